@@ -1,0 +1,302 @@
+//! The command line (`interface.md`, "Commands").
+//!
+//! Every command has `--help`; commands that report take `--json` and then print one JSON object
+//! on stdout (logs and progress on stderr). Exit status: 0 success, 1 failed computation, 2 bad
+//! input — see [`crate::error::Error::exit_code`].
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use serde_json::{json, Value};
+
+use crate::error::{Error, Result};
+use crate::mesh::msh::read_msh;
+use crate::mesh::Mesh;
+
+/// nlrom: vibration of structures with friction contacts (bladed disks with shroud,
+/// underplatform and root joints) by reduced-order models and harmonic balance.
+#[derive(Debug, Parser)]
+#[command(name = "nlrom", version, about, long_about = None, propagate_version = true)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Mesh utilities.
+    #[command(subcommand)]
+    Mesh(MeshCommand),
+    /// Natural frequencies (Hz) of the model at a stage of the pipeline.
+    Modes(ModesArgs),
+    /// Write the assembled K, M (Matrix Market, symmetric) and the DOF map dofs.csv.
+    Export(ExportArgs),
+    /// Stage 2: build the reduced-order models for every harmonic index the case needs.
+    Reduce(ReduceArgs),
+    /// Stage 3: list the contact pairs (targets, weights, local frames, distances).
+    Contact(ContactArgs),
+    /// Stage 4: forced response by harmonic balance with continuation.
+    Solve(SolveArgs),
+    /// Time marching (Newmark variants, quasi-static).
+    March(MarchArgs),
+    /// All stages in order.
+    Run(RunArgs),
+    /// Many cases (or many meshes with one template case) in parallel.
+    Batch(BatchArgs),
+    /// Run the bundled demo case end to end.
+    Demo(DemoArgs),
+}
+
+#[derive(Debug, Subcommand)]
+enum MeshCommand {
+    /// Format, node count, element counts by type, physical groups and bounding box of a Gmsh
+    /// MSH file (2.2 or 4.1, ASCII or binary).
+    Info(MeshInfoArgs),
+}
+
+#[derive(Debug, Args)]
+struct MeshInfoArgs {
+    /// The Gmsh .msh file.
+    file: PathBuf,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+/// The stage of the pipeline whose model `modes` solves.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum Stage {
+    /// The assembled or imported model with clamps.
+    Full,
+    /// The Craig–Bampton model.
+    Cb,
+    /// Craig–Bampton + cyclic constraint for harmonic index K.
+    Cs,
+    /// After Gram–Schmidt interface reduction.
+    Gsi,
+}
+
+#[derive(Debug, Args)]
+struct ModesArgs {
+    /// The case file (TOML).
+    case: PathBuf,
+    /// The stage of the pipeline.
+    #[arg(long, value_enum, default_value = "full")]
+    stage: Stage,
+    /// Harmonic index K (stages cs and gsi).
+    #[arg(long)]
+    harmonic: Option<usize>,
+    /// Number of modes.
+    #[arg(long, default_value_t = 20)]
+    num: usize,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Args)]
+struct ExportArgs {
+    /// The case file (TOML).
+    case: PathBuf,
+    /// Output directory for K.mtx, M.mtx and dofs.csv.
+    #[arg(long)]
+    dir: PathBuf,
+}
+
+#[derive(Debug, Args)]
+struct ReduceArgs {
+    /// The case file (TOML).
+    case: PathBuf,
+    /// The ROM file to write (HDF5).
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+#[derive(Debug, Args)]
+struct ContactArgs {
+    /// The case file (TOML).
+    case: PathBuf,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Args)]
+struct SolveArgs {
+    /// The case file (TOML).
+    case: PathBuf,
+    /// The result file to write (HDF5).
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// Time-marching schemes.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum Scheme {
+    /// Standard Newmark-β (β = 1/4, γ = 1/2).
+    Newmark,
+    /// Newmark with the time step adapted to the contact state.
+    Adaptive,
+    /// Piecewise-linear Newmark predictor–corrector.
+    PiecewiseLinear,
+    /// Quasi-static method for negligible inertia.
+    QuasiStatic,
+}
+
+#[derive(Debug, Args)]
+struct MarchArgs {
+    /// The case file (TOML).
+    case: PathBuf,
+    /// The result file to write (HDF5).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// The scheme (default: the case's [march] scheme).
+    #[arg(long, value_enum)]
+    scheme: Option<Scheme>,
+}
+
+#[derive(Debug, Args)]
+struct RunArgs {
+    /// The case file (TOML).
+    case: PathBuf,
+    /// The result file (default: the case's [output] file).
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
+struct BatchArgs {
+    /// Case files, or meshes with one template case.
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
+    /// Number of cases run at once.
+    #[arg(long, default_value_t = 1)]
+    jobs: usize,
+    /// Output directory.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
+struct DemoArgs {
+    /// Output directory.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// Parses the command line, runs the command and returns the exit status; errors go to stderr.
+pub fn main() -> i32 {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: {e}");
+            e.exit_code()
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Mesh(MeshCommand::Info(a)) => mesh_info(&a.file, a.json),
+        Command::Modes(_) => Err(Error::NotImplemented("nlrom modes".into())),
+        Command::Export(_) => Err(Error::NotImplemented("nlrom export".into())),
+        Command::Reduce(_) => Err(Error::NotImplemented("nlrom reduce".into())),
+        Command::Contact(_) => Err(Error::NotImplemented("nlrom contact".into())),
+        Command::Solve(_) => Err(Error::NotImplemented("nlrom solve".into())),
+        Command::March(_) => Err(Error::NotImplemented("nlrom march".into())),
+        Command::Run(_) => Err(Error::NotImplemented("nlrom run".into())),
+        Command::Batch(_) => Err(Error::NotImplemented("nlrom batch".into())),
+        Command::Demo(_) => Err(Error::NotImplemented("nlrom demo".into())),
+    }
+}
+
+/// `nlrom mesh info`: prints the summary of a mesh as text or JSON.
+fn mesh_info(path: &Path, as_json: bool) -> Result<()> {
+    let start = Instant::now();
+    let mesh = read_msh(path)?;
+    let mut report = mesh_summary(&mesh);
+    report["wall_seconds"] = json!(start.elapsed().as_secs_f64());
+    if as_json {
+        println!("{report}");
+    } else {
+        print!("{}", mesh_summary_text(path, &mesh));
+    }
+    Ok(())
+}
+
+/// The `mesh info` JSON object of `interface.md`.
+pub fn mesh_summary(mesh: &Mesh) -> Value {
+    let elements: serde_json::Map<String, Value> = mesh
+        .element_counts()
+        .into_iter()
+        .map(|(k, n)| (k.name().to_string(), json!(n)))
+        .collect();
+    let groups: Vec<Value> = mesh
+        .groups
+        .iter()
+        .map(|g| {
+            json!({
+                "name": g.name,
+                "dim": g.dim,
+                "tag": g.tag,
+                "elements": mesh.group_element_count(g),
+                "nodes": mesh.group_node_indices(g).len(),
+            })
+        })
+        .collect();
+    json!({
+        "format": mesh.format.version.as_str(),
+        "binary": mesh.format.binary,
+        "nodes": mesh.num_nodes(),
+        "elements": elements,
+        "groups": groups,
+        "bbox": mesh.bbox(),
+    })
+}
+
+/// The human-readable `mesh info` report.
+fn mesh_summary_text(path: &Path, mesh: &Mesh) -> String {
+    let mut s = format!(
+        "{}\n  format   MSH {} {}{}\n  nodes    {}\n  elements {}\n",
+        path.display(),
+        mesh.format.version.as_str(),
+        if mesh.format.binary {
+            "binary"
+        } else {
+            "ASCII"
+        },
+        if mesh.format.big_endian {
+            " (big-endian)"
+        } else {
+            ""
+        },
+        mesh.num_nodes(),
+        mesh.num_elements()
+    );
+    for (kind, n) in mesh.element_counts() {
+        s += &format!("    {:<10} {n}\n", kind.name());
+    }
+    s += &format!("  physical groups ({})\n", mesh.groups.len());
+    s += &format!(
+        "    {:<24} {:>3} {:>6} {:>9} {:>7}\n",
+        "name", "dim", "tag", "elements", "nodes"
+    );
+    for g in &mesh.groups {
+        s += &format!(
+            "    {:<24} {:>3} {:>6} {:>9} {:>7}\n",
+            g.name,
+            g.dim,
+            g.tag,
+            mesh.group_element_count(g),
+            mesh.group_node_indices(g).len()
+        );
+    }
+    let [lo, hi] = mesh.bbox();
+    s += &format!(
+        "  bounding box [{:.6e}, {:.6e}, {:.6e}] .. [{:.6e}, {:.6e}, {:.6e}]\n",
+        lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
+    );
+    s
+}

@@ -1,0 +1,253 @@
+//! Meshes: the data model shared by every stage, read from Gmsh MSH files ([`msh`]).
+//!
+//! Conventions (`conventions.md` §1): nodes get a compact 0-based index in ascending Gmsh node-tag
+//! order; the tag is kept for output. Elements are stored in blocks of one type that share their
+//! elementary entity and physical tags, with connectivity as node *indices* in Gmsh's node ordering
+//! (see [`element`]). Physical groups are resolved to element blocks, and from them to node sets,
+//! by name.
+
+pub mod element;
+pub mod faces;
+pub mod msh;
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+pub use element::ElementType;
+
+use crate::error::{Error, Result};
+
+/// Which MSH variant a mesh was read from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MshFormat {
+    /// `2.2` or `4.1` (as read from `$MeshFormat`).
+    pub version: MshVersion,
+    /// Binary (`file-type` 1) or ASCII.
+    pub binary: bool,
+    /// For binary files: whether the file's byte order differs from little-endian.
+    pub big_endian: bool,
+}
+
+/// The MSH versions nlrom reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MshVersion {
+    V22,
+    V41,
+}
+
+impl MshVersion {
+    /// `"2.2"` or `"4.1"`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MshVersion::V22 => "2.2",
+            MshVersion::V41 => "4.1",
+        }
+    }
+}
+
+/// Elements of one type on one elementary entity, with the same physical tags.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ElementBlock {
+    /// The element type (all elements of the block).
+    pub kind: ElementType,
+    /// Tag of the elementary entity (dimension = `kind.dim()`); 0 when the file gives none.
+    pub entity: i32,
+    /// Physical tags (dimension = `kind.dim()`) the elements belong to.
+    pub physicals: Vec<i32>,
+    /// Gmsh element tags, one per element.
+    pub tags: Vec<u64>,
+    /// Node indices, `kind.num_nodes()` per element, in Gmsh order.
+    pub connectivity: Vec<u32>,
+}
+
+impl ElementBlock {
+    /// Number of elements in the block.
+    pub fn len(&self) -> usize {
+        self.tags.len()
+    }
+
+    /// Whether the block has no element.
+    pub fn is_empty(&self) -> bool {
+        self.tags.is_empty()
+    }
+
+    /// Node indices of element `e` of the block.
+    pub fn element(&self, e: usize) -> &[u32] {
+        let n = self.kind.num_nodes();
+        &self.connectivity[e * n..(e + 1) * n]
+    }
+
+    /// Iterator over the elements' node-index slices.
+    pub fn elements(&self) -> std::slice::ChunksExact<'_, u32> {
+        self.connectivity.chunks_exact(self.kind.num_nodes())
+    }
+}
+
+/// A physical group: a name, a dimension and a tag (`$PhysicalNames`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PhysicalGroup {
+    /// Name from `$PhysicalNames`; groups without one are named by their tag (`"dim2_tag7"`).
+    pub name: String,
+    /// Dimension 0..=3.
+    pub dim: u8,
+    /// Physical tag.
+    pub tag: i32,
+}
+
+/// A `$Periodic` link between two entities: node pairs (indices) and the affine map, if given.
+///
+/// Gmsh lists only the corner nodes for second-order meshes; do not rely on this for mid-edge nodes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PeriodicLink {
+    /// Dimension of the linked entities.
+    pub dim: u8,
+    /// The slave (image) entity tag.
+    pub entity: i32,
+    /// The master entity tag.
+    pub master: i32,
+    /// Row-major 4×4 affine transform from master to slave (empty if the file gives none).
+    pub affine: Vec<f64>,
+    /// (slave node index, master node index).
+    pub nodes: Vec<(u32, u32)>,
+}
+
+/// A mesh as read from a Gmsh file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mesh {
+    /// The file it was read from, for messages.
+    pub source: Option<PathBuf>,
+    /// Version and encoding of the file.
+    pub format: MshFormat,
+    /// Gmsh node tags, ascending; index = compact node index.
+    pub node_tags: Vec<u64>,
+    /// Coordinates (m) of each node, by node index.
+    pub coords: Vec<[f64; 3]>,
+    /// Element blocks in file order.
+    pub blocks: Vec<ElementBlock>,
+    /// Physical groups, in the order of `$PhysicalNames` and then of first use.
+    pub groups: Vec<PhysicalGroup>,
+    /// `$Periodic` links.
+    pub periodic: Vec<PeriodicLink>,
+}
+
+impl Mesh {
+    /// Number of nodes.
+    pub fn num_nodes(&self) -> usize {
+        self.node_tags.len()
+    }
+
+    /// Total number of elements over all blocks.
+    pub fn num_elements(&self) -> usize {
+        self.blocks.iter().map(ElementBlock::len).sum()
+    }
+
+    /// Element counts by type, in type order.
+    pub fn element_counts(&self) -> BTreeMap<ElementType, usize> {
+        let mut counts = BTreeMap::new();
+        for b in &self.blocks {
+            *counts.entry(b.kind).or_insert(0) += b.len();
+        }
+        counts
+    }
+
+    /// The file name for messages (`<memory>` when parsed from bytes).
+    pub fn source_name(&self) -> String {
+        self.source
+            .as_ref()
+            .map(|p| p.display().to_string())
+            .unwrap_or_else(|| "<memory>".to_string())
+    }
+
+    /// The physical group called `name`, or an error that names the file and lists the groups there are.
+    pub fn group(&self, name: &str) -> Result<&PhysicalGroup> {
+        self.groups.iter().find(|g| g.name == name).ok_or_else(|| {
+            let names: Vec<&str> = self.groups.iter().map(|g| g.name.as_str()).collect();
+            Error::input(format!(
+                "{}: no physical group named '{}'; the mesh has: {}. Add it in Gmsh (Physical Surface/Volume/Point) or correct the name in the case file",
+                self.source_name(),
+                name,
+                if names.is_empty() { "none".to_string() } else { names.join(", ") }
+            ))
+        })
+    }
+
+    /// The blocks whose elements belong to `group` (same dimension and a matching physical tag).
+    pub fn group_blocks<'a>(
+        &'a self,
+        group: &'a PhysicalGroup,
+    ) -> impl Iterator<Item = &'a ElementBlock> + 'a {
+        self.blocks
+            .iter()
+            .filter(move |b| b.kind.dim() == group.dim && b.physicals.contains(&group.tag))
+    }
+
+    /// Number of elements in `group`.
+    pub fn group_element_count(&self, group: &PhysicalGroup) -> usize {
+        self.group_blocks(group).map(ElementBlock::len).sum()
+    }
+
+    /// Sorted, distinct node indices of the elements of `group`.
+    pub fn group_node_indices(&self, group: &PhysicalGroup) -> Vec<u32> {
+        let mut used = vec![false; self.num_nodes()];
+        for b in self.group_blocks(group) {
+            for &n in &b.connectivity {
+                used[n as usize] = true;
+            }
+        }
+        used.iter()
+            .enumerate()
+            .filter_map(|(i, &u)| u.then_some(i as u32))
+            .collect()
+    }
+
+    /// Sorted node indices of the group called `name` (error if it does not exist or is empty).
+    pub fn nodes_of(&self, name: &str) -> Result<Vec<u32>> {
+        let g = self.group(name)?;
+        let nodes = self.group_node_indices(g);
+        if nodes.is_empty() {
+            return Err(Error::input(format!(
+                "{}: physical group '{}' (dim {}, tag {}) has no elements, so no nodes",
+                self.source_name(),
+                name,
+                g.dim,
+                g.tag
+            )));
+        }
+        Ok(nodes)
+    }
+
+    /// The compact index of the node with Gmsh tag `tag`.
+    pub fn node_index(&self, tag: u64) -> Option<u32> {
+        self.node_tags.binary_search(&tag).ok().map(|i| i as u32)
+    }
+
+    /// Axis-aligned bounding box `[min, max]` of all nodes (zeros for an empty mesh).
+    pub fn bbox(&self) -> [[f64; 3]; 2] {
+        bbox_of(self.coords.iter())
+    }
+
+    /// Length of the bounding box diagonal (m): the model size that relative tolerances refer to.
+    pub fn size(&self) -> f64 {
+        let [lo, hi] = self.bbox();
+        ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt()
+    }
+}
+
+/// Bounding box of a set of points (zeros when empty).
+pub fn bbox_of<'a>(points: impl Iterator<Item = &'a [f64; 3]>) -> [[f64; 3]; 2] {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    let mut any = false;
+    for p in points {
+        any = true;
+        for c in 0..3 {
+            lo[c] = lo[c].min(p[c]);
+            hi[c] = hi[c].max(p[c]);
+        }
+    }
+    if any {
+        [lo, hi]
+    } else {
+        [[0.0; 3]; 2]
+    }
+}

@@ -1,0 +1,1326 @@
+//! Gmsh MSH reader: versions 2.2 and 4.1, ASCII and binary, written with `nom`.
+//!
+//! Sections read: `$MeshFormat`, `$PhysicalNames`, `$Entities` (4.1), `$Nodes`, `$Elements`,
+//! `$Periodic`; any other section (`$NodeData`, `$Parametrizations`, ...) is skipped up to its
+//! `$End...` line. Binary files must have data size 8; their byte order is recognised from the
+//! check integer `1` that follows the format line (both little- and big-endian are read).
+//!
+//! Node tags and element tags may be non-contiguous and unsorted; nodes are re-indexed in ascending
+//! tag order (`conventions.md` §1). In 4.1 files, parametric node coordinates (`u`, `v`, `w`) are
+//! read past and dropped. Physical groups are resolved per element: in 2.2 from the element's first
+//! tag, in 4.1 from the physical tags of the element block's entity in `$Entities`.
+//!
+//! Every error carries the section, the byte offset and the line number of the offending token.
+//! Counts read from the file are checked against the bytes left before anything is allocated, so a
+//! corrupt count cannot exhaust memory.
+//!
+//! Reference: Gmsh reference manual, "MSH file format" (version 4.1) and "Legacy formats" (2.2).
+
+use std::borrow::Cow;
+use std::collections::{BTreeSet, HashMap};
+use std::path::Path;
+
+use nom::bytes::complete::{tag, take, take_until};
+use nom::error::{ErrorKind, ParseError};
+use nom::{IResult, Parser};
+
+use super::{ElementBlock, ElementType, Mesh, MshFormat, MshVersion, PeriodicLink, PhysicalGroup};
+use crate::error::Error;
+
+/// A malformed MSH file: where (section, line, byte offset) and what.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{file}: line {line} (byte {offset}), section {section}: {message}")]
+pub struct MshError {
+    /// The file name (`<memory>` when parsed from bytes).
+    pub file: String,
+    /// The section being read, e.g. `$Nodes`.
+    pub section: String,
+    /// 1-based line number of the offending byte (counting `\n` before it, also in binary files).
+    pub line: usize,
+    /// 0-based byte offset of the offending token.
+    pub offset: usize,
+    /// What is wrong, and where it helps, what to do.
+    pub message: String,
+}
+
+/// Reads and parses the MSH file at `path`.
+pub fn read_msh(path: &Path) -> crate::Result<Mesh> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let mut mesh = parse_msh(&bytes).map_err(|mut e| {
+        e.file = path.display().to_string();
+        e
+    })?;
+    mesh.source = Some(path.to_path_buf());
+    Ok(mesh)
+}
+
+/// Parses an MSH file held in memory.
+pub fn parse_msh(bytes: &[u8]) -> Result<Mesh, MshError> {
+    let mut state = State::default();
+    let mut input = bytes;
+    let mut first = true;
+    loop {
+        input = skip_ws(input);
+        if input.is_empty() {
+            break;
+        }
+        let (rest, name) =
+            section_header(input).map_err(|e| to_error(bytes, "(file structure)", e))?;
+        let section = format!("${}", String::from_utf8_lossy(name));
+        if first && name != b"MeshFormat" {
+            return Err(located(
+                bytes,
+                input,
+                &section,
+                "not a Gmsh MSH file: it must start with $MeshFormat",
+            ));
+        }
+        first = false;
+        input = state
+            .section(name, rest)
+            .map_err(|e| to_error(bytes, &section, e))?;
+    }
+    state.finish(bytes)
+}
+
+// ---------------------------------------------------------------------------------------------
+// nom plumbing: the error type, positions, and the primitive parsers.
+
+/// The parse error: the remaining input where it happened and a message.
+#[derive(Debug)]
+struct PErr<'a> {
+    at: &'a [u8],
+    msg: Cow<'static, str>,
+}
+
+impl<'a> ParseError<&'a [u8]> for PErr<'a> {
+    fn from_error_kind(input: &'a [u8], kind: ErrorKind) -> Self {
+        let msg = if input.is_empty() {
+            Cow::Borrowed(EOF_MSG)
+        } else {
+            Cow::Owned(format!(
+                "unexpected input ({kind:?}) near '{}'",
+                show(input)
+            ))
+        };
+        PErr { at: input, msg }
+    }
+
+    fn append(_: &'a [u8], _: ErrorKind, other: Self) -> Self {
+        other
+    }
+}
+
+type PResult<'a, T> = IResult<&'a [u8], T, PErr<'a>>;
+
+const EOF_MSG: &str = "unexpected end of file: the file is truncated";
+
+/// A hard failure at `at`.
+fn fail<'a, T>(at: &'a [u8], msg: impl Into<Cow<'static, str>>) -> PResult<'a, T> {
+    Err(nom::Err::Failure(PErr {
+        at,
+        msg: msg.into(),
+    }))
+}
+
+/// The first token of `i`, for messages (at most 24 bytes, lossy UTF-8).
+fn show(i: &[u8]) -> String {
+    let n = i
+        .iter()
+        .take(24)
+        .position(|c| c.is_ascii_whitespace())
+        .unwrap_or(i.len().min(24));
+    String::from_utf8_lossy(&i[..n]).into_owned()
+}
+
+/// Converts a nom error into an [`MshError`] located in `whole`.
+fn to_error(whole: &[u8], section: &str, e: nom::Err<PErr<'_>>) -> MshError {
+    match e {
+        nom::Err::Error(p) | nom::Err::Failure(p) => located(whole, p.at, section, &p.msg),
+        nom::Err::Incomplete(_) => located(whole, &[], section, EOF_MSG),
+    }
+}
+
+/// An [`MshError`] at the position of the suffix `at` of `whole`.
+fn located(whole: &[u8], at: &[u8], section: &str, msg: &str) -> MshError {
+    let offset = whole.len().saturating_sub(at.len());
+    let line = 1 + whole[..offset].iter().filter(|&&c| c == b'\n').count();
+    MshError {
+        file: "<memory>".to_string(),
+        section: section.to_string(),
+        line,
+        offset,
+        message: msg.to_string(),
+    }
+}
+
+/// Skips ASCII white space (space, tab, CR, LF).
+fn skip_ws(i: &[u8]) -> &[u8] {
+    let n = i
+        .iter()
+        .position(|c| !c.is_ascii_whitespace())
+        .unwrap_or(i.len());
+    &i[n..]
+}
+
+/// Consumes the rest of the current line including its `\n` (only blanks may precede it): the
+/// boundary between an ASCII header line and binary data.
+fn end_of_line(i: &[u8]) -> PResult<'_, ()> {
+    let mut n = 0;
+    while n < i.len() && (i[n] == b' ' || i[n] == b'\t' || i[n] == b'\r') {
+        n += 1;
+    }
+    match i.get(n) {
+        Some(b'\n') => Ok((&i[n + 1..], ())),
+        None => fail(&i[n..], EOF_MSG),
+        Some(_) => fail(
+            &i[n..],
+            format!("expected the end of the line, found '{}'", show(&i[n..])),
+        ),
+    }
+}
+
+/// A white-space delimited token.
+fn token(i: &[u8]) -> PResult<'_, &[u8]> {
+    let i = skip_ws(i);
+    if i.is_empty() {
+        return fail(i, EOF_MSG);
+    }
+    let n = i
+        .iter()
+        .position(|c| c.is_ascii_whitespace())
+        .unwrap_or(i.len());
+    Ok((&i[n..], &i[..n]))
+}
+
+/// An unsigned decimal integer token.
+fn uint(i: &[u8]) -> PResult<'_, u64> {
+    let i = skip_ws(i);
+    let mut value: u64 = 0;
+    let mut n = 0;
+    while let Some(&c) = i.get(n) {
+        let d = c.wrapping_sub(b'0');
+        if d > 9 {
+            break;
+        }
+        value = match value
+            .checked_mul(10)
+            .and_then(|v| v.checked_add(u64::from(d)))
+        {
+            Some(v) => v,
+            None => return fail(i, format!("integer '{}' is too large", show(i))),
+        };
+        n += 1;
+    }
+    if n == 0 || i.get(n).is_some_and(|c| !c.is_ascii_whitespace()) {
+        if i.is_empty() {
+            return fail(i, EOF_MSG);
+        }
+        return fail(
+            i,
+            format!("expected an unsigned integer, found '{}'", show(i)),
+        );
+    }
+    Ok((&i[n..], value))
+}
+
+/// A signed decimal integer token that fits an `i32` (entity and physical tags, dimensions).
+fn int32(i: &[u8]) -> PResult<'_, i32> {
+    let i = skip_ws(i);
+    let (neg, digits) = match i.first() {
+        Some(b'-') => (true, &i[1..]),
+        Some(b'+') => (false, &i[1..]),
+        _ => (false, i),
+    };
+    if digits.first().is_some_and(|c| c.is_ascii_whitespace()) {
+        return fail(i, format!("expected an integer, found '{}'", show(i)));
+    }
+    let (rest, v) = uint(digits).map_err(|_| {
+        nom::Err::Failure(PErr {
+            at: i,
+            msg: format!("expected an integer, found '{}'", show(i)).into(),
+        })
+    })?;
+    let v = if neg { -(v as i128) } else { v as i128 };
+    match i32::try_from(v) {
+        Ok(v) => Ok((rest, v)),
+        Err(_) => fail(
+            i,
+            format!("integer '{}' is out of range for a tag", show(i)),
+        ),
+    }
+}
+
+/// A floating-point token; non-finite values are rejected.
+fn float(i: &[u8]) -> PResult<'_, f64> {
+    let (rest, tok) = token(i)?;
+    let at = skip_ws(i);
+    let parsed = std::str::from_utf8(tok)
+        .ok()
+        .and_then(|s| s.parse::<f64>().ok());
+    match parsed {
+        Some(v) if v.is_finite() => Ok((rest, v)),
+        Some(_) => fail(at, format!("non-finite number '{}'", show(tok))),
+        None => fail(at, format!("expected a number, found '{}'", show(tok))),
+    }
+}
+
+/// Exactly `n` bytes of binary data.
+fn bytes_n<'a>(i: &'a [u8], n: usize, what: &str) -> PResult<'a, &'a [u8]> {
+    take::<usize, &[u8], PErr<'a>>(n).parse(i).or_else(|_| {
+        fail(
+            &i[i.len()..],
+            format!("unexpected end of file while reading {what} ({n} bytes needed, {} left): the file is truncated", i.len()),
+        )
+    })
+}
+
+/// A count of items read from the file, checked against the bytes that remain (each item needs at
+/// least `min_bytes`), so that a corrupt count is reported instead of exhausting memory.
+fn checked_count<'a>(
+    at: &'a [u8],
+    rest: &'a [u8],
+    n: u64,
+    min_bytes: usize,
+    what: &str,
+) -> PResult<'a, usize> {
+    let max = (rest.len() / min_bytes.max(1)) as u64;
+    if n > max {
+        return fail(
+            at,
+            format!("the file declares {n} {what}, but only {} bytes remain: the file is truncated or the count is wrong", rest.len()),
+        );
+    }
+    Ok((rest, n as usize))
+}
+
+/// Byte order of binary data.
+#[derive(Clone, Copy, Debug)]
+struct Endian {
+    big: bool,
+}
+
+impl Endian {
+    fn i32(self, b: &[u8]) -> i32 {
+        let a = [b[0], b[1], b[2], b[3]];
+        if self.big {
+            i32::from_be_bytes(a)
+        } else {
+            i32::from_le_bytes(a)
+        }
+    }
+
+    fn u64(self, b: &[u8]) -> u64 {
+        let a = [b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]];
+        if self.big {
+            u64::from_be_bytes(a)
+        } else {
+            u64::from_le_bytes(a)
+        }
+    }
+
+    fn f64(self, b: &[u8]) -> f64 {
+        f64::from_bits(self.u64(b))
+    }
+}
+
+/// Reads integers and reals either as ASCII tokens or as binary values of the file's byte order
+/// (`int` = 4 bytes, `size_t` and `double` = 8 bytes).
+#[derive(Clone, Copy, Debug)]
+struct Reader {
+    binary: Option<Endian>,
+}
+
+impl Reader {
+    fn int<'a>(self, i: &'a [u8], what: &str) -> PResult<'a, i32> {
+        match self.binary {
+            None => int32(i),
+            Some(e) => bytes_n(i, 4, what).map(|(r, b)| (r, e.i32(b))),
+        }
+    }
+
+    fn size<'a>(self, i: &'a [u8], what: &str) -> PResult<'a, u64> {
+        match self.binary {
+            None => uint(i),
+            Some(e) => bytes_n(i, 8, what).map(|(r, b)| (r, e.u64(b))),
+        }
+    }
+
+    fn real<'a>(self, i: &'a [u8], what: &str) -> PResult<'a, f64> {
+        match self.binary {
+            None => float(i),
+            Some(e) => {
+                let (r, b) = bytes_n(i, 8, what)?;
+                let v = e.f64(b);
+                if v.is_finite() {
+                    Ok((r, v))
+                } else {
+                    fail(i, format!("non-finite value in {what}"))
+                }
+            }
+        }
+    }
+
+    /// A count (`size_t`), checked against the remaining bytes.
+    fn count<'a>(
+        self,
+        i: &'a [u8],
+        min_ascii: usize,
+        min_binary: usize,
+        what: &str,
+    ) -> PResult<'a, usize> {
+        let at = skip_ws(i);
+        let (rest, n) = self.size(i, what)?;
+        let min = if self.binary.is_some() {
+            min_binary
+        } else {
+            min_ascii
+        };
+        checked_count(at, rest, n, min, what)
+    }
+}
+
+/// `$Name` followed by the end of its line.
+fn section_header(i: &[u8]) -> PResult<'_, &[u8]> {
+    let (i, _) =
+        tag::<&[u8], &[u8], PErr<'_>>(b"$")
+            .parse(i)
+            .or_else(|_: nom::Err<PErr<'_>>| {
+                fail(
+                    i,
+                    format!("expected a section header like $Nodes, found '{}'", show(i)),
+                )
+            })?;
+    let n = i
+        .iter()
+        .position(|c| c.is_ascii_whitespace())
+        .unwrap_or(i.len());
+    let name = &i[..n];
+    if name.is_empty() {
+        return fail(i, "empty section name after '$'");
+    }
+    if name.starts_with(b"End") {
+        return fail(
+            i,
+            format!("'${}' without a matching section start", show(name)),
+        );
+    }
+    let (rest, ()) = end_of_line(&i[n..])?;
+    Ok((rest, name))
+}
+
+/// The `$End<name>` line closing a section.
+fn section_end<'a>(i: &'a [u8], name: &[u8]) -> PResult<'a, ()> {
+    let i = skip_ws(i);
+    let mut closing = b"$End".to_vec();
+    closing.extend_from_slice(name);
+    if i.starts_with(&closing) && i.get(closing.len()).is_none_or(|c| c.is_ascii_whitespace()) {
+        return Ok((&i[closing.len()..], ()));
+    }
+    let what = String::from_utf8_lossy(&closing).into_owned();
+    if i.is_empty() {
+        fail(
+            i,
+            format!("missing {what}: the file ends inside the section (truncated?)"),
+        )
+    } else {
+        fail(i, format!("expected {what}, found '{}' (wrong count in the section header, or a missing {what})", show(i)))
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The parser state: what has been read so far.
+
+/// Maps node tags to compact indices.
+#[derive(Debug)]
+enum NodeLookup {
+    /// Tags are exactly `first .. first + n`.
+    Contiguous { first: u64, n: u64 },
+    /// Dense table indexed by tag (`u32::MAX` = absent).
+    Dense(Vec<u32>),
+    /// Sparse tags.
+    Sparse(HashMap<u64, u32>),
+}
+
+impl NodeLookup {
+    fn new(sorted_tags: &[u64]) -> NodeLookup {
+        let n = sorted_tags.len() as u64;
+        let (first, last) = match (sorted_tags.first(), sorted_tags.last()) {
+            (Some(&f), Some(&l)) => (f, l),
+            _ => return NodeLookup::Contiguous { first: 0, n: 0 },
+        };
+        if last - first + 1 == n {
+            NodeLookup::Contiguous { first, n }
+        } else if last <= 8 * n + (1 << 20) {
+            let mut table = vec![u32::MAX; last as usize + 1];
+            for (i, &t) in sorted_tags.iter().enumerate() {
+                table[t as usize] = i as u32;
+            }
+            NodeLookup::Dense(table)
+        } else {
+            NodeLookup::Sparse(
+                sorted_tags
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &t)| (t, i as u32))
+                    .collect(),
+            )
+        }
+    }
+
+    #[inline]
+    fn get(&self, tag: u64) -> Option<u32> {
+        match self {
+            NodeLookup::Contiguous { first, n } => tag
+                .checked_sub(*first)
+                .filter(|&d| d < *n)
+                .map(|d| d as u32),
+            NodeLookup::Dense(t) => t.get(tag as usize).copied().filter(|&i| i != u32::MAX),
+            NodeLookup::Sparse(m) => m.get(&tag).copied(),
+        }
+    }
+}
+
+#[derive(Default)]
+struct State {
+    format: Option<MshFormat>,
+    named: Vec<PhysicalGroup>,
+    /// Physical tags of each 4.1 entity, indexed by dimension then entity tag.
+    entity_physicals: [HashMap<i32, Vec<i32>>; 4],
+    has_entities: bool,
+    node_tags: Vec<u64>,
+    coords: Vec<[f64; 3]>,
+    lookup: Option<NodeLookup>,
+    blocks: Vec<ElementBlock>,
+    periodic: Vec<PeriodicLink>,
+}
+
+impl State {
+    fn reader(&self) -> Reader {
+        let binary = self
+            .format
+            .filter(|f| f.binary)
+            .map(|f| Endian { big: f.big_endian });
+        Reader { binary }
+    }
+
+    fn version(&self) -> MshVersion {
+        self.format.map(|f| f.version).unwrap_or(MshVersion::V41)
+    }
+
+    /// Reads the section `name` (header already consumed) including its `$End` line.
+    fn section<'a>(&mut self, name: &[u8], i: &'a [u8]) -> Result<&'a [u8], nom::Err<PErr<'a>>> {
+        let i = match name {
+            b"MeshFormat" => {
+                if self.format.is_some() {
+                    return fail(i, "a second $MeshFormat section").map(|(r, ())| r);
+                }
+                let (i, f) = mesh_format(i)?;
+                self.format = Some(f);
+                i
+            }
+            b"PhysicalNames" => self.physical_names(i)?.0,
+            b"Entities" if self.version() == MshVersion::V41 => self.entities(i)?.0,
+            b"Nodes" => self.nodes(i)?.0,
+            b"Elements" => self.elements(i)?.0,
+            b"Periodic" => self.periodic_links(i)?.0,
+            _ => skip_section(i, name)?.0,
+        };
+        Ok(section_end(i, name)?.0)
+    }
+
+    fn physical_names<'a>(&mut self, i: &'a [u8]) -> PResult<'a, ()> {
+        let at = skip_ws(i);
+        let (mut i, n) = uint(i)?;
+        let (_, n) = checked_count(at, i, n, 6, "physical names")?;
+        for _ in 0..n {
+            let at = skip_ws(i);
+            let (r, dim) = int32(i)?;
+            if !(0..=3).contains(&dim) {
+                return fail(at, format!("physical group dimension {dim} is not 0..3"));
+            }
+            let (r, tag) = int32(r)?;
+            let (r, name) = quoted_name(r)?;
+            self.named.push(PhysicalGroup {
+                name,
+                dim: dim as u8,
+                tag,
+            });
+            i = r;
+        }
+        Ok((i, ()))
+    }
+
+    fn entities<'a>(&mut self, i: &'a [u8]) -> PResult<'a, ()> {
+        let rd = self.reader();
+        let mut counts = [0usize; 4];
+        let mut i = i;
+        for (d, c) in counts.iter_mut().enumerate() {
+            let (r, n) = rd.count(i, 2, 4, ["points", "curves", "surfaces", "volumes"][d])?;
+            *c = n;
+            i = r;
+        }
+        if rd.binary.is_none() {
+            i = skip_ws(i);
+        }
+        for (dim, &n) in counts.iter().enumerate() {
+            for _ in 0..n {
+                let at = skip_ws(i);
+                let (r, tag) = rd.int(i, "an entity tag")?;
+                let mut r = r;
+                let nreal = if dim == 0 { 3 } else { 6 };
+                for _ in 0..nreal {
+                    r = rd.real(r, "entity coordinates")?.0;
+                }
+                let (r2, phys) = int_list(rd, r, "physical tags")?;
+                r = r2;
+                if dim > 0 {
+                    r = int_list(rd, r, "bounding entities")?.0;
+                }
+                if self.entity_physicals[dim].insert(tag, phys).is_some() {
+                    return fail(
+                        at,
+                        format!("entity of dimension {dim} with tag {tag} is defined twice"),
+                    );
+                }
+                i = r;
+            }
+        }
+        self.has_entities = true;
+        Ok((i, ()))
+    }
+
+    fn nodes<'a>(&mut self, i: &'a [u8]) -> PResult<'a, ()> {
+        if self.lookup.is_some() {
+            return fail(i, "a second $Nodes section: nlrom reads one");
+        }
+        let at = i;
+        let i = match self.version() {
+            MshVersion::V22 => self.nodes_v22(i)?.0,
+            MshVersion::V41 => self.nodes_v41(i)?.0,
+        };
+        self.index_nodes(at)?;
+        Ok((i, ()))
+    }
+
+    fn nodes_v22<'a>(&mut self, i: &'a [u8]) -> PResult<'a, ()> {
+        let rd = self.reader();
+        let (mut i, n) = rd_count_ascii(i, 8, 28, rd.binary.is_some(), "nodes")?;
+        self.node_tags.reserve(n);
+        self.coords.reserve(n);
+        match rd.binary {
+            Some(e) => {
+                i = end_of_line(i)?.0;
+                let (r, data) = bytes_n(i, n * 28, "the node records (int tag, 3 doubles)")?;
+                for (k, rec) in data.chunks_exact(28).enumerate() {
+                    let tag = e.i32(rec);
+                    if tag <= 0 {
+                        return fail(&data[k * 28..], format!("node tag {tag} is not positive"));
+                    }
+                    let p = [e.f64(&rec[4..]), e.f64(&rec[12..]), e.f64(&rec[20..])];
+                    if !p.iter().all(|v| v.is_finite()) {
+                        return fail(
+                            &data[k * 28..],
+                            format!("node {tag} has a non-finite coordinate"),
+                        );
+                    }
+                    self.node_tags.push(tag as u64);
+                    self.coords.push(p);
+                }
+                i = r;
+            }
+            None => {
+                for _ in 0..n {
+                    let (r, tag) = uint(i)?;
+                    let (r, x) = float(r)?;
+                    let (r, y) = float(r)?;
+                    let (r, z) = float(r)?;
+                    self.node_tags.push(tag);
+                    self.coords.push([x, y, z]);
+                    i = r;
+                }
+            }
+        }
+        Ok((i, ()))
+    }
+
+    fn nodes_v41<'a>(&mut self, i: &'a [u8]) -> PResult<'a, ()> {
+        let rd = self.reader();
+        let (i, nblocks) = rd.count(i, 8, 20, "node blocks")?;
+        let at = skip_ws(i);
+        let (i, total) = rd.size(i, "the number of nodes")?;
+        let (i, total) = checked_count(at, i, total, 4, "nodes")?;
+        let (i, _min_tag) = rd.size(i, "the minimum node tag")?;
+        let (mut i, _max_tag) = rd.size(i, "the maximum node tag")?;
+        self.node_tags.reserve(total);
+        self.coords.reserve(total);
+        for _ in 0..nblocks {
+            let at = skip_ws(i);
+            let (r, dim) = rd.int(i, "the entity dimension")?;
+            let (r, _entity) = rd.int(r, "the entity tag")?;
+            let (r, parametric) = rd.int(r, "the parametric flag")?;
+            if !(0..=3).contains(&dim) || !(0..=1).contains(&parametric) {
+                return fail(
+                    at,
+                    format!(
+                        "bad node block header: entity dimension {dim}, parametric {parametric}"
+                    ),
+                );
+            }
+            let extra = if parametric == 1 { dim as usize } else { 0 };
+            let (r, n) = rd.count(r, 4, 8 + 24, "nodes in the block")?;
+            i = match rd.binary {
+                Some(e) => self.node_block_binary(r, n, extra, e)?.0,
+                None => self.node_block_ascii(r, n, extra)?.0,
+            };
+        }
+        if self.node_tags.len() != total {
+            return fail(
+                at,
+                format!(
+                    "the header declares {total} nodes but the blocks hold {}",
+                    self.node_tags.len()
+                ),
+            );
+        }
+        Ok((i, ()))
+    }
+
+    fn node_block_binary<'a>(
+        &mut self,
+        i: &'a [u8],
+        n: usize,
+        extra: usize,
+        e: Endian,
+    ) -> PResult<'a, ()> {
+        let (i, tags) = bytes_n(i, n * 8, "node tags")?;
+        let stride = 8 * (3 + extra);
+        let (i, xyz) = bytes_n(i, n * stride, "node coordinates")?;
+        for (k, t) in tags.chunks_exact(8).enumerate() {
+            let tag = e.u64(t);
+            if tag == 0 {
+                return fail(&tags[k * 8..], "node tag 0 is not allowed");
+            }
+            self.node_tags.push(tag);
+        }
+        for (k, rec) in xyz.chunks_exact(stride).enumerate() {
+            let p = [e.f64(rec), e.f64(&rec[8..]), e.f64(&rec[16..])];
+            if !p.iter().all(|v| v.is_finite()) {
+                return fail(&xyz[k * stride..], "non-finite node coordinate");
+            }
+            self.coords.push(p);
+        }
+        Ok((i, ()))
+    }
+
+    fn node_block_ascii<'a>(&mut self, mut i: &'a [u8], n: usize, extra: usize) -> PResult<'a, ()> {
+        let first = self.node_tags.len();
+        for _ in 0..n {
+            let at = skip_ws(i);
+            let (r, tag) = uint(i)?;
+            if tag == 0 {
+                return fail(at, "node tag 0 is not allowed");
+            }
+            self.node_tags.push(tag);
+            i = r;
+        }
+        for _ in 0..n {
+            let (r, x) = float(i)?;
+            let (r, y) = float(r)?;
+            let (mut r, z) = float(r)?;
+            for _ in 0..extra {
+                r = float(r)?.0;
+            }
+            self.coords.push([x, y, z]);
+            i = r;
+        }
+        debug_assert_eq!(self.coords.len(), first + n);
+        Ok((i, ()))
+    }
+
+    /// Sorts the nodes by tag (if needed), rejects duplicate tags and builds the tag lookup.
+    fn index_nodes<'a>(&mut self, at: &'a [u8]) -> PResult<'a, ()> {
+        if !self.node_tags.windows(2).all(|w| w[0] < w[1]) {
+            let mut order: Vec<usize> = (0..self.node_tags.len()).collect();
+            order.sort_unstable_by_key(|&k| self.node_tags[k]);
+            self.node_tags = order.iter().map(|&k| self.node_tags[k]).collect();
+            self.coords = order.iter().map(|&k| self.coords[k]).collect();
+            if let Some(w) = self.node_tags.windows(2).find(|w| w[0] == w[1]) {
+                return fail(at, format!("node tag {} appears twice", w[0]));
+            }
+        }
+        if self.node_tags.len() > u32::MAX as usize {
+            return fail(at, "more than 4 294 967 295 nodes");
+        }
+        self.lookup = Some(NodeLookup::new(&self.node_tags));
+        Ok((at, ()))
+    }
+
+    fn elements<'a>(&mut self, i: &'a [u8]) -> PResult<'a, ()> {
+        if self.lookup.is_none() {
+            return fail(i, "$Elements before $Nodes: nodes must be defined first");
+        }
+        match self.version() {
+            MshVersion::V22 => self.elements_v22(i),
+            MshVersion::V41 => self.elements_v41(i),
+        }
+    }
+
+    fn elements_v41<'a>(&mut self, i: &'a [u8]) -> PResult<'a, ()> {
+        let rd = self.reader();
+        let (i, nblocks) = rd.count(i, 8, 20, "element blocks")?;
+        let at = skip_ws(i);
+        let (i, total) = rd.size(i, "the number of elements")?;
+        let (i, total) = checked_count(at, i, total, 4, "elements")?;
+        let (i, _) = rd.size(i, "the minimum element tag")?;
+        let (mut i, _) = rd.size(i, "the maximum element tag")?;
+        let mut read = 0usize;
+        for _ in 0..nblocks {
+            let at = skip_ws(i);
+            let (r, dim) = rd.int(i, "the entity dimension")?;
+            let (r, entity) = rd.int(r, "the entity tag")?;
+            let type_at = skip_ws(r);
+            let (r, ty) = rd.int(r, "the element type")?;
+            let kind = element_type(type_at, i64::from(ty))?.1;
+            if i32::from(kind.dim()) != dim {
+                return fail(
+                    at,
+                    format!(
+                        "a block of {kind} elements (dimension {}) on an entity of dimension {dim}",
+                        kind.dim()
+                    ),
+                );
+            }
+            let nn = kind.num_nodes();
+            let (r, n) = rd.count(r, 2 * (nn + 1), 8 * (nn + 1), "elements in the block")?;
+            let mut block = ElementBlock {
+                kind,
+                entity,
+                physicals: Vec::new(),
+                tags: Vec::with_capacity(n),
+                connectivity: Vec::with_capacity(n * nn),
+            };
+            i = match rd.binary {
+                Some(e) => self.element_block_binary(r, n, &mut block, e)?.0,
+                None => self.element_block_ascii(r, n, &mut block)?.0,
+            };
+            read += n;
+            self.blocks.push(block);
+        }
+        if read != total {
+            return fail(
+                at,
+                format!("the header declares {total} elements but the blocks hold {read}"),
+            );
+        }
+        Ok((i, ()))
+    }
+
+    fn element_block_binary<'a>(
+        &self,
+        i: &'a [u8],
+        n: usize,
+        block: &mut ElementBlock,
+        e: Endian,
+    ) -> PResult<'a, ()> {
+        let nn = block.kind.num_nodes();
+        let stride = 8 * (nn + 1);
+        let (i, data) = bytes_n(i, n * stride, "element records")?;
+        let lookup = self
+            .lookup
+            .as_ref()
+            .expect("nodes are read before elements");
+        for (k, rec) in data.chunks_exact(stride).enumerate() {
+            let tag = e.u64(rec);
+            block.tags.push(tag);
+            for (j, t) in rec[8..].chunks_exact(8).enumerate() {
+                let node = e.u64(t);
+                match lookup.get(node) {
+                    Some(idx) => block.connectivity.push(idx),
+                    None => {
+                        return fail(&data[k * stride + 8 * (j + 1)..], unknown_node(tag, node))
+                    }
+                }
+            }
+        }
+        Ok((i, ()))
+    }
+
+    fn element_block_ascii<'a>(
+        &self,
+        mut i: &'a [u8],
+        n: usize,
+        block: &mut ElementBlock,
+    ) -> PResult<'a, ()> {
+        let nn = block.kind.num_nodes();
+        let lookup = self
+            .lookup
+            .as_ref()
+            .expect("nodes are read before elements");
+        for _ in 0..n {
+            let (r, tag) = uint(i)?;
+            block.tags.push(tag);
+            i = r;
+            for _ in 0..nn {
+                let at = skip_ws(i);
+                let (r, node) = uint(i)?;
+                match lookup.get(node) {
+                    Some(idx) => block.connectivity.push(idx),
+                    None => return fail(at, unknown_node(tag, node)),
+                }
+                i = r;
+            }
+        }
+        Ok((i, ()))
+    }
+
+    fn elements_v22<'a>(&mut self, i: &'a [u8]) -> PResult<'a, ()> {
+        let rd = self.reader();
+        let (i, n) = rd_count_ascii(i, 8, 16, rd.binary.is_some(), "elements")?;
+        match rd.binary {
+            Some(e) => self.elements_v22_binary(end_of_line(i)?.0, n, e),
+            None => self.elements_v22_ascii(i, n),
+        }
+    }
+
+    fn elements_v22_ascii<'a>(&mut self, mut i: &'a [u8], n: usize) -> PResult<'a, ()> {
+        for _ in 0..n {
+            let (r, tag) = uint(i)?;
+            let type_at = skip_ws(r);
+            let (r, ty) = uint(r)?;
+            let (_, kind) = element_type(type_at, ty as i64)?;
+            let ntags_at = skip_ws(r);
+            let (mut r, ntags) = uint(r)?;
+            if ntags > 64 {
+                return fail(ntags_at, format!("element {tag} declares {ntags} tags"));
+            }
+            let mut tags = [0i32; 2];
+            for k in 0..ntags as usize {
+                let (r2, t) = int32(r)?;
+                if let Some(slot) = tags.get_mut(k) {
+                    *slot = t;
+                }
+                r = r2;
+            }
+            let block = self.block_v22(kind, tags[1], tags[0]);
+            let lookup = self
+                .lookup
+                .as_ref()
+                .expect("nodes are read before elements");
+            let mut conn = [0u32; 27];
+            for c in conn.iter_mut().take(kind.num_nodes()) {
+                let at = skip_ws(r);
+                let (r2, node) = uint(r)?;
+                *c = match lookup.get(node) {
+                    Some(idx) => idx,
+                    None => return fail(at, unknown_node(tag, node)),
+                };
+                r = r2;
+            }
+            let b = &mut self.blocks[block];
+            b.tags.push(tag);
+            b.connectivity.extend_from_slice(&conn[..kind.num_nodes()]);
+            i = r;
+        }
+        Ok((i, ()))
+    }
+
+    fn elements_v22_binary<'a>(&mut self, mut i: &'a [u8], n: usize, e: Endian) -> PResult<'a, ()> {
+        let mut read = 0usize;
+        while read < n {
+            let (r, head) = bytes_n(i, 12, "an element header (type, count, number of tags)")?;
+            let ty = e.i32(head);
+            let (_, kind) = element_type(i, i64::from(ty))?;
+            let follow = e.i32(&head[4..]);
+            let ntags = e.i32(&head[8..]);
+            if follow <= 0 || (follow as usize) > n - read || !(0..=64).contains(&ntags) {
+                return fail(
+                    &i[4..],
+                    format!(
+                        "bad element header: {follow} elements with {ntags} tags ({} of {n} read)",
+                        read
+                    ),
+                );
+            }
+            let nn = kind.num_nodes();
+            let stride = 4 * (1 + ntags as usize + nn);
+            let (r, data) = bytes_n(r, follow as usize * stride, "element records")?;
+            for (k, rec) in data.chunks_exact(stride).enumerate() {
+                let tag = e.i32(rec);
+                if tag <= 0 {
+                    return fail(
+                        &data[k * stride..],
+                        format!("element tag {tag} is not positive"),
+                    );
+                }
+                let physical = if ntags >= 1 { e.i32(&rec[4..]) } else { 0 };
+                let entity = if ntags >= 2 { e.i32(&rec[8..]) } else { 0 };
+                let block = self.block_v22(kind, entity, physical);
+                let lookup = self
+                    .lookup
+                    .as_ref()
+                    .expect("nodes are read before elements");
+                let nodes_at = 4 * (1 + ntags as usize);
+                let mut conn = [0u32; 27];
+                for (j, c) in conn.iter_mut().take(nn).enumerate() {
+                    let node = e.i32(&rec[nodes_at + 4 * j..]);
+                    *c = match u64::try_from(node).ok().and_then(|t| lookup.get(t)) {
+                        Some(idx) => idx,
+                        None => {
+                            return fail(
+                                &data[k * stride + nodes_at + 4 * j..],
+                                unknown_node(tag as u64, node as u64),
+                            )
+                        }
+                    };
+                }
+                let b = &mut self.blocks[block];
+                b.tags.push(tag as u64);
+                b.connectivity.extend_from_slice(&conn[..nn]);
+            }
+            read += follow as usize;
+            i = r;
+        }
+        Ok((i, ()))
+    }
+
+    /// The block that a 2.2 element of `kind` on `entity` with physical tag `physical` (0 = none)
+    /// goes to: the last block if it matches, else a new one.
+    fn block_v22(&mut self, kind: ElementType, entity: i32, physical: i32) -> usize {
+        let physicals = if physical != 0 {
+            vec![physical]
+        } else {
+            Vec::new()
+        };
+        if let Some(last) = self.blocks.last() {
+            if last.kind == kind && last.entity == entity && last.physicals == physicals {
+                return self.blocks.len() - 1;
+            }
+        }
+        self.blocks.push(ElementBlock {
+            kind,
+            entity,
+            physicals,
+            tags: Vec::new(),
+            connectivity: Vec::new(),
+        });
+        self.blocks.len() - 1
+    }
+
+    fn periodic_links<'a>(&mut self, i: &'a [u8]) -> PResult<'a, ()> {
+        if self.lookup.is_none() {
+            return fail(i, "$Periodic before $Nodes: nodes must be defined first");
+        }
+        // MSH 2.2 writes $Periodic in ASCII even in binary files.
+        let rd = match self.version() {
+            MshVersion::V22 => Reader { binary: None },
+            MshVersion::V41 => self.reader(),
+        };
+        let (mut i, n) = rd.count(i, 6, 20, "periodic links")?;
+        for _ in 0..n {
+            let at = skip_ws(i);
+            let (r, dim) = rd.int(i, "the entity dimension")?;
+            if !(0..=3).contains(&dim) {
+                return fail(at, format!("periodic entity dimension {dim} is not 0..3"));
+            }
+            let (r, entity) = rd.int(r, "the entity tag")?;
+            let (r, master) = rd.int(r, "the master entity tag")?;
+            let (r, affine) = self.periodic_affine(rd, r)?;
+            let (mut r, npairs) = rd.count(r, 4, 16, "periodic node pairs")?;
+            let lookup = self.lookup.as_ref().expect("checked above");
+            let mut nodes = Vec::with_capacity(npairs);
+            for _ in 0..npairs {
+                let at = skip_ws(r);
+                let (r2, a) = rd.size(r, "a node tag")?;
+                let (r2, b) = rd.size(r2, "a master node tag")?;
+                match (lookup.get(a), lookup.get(b)) {
+                    (Some(x), Some(y)) => nodes.push((x, y)),
+                    _ => {
+                        return fail(
+                            at,
+                            format!(
+                                "periodic node pair ({a}, {b}) names a node that is not in $Nodes"
+                            ),
+                        )
+                    }
+                }
+                r = r2;
+            }
+            self.periodic.push(PeriodicLink {
+                dim: dim as u8,
+                entity,
+                master,
+                affine,
+                nodes,
+            });
+            i = r;
+        }
+        Ok((i, ()))
+    }
+
+    /// The optional affine transform of a periodic link: 2.2 `Affine a1..a16` line, 4.1 a count
+    /// followed by that many reals.
+    fn periodic_affine<'a>(&self, rd: Reader, i: &'a [u8]) -> PResult<'a, Vec<f64>> {
+        let mut affine = Vec::new();
+        match self.version() {
+            MshVersion::V22 => {
+                let s = skip_ws(i);
+                if let Ok((mut r, _)) = tag::<&[u8], &[u8], PErr<'_>>(b"Affine").parse(s) {
+                    for _ in 0..16 {
+                        let (r2, v) = float(r)?;
+                        affine.push(v);
+                        r = r2;
+                    }
+                    return Ok((r, affine));
+                }
+                Ok((i, affine))
+            }
+            MshVersion::V41 => {
+                let (mut r, n) = rd.count(i, 2, 8, "affine values")?;
+                for _ in 0..n {
+                    let (r2, v) = rd.real(r, "the affine transform")?;
+                    affine.push(v);
+                    r = r2;
+                }
+                Ok((r, affine))
+            }
+        }
+    }
+
+    /// Resolves physical groups and builds the mesh.
+    fn finish(mut self, whole: &[u8]) -> Result<Mesh, MshError> {
+        let format = self.format.ok_or_else(|| {
+            located(
+                whole,
+                whole,
+                "$MeshFormat",
+                "not a Gmsh MSH file: no $MeshFormat section",
+            )
+        })?;
+        if self.lookup.is_none() {
+            return Err(located(
+                whole,
+                &[],
+                "$Nodes",
+                "the file has no $Nodes section",
+            ));
+        }
+        if format.version == MshVersion::V41 {
+            for b in &mut self.blocks {
+                let dim = b.kind.dim() as usize;
+                b.physicals = self.entity_physicals[dim]
+                    .get(&b.entity)
+                    .cloned()
+                    .unwrap_or_default();
+            }
+        }
+        let mut groups = self.named;
+        let mut known: BTreeSet<(u8, i32)> = groups.iter().map(|g| (g.dim, g.tag)).collect();
+        for b in &self.blocks {
+            for &p in &b.physicals {
+                let key = (b.kind.dim(), p);
+                if known.insert(key) {
+                    groups.push(PhysicalGroup {
+                        name: format!("dim{}_tag{}", key.0, key.1),
+                        dim: key.0,
+                        tag: key.1,
+                    });
+                }
+            }
+        }
+        Ok(Mesh {
+            source: None,
+            format,
+            node_tags: self.node_tags,
+            coords: self.coords,
+            blocks: self.blocks,
+            groups,
+            periodic: self.periodic,
+        })
+    }
+}
+
+/// `$MeshFormat` body: `version file-type data-size`, then for binary files the check integer.
+fn mesh_format(i: &[u8]) -> PResult<'_, MshFormat> {
+    let at = skip_ws(i);
+    let (i, ver) = token(i)?;
+    let version = match ver {
+        b"4.1" => MshVersion::V41,
+        b"2.2" | b"2.1" | b"2" | b"2.0" => MshVersion::V22,
+        b"4" | b"4.0" => {
+            return fail(at, "MSH 4.0 is not supported: re-export the mesh from Gmsh as 4.1 (Mesh.MshFileVersion = 4.1) or 2.2")
+        }
+        _ => return fail(at, format!("unsupported MSH version '{}': nlrom reads 2.2 and 4.1", show(ver))),
+    };
+    let ft_at = skip_ws(i);
+    let (i, file_type) = uint(i)?;
+    if file_type > 1 {
+        return fail(
+            ft_at,
+            format!("file-type {file_type} is neither 0 (ASCII) nor 1 (binary)"),
+        );
+    }
+    let ds_at = skip_ws(i);
+    let (i, data_size) = uint(i)?;
+    if data_size != 8 {
+        return fail(
+            ds_at,
+            format!("data-size {data_size} is not supported (only 8)"),
+        );
+    }
+    let mut big_endian = false;
+    let mut i = i;
+    if file_type == 1 {
+        let (r, ()) = end_of_line(i)?;
+        let (r, one) = bytes_n(r, 4, "the binary check integer")?;
+        let word = [one[0], one[1], one[2], one[3]];
+        big_endian = if i32::from_le_bytes(word) == 1 {
+            false
+        } else if i32::from_be_bytes(word) == 1 {
+            true
+        } else {
+            return fail(
+                one,
+                "the binary check integer is not 1 in either byte order: the file is corrupt",
+            );
+        };
+        i = r;
+    }
+    Ok((
+        i,
+        MshFormat {
+            version,
+            binary: file_type == 1,
+            big_endian,
+        },
+    ))
+}
+
+/// A count on an ASCII line (2.2 headers are ASCII also in binary files), checked against the
+/// bytes that remain (`min_ascii` / `min_binary` bytes per item).
+fn rd_count_ascii<'a>(
+    i: &'a [u8],
+    min_ascii: usize,
+    min_binary: usize,
+    binary: bool,
+    what: &str,
+) -> PResult<'a, usize> {
+    let at = skip_ws(i);
+    let (rest, n) = uint(i)?;
+    checked_count(
+        at,
+        rest,
+        n,
+        if binary { min_binary } else { min_ascii },
+        what,
+    )
+}
+
+/// A list `n v1 .. vn` of `int`s preceded by its `size_t` length.
+fn int_list<'a>(rd: Reader, i: &'a [u8], what: &str) -> PResult<'a, Vec<i32>> {
+    let (mut i, n) = rd.count(i, 2, 4, what)?;
+    let mut out = Vec::with_capacity(n);
+    for _ in 0..n {
+        let (r, v) = rd.int(i, what)?;
+        out.push(v);
+        i = r;
+    }
+    Ok((i, out))
+}
+
+/// A physical name in double quotes (Gmsh writes them so; an unquoted word is accepted).
+fn quoted_name(i: &[u8]) -> PResult<'_, String> {
+    let i = skip_ws(i);
+    if let Some(body) = i.strip_prefix(b"\"") {
+        let n = match body.iter().position(|&c| c == b'"' || c == b'\n') {
+            Some(n) if body[n] == b'"' => n,
+            _ => return fail(i, "unterminated physical name (missing closing '\"')"),
+        };
+        return Ok((
+            &body[n + 1..],
+            String::from_utf8_lossy(&body[..n]).into_owned(),
+        ));
+    }
+    let (r, tok) = token(i)?;
+    Ok((r, String::from_utf8_lossy(tok).into_owned()))
+}
+
+/// The element type for a Gmsh type number, or an error naming it.
+fn element_type(at: &[u8], ty: i64) -> PResult<'_, ElementType> {
+    match ElementType::from_gmsh(ty) {
+        Some(k) => Ok((at, k)),
+        None => fail(
+            at,
+            format!("unknown or unsupported element type {ty}: nlrom reads Gmsh types 1-19 (points, lines, triangles, quads, tetrahedra, hexahedra, prisms, pyramids up to second order)"),
+        ),
+    }
+}
+
+fn unknown_node(element: u64, node: u64) -> String {
+    format!("element {element} references node {node}, which is not in $Nodes")
+}
+
+/// Skips an unknown section up to (not including) its `$End<name>`.
+fn skip_section<'a>(i: &'a [u8], name: &[u8]) -> PResult<'a, ()> {
+    let mut closing = b"$End".to_vec();
+    closing.extend_from_slice(name);
+    let found = take_until::<&[u8], &[u8], nom::error::Error<&[u8]>>(closing.as_slice())
+        .parse(i)
+        .map(|(rest, _)| rest);
+    match found {
+        Ok(rest) => Ok((rest, ())),
+        Err(_) => fail(
+            &i[i.len()..],
+            format!(
+                "missing ${}: the file ends inside the section",
+                String::from_utf8_lossy(&closing[1..])
+            ),
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TINY_41: &str = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n2 1 \"face\"\n3 2 \"solid body\"\n$EndPhysicalNames\n$Entities\n0 0 1 1\n5 0 0 0 1 1 0 1 1 0\n7 0 0 0 1 1 1 1 2 1 5\n$EndEntities\n$Nodes\n2 4 10 40\n2 5 0 3\n10\n20\n30\n0 0 0\n1 0 0\n0 1 0\n3 7 0 1\n40\n0 0 1\n$EndNodes\n$Elements\n2 2 1 9\n2 5 2 1\n1 10 20 30\n3 7 4 1\n9 10 20 30 40\n$EndElements\n";
+
+    #[test]
+    fn tiny_41_ascii() {
+        let m = parse_msh(TINY_41.as_bytes()).expect("parses");
+        assert_eq!(m.node_tags, vec![10, 20, 30, 40]);
+        assert_eq!(m.coords[3], [0.0, 0.0, 1.0]);
+        assert_eq!(m.blocks.len(), 2);
+        assert_eq!(m.blocks[1].kind, ElementType::Tetra4);
+        assert_eq!(m.blocks[1].connectivity, vec![0, 1, 2, 3]);
+        let g = m.group("solid body").expect("group");
+        assert_eq!(m.group_element_count(g), 1);
+        assert_eq!(
+            m.group_node_indices(m.group("face").expect("face")),
+            vec![0, 1, 2]
+        );
+    }
+
+    #[test]
+    fn errors_carry_line_and_section() {
+        let bad = TINY_41.replace("1 10 20 30\n", "1 10 20 31\n");
+        let e = parse_msh(bad.as_bytes()).expect_err("unknown node");
+        assert_eq!(e.section, "$Elements");
+        assert_eq!(e.line, 30);
+        assert!(e.message.contains("node 31"), "{}", e.message);
+    }
+
+    #[test]
+    fn node_lookup_variants() {
+        let dense = NodeLookup::new(&[1, 3, 7]);
+        assert!(matches!(dense, NodeLookup::Dense(_)));
+        assert_eq!(dense.get(7), Some(2));
+        assert_eq!(dense.get(2), None);
+        let sparse = NodeLookup::new(&[5, 1 << 40]);
+        assert!(matches!(sparse, NodeLookup::Sparse(_)));
+        assert_eq!(sparse.get(1 << 40), Some(1));
+        let contiguous = NodeLookup::new(&[4, 5, 6]);
+        assert_eq!(contiguous.get(3), None);
+        assert_eq!(contiguous.get(6), Some(2));
+    }
+}
