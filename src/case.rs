@@ -439,9 +439,9 @@ pub struct Response {
 pub struct FrictionElement {
     /// The element kind (only `friction`).
     pub kind: ElementKind,
-    /// Tangential relative displacement u_t = Σ weights·q[dofs]; the force acts back along it.
+    /// Tangential relative displacement u_t = Σ weights·q\[dofs\]; the force acts back along it.
     pub tangential: WeightedDofs,
-    /// Normal relative displacement v = Σ weights·q[dofs] (optional normal load variation).
+    /// Normal relative displacement v = Σ weights·q\[dofs\] (optional normal load variation).
     #[serde(default)]
     pub normal: Option<WeightedDofs>,
     /// Tangential stiffness (N/m), ≥ 0.
@@ -463,7 +463,7 @@ pub enum ElementKind {
     Friction,
 }
 
-/// A linear combination Σ weights[i]·q[dofs[i]] of matrix rows.
+/// A linear combination Σ weights\[i\]·q\[dofs\[i\]\] of matrix rows.
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WeightedDofs {
@@ -990,23 +990,26 @@ impl Case {
         )
     }
 
+    /// `Ok(())` if `ok`, else an input error at `key` with the message `msg()`.
+    fn require<M: fmt::Display>(&self, ok: bool, key: &str, msg: impl FnOnce() -> M) -> Result<()> {
+        if ok {
+            Ok(())
+        } else {
+            Err(self.key_error(&KeyPath::parse(key), msg()))
+        }
+    }
+
     /// Error unless `v` is finite and > 0.
     fn positive(&self, key: &str, v: f64) -> Result<()> {
-        check(v.is_finite() && v > 0.0, || {
-            self.key_error(
-                &KeyPath::parse(key),
-                format!("must be a finite number > 0 (found {v})"),
-            )
+        self.require(v.is_finite() && v > 0.0, key, || {
+            format!("must be a finite number > 0 (found {v})")
         })
     }
 
     /// Error unless `v` is finite and ≥ 0.
     fn non_negative(&self, key: &str, v: f64) -> Result<()> {
-        check(v.is_finite() && v >= 0.0, || {
-            self.key_error(
-                &KeyPath::parse(key),
-                format!("must be a finite number ≥ 0 (found {v})"),
-            )
+        self.require(v.is_finite() && v >= 0.0, key, || {
+            format!("must be a finite number ≥ 0 (found {v})")
         })
     }
 
@@ -1018,15 +1021,6 @@ impl Case {
                 Err(self.key_error(&KeyPath::parse(key), format!("must be finite (found {x})")))
             }
         }
-    }
-}
-
-/// `Ok(())` if `ok`, else the error `err()`.
-fn check(ok: bool, err: impl FnOnce() -> Error) -> Result<()> {
-    if ok {
-        Ok(())
-    } else {
-        Err(err())
     }
 }
 
@@ -1093,12 +1087,11 @@ impl Case {
         self.positive(&format!("{key}.young"), m.young)?;
         self.positive(&format!("{key}.density"), m.density)?;
         let nu = m.poisson;
-        check(nu.is_finite() && nu > -1.0 && nu < 0.5, || {
-            self.key_error(
-                &KeyPath::parse(&format!("{key}.poisson")),
-                format!("Poisson's ratio must satisfy -1 < ν < 0.5 (found {nu})"),
-            )
-        })
+        self.require(
+            nu.is_finite() && nu > -1.0 && nu < 0.5,
+            &format!("{key}.poisson"),
+            || format!("Poisson's ratio must satisfy -1 < ν < 0.5 (found {nu})"),
+        )
     }
 
     /// A model without a mesh has no groups: nothing may name one.
@@ -1140,12 +1133,12 @@ impl Case {
 
     fn validate_damping(&self) -> Result<()> {
         match &self.model.damping {
-            Some(Damping::Modal(z)) => check(z.is_finite() && (0.0..1.0).contains(z), || {
-                self.key_error(
-                    &KeyPath::parse("model.damping.modal"),
-                    format!("the modal damping ratio must satisfy 0 ≤ ζ < 1 (found {z})"),
-                )
-            }),
+            Some(Damping::Modal(z)) => {
+                let ok = z.is_finite() && (0.0..1.0).contains(z);
+                self.require(ok, "model.damping.modal", || {
+                    format!("the modal damping ratio must satisfy 0 ≤ ζ < 1 (found {z})")
+                })
+            }
             Some(Damping::Rayleigh { alpha, beta }) => {
                 self.non_negative("model.damping.rayleigh[0]", *alpha)?;
                 self.non_negative("model.damping.rayleigh[1]", *beta)
@@ -1156,35 +1149,25 @@ impl Case {
 
     fn validate_cyclic(&self) -> Result<()> {
         let Some(c) = &self.cyclic else { return Ok(()) };
-        check(c.sectors >= 2, || {
-            self.key_error(
-                &KeyPath::parse("cyclic.sectors"),
-                format!("needs at least 2 sectors (found {})", c.sectors),
-            )
+        self.require(c.sectors >= 2, "cyclic.sectors", || {
+            format!("needs at least 2 sectors (found {})", c.sectors)
         })?;
         self.finite("cyclic.axis.origin", &c.axis.origin)?;
         self.finite("cyclic.axis.direction", &c.axis.direction)?;
-        check(norm(&c.axis.direction) > 0.0, || {
-            self.key_error(
-                &KeyPath::parse("cyclic.axis.direction"),
-                "the axis direction must not be zero",
-            )
-        })?;
-        check(c.low != c.high, || {
-            self.key_error(
-                &KeyPath::parse("cyclic.high"),
-                format!("the low and high frontiers are the same group '{}'", c.low),
-            )
+        self.require(
+            norm(&c.axis.direction) > 0.0,
+            "cyclic.axis.direction",
+            || "the axis direction must not be zero",
+        )?;
+        self.require(c.low != c.high, "cyclic.high", || {
+            format!("the low and high frontiers are the same group '{}'", c.low)
         })?;
         let needs_eo = self
             .excitation
             .as_ref()
             .is_some_and(|e| e.engine_order.is_none());
-        check(!needs_eo, || {
-            self.key_error(
-                &KeyPath::parse("excitation"),
-                "a cyclic model needs `engine_order` (the excitation's engine order m)",
-            )
+        self.require(!needs_eo, "excitation", || {
+            "a cyclic model needs `engine_order` (the excitation's engine order m)"
         })
     }
 
@@ -1192,11 +1175,8 @@ impl Case {
         let Some(r) = &self.reduction else {
             return Ok(());
         };
-        check(r.gsi_modes != Some(0), || {
-            self.key_error(
-                &KeyPath::parse("reduction.gsi_modes"),
-                "must be ≥ 1; omit it to keep all frontier DOF",
-            )
+        self.require(r.gsi_modes != Some(0), "reduction.gsi_modes", || {
+            "must be ≥ 1; omit it to keep all frontier DOF"
         })
     }
 
@@ -1204,18 +1184,18 @@ impl Case {
         let mut names = HashSet::new();
         for (i, c) in self.contact.iter().enumerate() {
             let key = format!("contact[{i}]");
-            check(!c.name.trim().is_empty(), || {
-                self.key_error(&KeyPath::parse(&format!("{key}.name")), "must not be empty")
-            })?;
-            check(names.insert(c.name.as_str()), || {
-                self.key_error(
-                    &KeyPath::parse(&format!("{key}.name")),
+            let ok_name = !c.name.trim().is_empty() && !c.name.contains('.');
+            self.require(ok_name, &format!("{key}.name"), || format!("'{}' is not a usable name: it must be non-empty and contain no '.' (sweep paths are contact.<name>.<field>)", c.name))?;
+            self.require(
+                names.insert(c.name.as_str()),
+                &format!("{key}.name"),
+                || {
                     format!(
                         "contact name '{}' is used twice; names must be unique",
                         c.name
-                    ),
-                )
-            })?;
+                    )
+                },
+            )?;
             self.check_friction(&key, c.mu, c.kt, c.kn, c.n0, true)?;
             if let Some(m) = &c.misalignment {
                 self.check_misalignment(&format!("{key}.misalignment"), m)?;
@@ -1238,17 +1218,14 @@ impl Case {
         self.non_negative(&format!("{key}.kt"), kt)?;
         self.non_negative(&format!("{key}.kn"), kn)?;
         self.finite(&format!("{key}.n0"), &[n0])?;
-        let n0_key = KeyPath::parse(&format!("{key}.n0"));
+        let n0_key = format!("{key}.n0");
         if !normal {
-            return check(n0 >= 0.0, || {
-                self.key_error(&n0_key, format!("without a `normal` direction the slip limit is mu·n0, so n0 must be ≥ 0 (found {n0})"))
+            return self.require(n0 >= 0.0, &n0_key, || {
+                format!("without a `normal` direction the slip limit is mu·n0, so n0 must be ≥ 0 (found {n0})")
             });
         }
-        check(n0 >= 0.0 || kn > 0.0, || {
-            self.key_error(
-                &n0_key,
-                format!("n0 = {n0} < 0 means an initial gap -n0/kn, which needs kn > 0"),
-            )
+        self.require(n0 >= 0.0 || kn > 0.0, &n0_key, || {
+            format!("n0 = {n0} < 0 means an initial gap -n0/kn, which needs kn > 0")
         })
     }
 
@@ -1258,11 +1235,8 @@ impl Case {
         self.finite(&format!("{key}.rotate.axis"), &r.axis)?;
         self.finite(&format!("{key}.rotate.origin"), &r.origin)?;
         self.finite(&format!("{key}.rotate.angle_deg"), &[r.angle_deg])?;
-        check(norm(&r.axis) > 0.0, || {
-            self.key_error(
-                &KeyPath::parse(&format!("{key}.rotate.axis")),
-                "the rotation axis must not be zero",
-            )
+        self.require(norm(&r.axis) > 0.0, &format!("{key}.rotate.axis"), || {
+            "the rotation axis must not be zero"
         })
     }
 
@@ -1281,11 +1255,8 @@ impl Case {
         let Some(r) = &self.response else {
             return Ok(());
         };
-        check(r.groups.is_empty() || r.dofs.is_empty(), || {
-            self.key_error(
-                &KeyPath::parse("response"),
-                "give either `groups` (mesh models) or `dofs` (matrix rows), not both",
-            )
+        self.require(r.groups.is_empty() || r.dofs.is_empty(), "response", || {
+            "give either `groups` (mesh models) or `dofs` (matrix rows), not both"
         })
     }
 
@@ -1302,34 +1273,35 @@ impl Case {
     }
 
     fn check_weighted(&self, key: &str, w: &WeightedDofs) -> Result<()> {
-        check(
-            !w.dofs.is_empty() && w.dofs.len() == w.weights.len(),
-            || {
-                self.key_error(
-                &KeyPath::parse(key),
-                format!("`dofs` ({} entries) and `weights` ({} entries) must be non-empty lists of equal length", w.dofs.len(), w.weights.len()),
+        let ok = !w.dofs.is_empty() && w.dofs.len() == w.weights.len();
+        self.require(ok, key, || {
+            format!(
+                "`dofs` ({} entries) and `weights` ({} entries) must be non-empty lists of equal length",
+                w.dofs.len(),
+                w.weights.len()
             )
-            },
-        )?;
+        })?;
         self.finite(&format!("{key}.weights"), &w.weights)
     }
 
     fn validate_harmonic_balance(&self) -> Result<()> {
         let hb = &self.harmonic_balance;
         let h = hb.harmonics;
-        check(h >= 1, || {
-            self.key_error(
-                &KeyPath::parse("harmonic_balance.harmonics"),
-                "needs at least 1 harmonic (the forcing is on harmonic 1)",
-            )
+        self.require(h >= 1, "harmonic_balance.harmonics", || {
+            "needs at least 1 harmonic (the forcing is on harmonic 1)"
         })?;
-        match hb.time_samples {
-            Some(n) if n < 2 * h + 2 => Err(self.key_error(
-                &KeyPath::parse("harmonic_balance.time_samples"),
-                format!("{n} samples cannot resolve {h} harmonics without aliasing; use at least 2H+2 = {} (or omit it for the default {})", 2 * h + 2, HarmonicBalance { harmonics: h, time_samples: None }.samples()),
-            )),
-            _ => Ok(()),
+        let n = hb.samples();
+        let default = HarmonicBalance {
+            harmonics: h,
+            time_samples: None,
         }
+        .samples();
+        self.require(n >= 2 * h + 2, "harmonic_balance.time_samples", || {
+            format!(
+                "{n} samples cannot resolve {h} harmonics without aliasing; use at least 2H+2 = {} (or omit it for the default {default})",
+                2 * h + 2
+            )
+        })
     }
 
     fn validate_continuation(&self) -> Result<()> {
@@ -1340,11 +1312,8 @@ impl Case {
         self.positive(&k("start"), c.start)?;
         self.positive(&k("end"), c.end)?;
         self.positive(&k("step"), c.step)?;
-        check(c.start != c.end, || {
-            self.key_error(
-                &KeyPath::parse(&k("end")),
-                "the range is empty: end equals start",
-            )
+        self.require(c.start != c.end, &k("end"), || {
+            "the range is empty: end equals start"
         })?;
         if let Some(s) = c.min_step {
             self.positive(&k("min_step"), s)?;
@@ -1353,35 +1322,29 @@ impl Case {
             self.positive(&k("max_step"), s)?;
         }
         if let (Some(lo), Some(hi)) = (c.min_step, c.max_step) {
-            check(lo <= hi, || {
-                self.key_error(
-                    &KeyPath::parse(&k("min_step")),
-                    format!("min step {lo} exceeds max step {hi}"),
-                )
+            self.require(lo <= hi, &k("min_step"), || {
+                format!("min step {lo} exceeds max step {hi}")
             })?;
         }
         if let Some(t) = c.tolerance {
             self.positive("continuation.tolerance", t)?;
         }
-        check(c.max_points != Some(0), || {
-            self.key_error(&KeyPath::parse("continuation.max_points"), "must be ≥ 1")
+        self.require(c.max_points != Some(0), "continuation.max_points", || {
+            "must be ≥ 1"
         })?;
-        check(c.max_iterations != Some(0), || {
-            self.key_error(
-                &KeyPath::parse("continuation.max_iterations"),
-                "must be ≥ 1",
-            )
-        })
+        self.require(
+            c.max_iterations != Some(0),
+            "continuation.max_iterations",
+            || "must be ≥ 1",
+        )
     }
 
     fn validate_march(&self) -> Result<()> {
         let Some(m) = &self.march else { return Ok(()) };
         self.positive(&format!("march.frequency_{}", m.unit.suffix()), m.frequency)?;
-        check(m.periods >= 1, || {
-            self.key_error(&KeyPath::parse("march.periods"), "must be ≥ 1")
-        })?;
-        check(m.steps_per_period >= 1, || {
-            self.key_error(&KeyPath::parse("march.steps_per_period"), "must be ≥ 1")
+        self.require(m.periods >= 1, "march.periods", || "must be ≥ 1")?;
+        self.require(m.steps_per_period >= 1, "march.steps_per_period", || {
+            "must be ≥ 1"
         })
     }
 }

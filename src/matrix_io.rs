@@ -76,12 +76,13 @@ pub fn read_real_matrix(path: &Path) -> Result<SparseColMat<usize, f64>> {
 pub fn parse_matrix_market(text: &str, name: &str) -> Result<SparseMatrix> {
     let mut lines = DataLines::new(text, name);
     let header = Header::parse(&mut lines)?;
-    let entries = match header.format {
-        Format::Coordinate => read_coordinate(&mut lines, &header)?,
-        Format::Array => read_array(&mut lines, &header)?,
+    let mut full = FullStorage::new(&header);
+    match header.format {
+        Format::Coordinate => read_coordinate(&mut lines, &header, &mut full)?,
+        Format::Array => read_array(&mut lines, &header, &mut full)?,
     };
     lines.expect_end()?;
-    build_matrix(entries, &header, name)
+    full.build(&header, name)
 }
 
 /// Reads a whole file as UTF-8 text; errors name the file.
@@ -346,7 +347,7 @@ fn symmetry_name(s: Symmetry) -> &'static str {
 // Reading: entries
 // ---------------------------------------------------------------------------------------------
 
-/// One stored entry, 0-based, with its value as (re, im) and the line it came from.
+/// One stored entry, 0-based, with its value as (re, im).
 #[derive(Clone, Copy, Debug)]
 struct Entry {
     row: usize,
@@ -447,8 +448,7 @@ impl Triangles {
 }
 
 /// Reads the entries of a coordinate file, checking the declared count.
-fn read_coordinate(lines: &mut DataLines, h: &Header) -> Result<Vec<(Entry, usize)>> {
-    let mut entries = Vec::with_capacity(h.count.min(1 << 24));
+fn read_coordinate(lines: &mut DataLines, h: &Header, full: &mut FullStorage) -> Result<()> {
     let mut triangles = Triangles::default();
     for k in 0..h.count {
         let Some((no, line)) = lines.next_data() else {
@@ -464,9 +464,9 @@ fn read_coordinate(lines: &mut DataLines, h: &Header) -> Result<Vec<(Entry, usiz
         if h.symmetry != Symmetry::General {
             triangles.record(&e, no).map_err(|m| lines.err(no, m))?;
         }
-        entries.push((e, no));
+        full.add(e, h.symmetry).map_err(|m| lines.err(no, m))?;
     }
-    Ok(entries)
+    Ok(())
 }
 
 /// The first stored row of column `col` of an array file: 0 (general), `col` (symmetric lower
@@ -480,8 +480,7 @@ fn first_array_row(h: &Header, col: usize) -> usize {
 }
 
 /// Reads the values of an array file; zeros are dropped.
-fn read_array(lines: &mut DataLines, h: &Header) -> Result<Vec<(Entry, usize)>> {
-    let mut entries = Vec::new();
+fn read_array(lines: &mut DataLines, h: &Header, full: &mut FullStorage) -> Result<()> {
     let (mut row, mut col) = (first_array_row(h, 0), 0);
     for k in 0..h.count {
         let Some((no, line)) = lines.next_data() else {
@@ -509,11 +508,12 @@ fn read_array(lines: &mut DataLines, h: &Header) -> Result<Vec<(Entry, usize)>> 
         }
         let (re, im) = parse_values(h, &fields).map_err(|m| lines.err(no, m))?;
         if re != 0.0 || im != 0.0 {
-            entries.push((Entry { row, col, re, im }, no));
+            let e = Entry { row, col, re, im };
+            full.add(e, h.symmetry).map_err(|m| lines.err(no, m))?;
         }
         (row, col) = next_array_position(h, row, col);
     }
-    Ok(entries)
+    Ok(())
 }
 
 /// The position after (row, col) in array order.
@@ -524,59 +524,71 @@ fn next_array_position(h: &Header, row: usize, col: usize) -> (usize, usize) {
     (first_array_row(h, col + 1), col + 1)
 }
 
-/// Expands the stored entries to the full matrix and builds it.
-fn build_matrix(entries: Vec<(Entry, usize)>, h: &Header, name: &str) -> Result<SparseMatrix> {
-    let mut full = Vec::with_capacity(2 * entries.len());
-    for (e, line) in entries {
-        expand_entry(e, h.symmetry, &mut full)
-            .map_err(|m| Error::input(format!("{name}: line {line}: {m}")))?;
-    }
-    if h.field == Field::Complex {
-        let t: Vec<Triplet<usize, usize, c64>> = full
-            .iter()
-            .map(|e| Triplet::new(e.row, e.col, c64::new(e.re, e.im)))
-            .collect();
-        from_triplets(h, &t, name).map(SparseMatrix::Complex)
-    } else {
-        let t: Vec<Triplet<usize, usize, f64>> = full
-            .iter()
-            .map(|e| Triplet::new(e.row, e.col, e.re))
-            .collect();
-        from_triplets(h, &t, name).map(SparseMatrix::Real)
-    }
+/// The full-storage triplets of the matrix being read (real or complex, by the file's field).
+struct FullStorage {
+    complex: bool,
+    real: Vec<Triplet<usize, usize, f64>>,
+    cplx: Vec<Triplet<usize, usize, c64>>,
 }
 
-/// Pushes an entry and, for symmetric storage, its mirror image.
-fn expand_entry(e: Entry, sym: Symmetry, out: &mut Vec<Entry>) -> std::result::Result<(), String> {
-    out.push(e);
-    let diagonal = e.row == e.col;
-    let mirror = |re: f64, im: f64| Entry {
-        row: e.col,
-        col: e.row,
-        re,
-        im,
-    };
-    match sym {
-        Symmetry::General => {}
-        Symmetry::Symmetric if !diagonal => out.push(mirror(e.re, e.im)),
-        Symmetry::Hermitian if diagonal && e.im != 0.0 => {
-            return Err(format!(
-                "diagonal entry ({0}, {0}) of a hermitian matrix has imaginary part {1}; it must be real",
-                e.row + 1,
-                e.im
-            ))
+impl FullStorage {
+    fn new(h: &Header) -> Self {
+        FullStorage {
+            complex: h.field == Field::Complex,
+            real: Vec::new(),
+            cplx: Vec::new(),
         }
-        Symmetry::Hermitian if !diagonal => out.push(mirror(e.re, -e.im)),
-        Symmetry::SkewSymmetric if diagonal && (e.re != 0.0 || e.im != 0.0) => {
-            return Err(format!(
-                "diagonal entry ({0}, {0}) of a skew-symmetric matrix must be zero",
-                e.row + 1
-            ))
-        }
-        Symmetry::SkewSymmetric if !diagonal => out.push(mirror(-e.re, -e.im)),
-        _ => {}
     }
-    Ok(())
+
+    /// Stores one value at (row, col).
+    fn push(&mut self, row: usize, col: usize, re: f64, im: f64) {
+        if self.complex {
+            self.cplx.push(Triplet::new(row, col, c64::new(re, im)));
+        } else {
+            self.real.push(Triplet::new(row, col, re));
+        }
+    }
+
+    /// Stores a file entry and, for symmetric storage, its mirror image.
+    fn add(&mut self, e: Entry, sym: Symmetry) -> std::result::Result<(), String> {
+        let diagonal = e.row == e.col;
+        match sym {
+            Symmetry::Hermitian if diagonal && e.im != 0.0 => {
+                return Err(format!(
+                    "diagonal entry ({0}, {0}) of a hermitian matrix has imaginary part {1}; it must be real",
+                    e.row + 1,
+                    e.im
+                ))
+            }
+            Symmetry::SkewSymmetric if diagonal && (e.re != 0.0 || e.im != 0.0) => {
+                return Err(format!(
+                    "diagonal entry ({0}, {0}) of a skew-symmetric matrix must be zero",
+                    e.row + 1
+                ))
+            }
+            _ => {}
+        }
+        self.push(e.row, e.col, e.re, e.im);
+        if !diagonal {
+            let (re, im) = match sym {
+                Symmetry::General => return Ok(()),
+                Symmetry::Symmetric => (e.re, e.im),
+                Symmetry::Hermitian => (e.re, -e.im),
+                Symmetry::SkewSymmetric => (-e.re, -e.im),
+            };
+            self.push(e.col, e.row, re, im);
+        }
+        Ok(())
+    }
+
+    /// Builds the matrix (duplicates summed).
+    fn build(self, h: &Header, name: &str) -> Result<SparseMatrix> {
+        if self.complex {
+            from_triplets(h, &self.cplx, name).map(SparseMatrix::Complex)
+        } else {
+            from_triplets(h, &self.real, name).map(SparseMatrix::Real)
+        }
+    }
 }
 
 /// Builds a faer matrix from full-storage triplets (duplicates are summed).

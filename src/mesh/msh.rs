@@ -232,6 +232,9 @@ fn int32(i: &[u8]) -> PResult<'_, i32> {
         Some(b'+') => (false, &i[1..]),
         _ => (false, i),
     };
+    if digits.is_empty() {
+        return fail(digits, EOF_MSG);
+    }
     if digits.first().is_some_and(|c| c.is_ascii_whitespace()) {
         return fail(i, format!("expected an integer, found '{}'", show(i)));
     }
@@ -615,12 +618,12 @@ impl State {
                 for (k, rec) in data.chunks_exact(28).enumerate() {
                     let tag = e.i32(rec);
                     if tag <= 0 {
-                        return fail(&data[k * 28..], format!("node tag {tag} is not positive"));
+                        return fail(&i[k * 28..], format!("node tag {tag} is not positive"));
                     }
                     let p = [e.f64(&rec[4..]), e.f64(&rec[12..]), e.f64(&rec[20..])];
                     if !p.iter().all(|v| v.is_finite()) {
                         return fail(
-                            &data[k * 28..],
+                            &i[k * 28..],
                             format!("node {tag} has a non-finite coordinate"),
                         );
                     }
@@ -693,20 +696,21 @@ impl State {
         extra: usize,
         e: Endian,
     ) -> PResult<'a, ()> {
+        let start = i;
         let (i, tags) = bytes_n(i, n * 8, "node tags")?;
         let stride = 8 * (3 + extra);
         let (i, xyz) = bytes_n(i, n * stride, "node coordinates")?;
         for (k, t) in tags.chunks_exact(8).enumerate() {
             let tag = e.u64(t);
             if tag == 0 {
-                return fail(&tags[k * 8..], "node tag 0 is not allowed");
+                return fail(&start[k * 8..], "node tag 0 is not allowed");
             }
             self.node_tags.push(tag);
         }
         for (k, rec) in xyz.chunks_exact(stride).enumerate() {
             let p = [e.f64(rec), e.f64(&rec[8..]), e.f64(&rec[16..])];
             if !p.iter().all(|v| v.is_finite()) {
-                return fail(&xyz[k * stride..], "non-finite node coordinate");
+                return fail(&start[n * 8 + k * stride..], "non-finite node coordinate");
             }
             self.coords.push(p);
         }
@@ -825,6 +829,7 @@ impl State {
     ) -> PResult<'a, ()> {
         let nn = block.kind.num_nodes();
         let stride = 8 * (nn + 1);
+        let start = i;
         let (i, data) = bytes_n(i, n * stride, "element records")?;
         let lookup = self
             .lookup
@@ -838,7 +843,7 @@ impl State {
                 match lookup.get(node) {
                     Some(idx) => block.connectivity.push(idx),
                     None => {
-                        return fail(&data[k * stride + 8 * (j + 1)..], unknown_node(tag, node))
+                        return fail(&start[k * stride + 8 * (j + 1)..], unknown_node(tag, node))
                     }
                 }
             }
@@ -944,12 +949,13 @@ impl State {
             }
             let nn = kind.num_nodes();
             let stride = 4 * (1 + ntags as usize + nn);
+            let start = r;
             let (r, data) = bytes_n(r, follow as usize * stride, "element records")?;
             for (k, rec) in data.chunks_exact(stride).enumerate() {
                 let tag = e.i32(rec);
                 if tag <= 0 {
                     return fail(
-                        &data[k * stride..],
+                        &start[k * stride..],
                         format!("element tag {tag} is not positive"),
                     );
                 }
@@ -968,7 +974,7 @@ impl State {
                         Some(idx) => idx,
                         None => {
                             return fail(
-                                &data[k * stride + nodes_at + 4 * j..],
+                                &start[k * stride + nodes_at + 4 * j..],
                                 unknown_node(tag as u64, node as u64),
                             )
                         }
@@ -1172,6 +1178,7 @@ fn mesh_format(i: &[u8]) -> PResult<'_, MshFormat> {
     let mut i = i;
     if file_type == 1 {
         let (r, ()) = end_of_line(i)?;
+        let start = r;
         let (r, one) = bytes_n(r, 4, "the binary check integer")?;
         let word = [one[0], one[1], one[2], one[3]];
         big_endian = if i32::from_le_bytes(word) == 1 {
@@ -1180,7 +1187,7 @@ fn mesh_format(i: &[u8]) -> PResult<'_, MshFormat> {
             true
         } else {
             return fail(
-                one,
+                start,
                 "the binary check integer is not 1 in either byte order: the file is corrupt",
             );
         };
