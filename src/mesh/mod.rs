@@ -12,6 +12,9 @@ pub mod msh;
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use rayon::prelude::*;
 
 pub use element::ElementType;
 
@@ -186,17 +189,21 @@ impl Mesh {
         self.group_blocks(group).map(ElementBlock::len).sum()
     }
 
-    /// Sorted, distinct node indices of the elements of `group`.
+    /// Sorted, distinct node indices of the elements of `group` (marked in parallel).
     pub fn group_node_indices(&self, group: &PhysicalGroup) -> Vec<u32> {
-        let mut used = vec![false; self.num_nodes()];
+        let used: Vec<AtomicBool> = (0..self.num_nodes())
+            .map(|_| AtomicBool::new(false))
+            .collect();
         for b in self.group_blocks(group) {
-            for &n in &b.connectivity {
-                used[n as usize] = true;
-            }
+            b.connectivity.par_chunks(1 << 16).for_each(|chunk| {
+                for &n in chunk {
+                    used[n as usize].store(true, Ordering::Relaxed);
+                }
+            });
         }
         used.iter()
             .enumerate()
-            .filter_map(|(i, &u)| u.then_some(i as u32))
+            .filter_map(|(i, u)| u.load(Ordering::Relaxed).then_some(i as u32))
             .collect()
     }
 
@@ -223,7 +230,18 @@ impl Mesh {
 
     /// Axis-aligned bounding box `[min, max]` of all nodes (zeros for an empty mesh).
     pub fn bbox(&self) -> [[f64; 3]; 2] {
-        bbox_of(self.coords.iter())
+        self.coords
+            .par_chunks(1 << 16)
+            .map(|c| bbox_of(c.iter()))
+            .reduce_with(|a, b| {
+                let mut out = a;
+                for k in 0..3 {
+                    out[0][k] = a[0][k].min(b[0][k]);
+                    out[1][k] = a[1][k].max(b[1][k]);
+                }
+                out
+            })
+            .unwrap_or([[0.0; 3]; 2])
     }
 
     /// Length of the bounding box diagonal (m): the model size that relative tolerances refer to.

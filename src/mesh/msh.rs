@@ -23,6 +23,7 @@ use std::path::Path;
 use nom::bytes::complete::{tag, take, take_until};
 use nom::error::{ErrorKind, ParseError};
 use nom::{IResult, Parser};
+use rayon::prelude::*;
 
 use super::{ElementBlock, ElementType, Mesh, MshFormat, MshVersion, PeriodicLink, PhysicalGroup};
 use crate::error::Error;
@@ -44,9 +45,24 @@ pub struct MshError {
 }
 
 /// Reads and parses the MSH file at `path`.
+///
+/// The file is memory-mapped (pre-faulted) rather than copied into a buffer; if mapping is not
+/// possible (a pipe, an exotic file system) it is read into memory instead.
 pub fn read_msh(path: &Path) -> crate::Result<Mesh> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let mut mesh = parse_msh(&bytes).map_err(|mut e| {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    // SAFETY: the map is read-only and lives only for this call. The usual caveat of memory maps
+    // applies: if another process truncates the file while it is parsed, the process may receive
+    // SIGBUS; nlrom never modifies its input files.
+    let mapped = unsafe { memmap2::MmapOptions::new().populate().map(&file) };
+    let owned;
+    let bytes: &[u8] = match &mapped {
+        Ok(m) => m,
+        Err(_) => {
+            owned = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+            &owned
+        }
+    };
+    let mut mesh = parse_msh(bytes).map_err(|mut e| {
         e.file = path.display().to_string();
         e
     })?;
@@ -155,6 +171,7 @@ fn located(whole: &[u8], at: &[u8], section: &str, msg: &str) -> MshError {
 }
 
 /// Skips ASCII white space (space, tab, CR, LF).
+#[inline]
 fn skip_ws(i: &[u8]) -> &[u8] {
     let n = i
         .iter()
@@ -194,10 +211,20 @@ fn token(i: &[u8]) -> PResult<'_, &[u8]> {
 }
 
 /// An unsigned decimal integer token.
+#[inline]
 fn uint(i: &[u8]) -> PResult<'_, u64> {
     let i = skip_ws(i);
+    // Up to 19 digits cannot overflow a u64: no checks on the hot path.
     let mut value: u64 = 0;
     let mut n = 0;
+    while let Some(&c) = i.get(n) {
+        let d = c.wrapping_sub(b'0');
+        if d > 9 || n == 19 {
+            break;
+        }
+        value = value * 10 + u64::from(d);
+        n += 1;
+    }
     while let Some(&c) = i.get(n) {
         let d = c.wrapping_sub(b'0');
         if d > 9 {
@@ -297,6 +324,9 @@ fn checked_count<'a>(
     Ok((rest, n as usize))
 }
 
+/// Records decoded per parallel task in binary node and element blocks.
+const PAR_RECORDS: usize = 1 << 14;
+
 /// Byte order of binary data.
 #[derive(Clone, Copy, Debug)]
 struct Endian {
@@ -304,6 +334,7 @@ struct Endian {
 }
 
 impl Endian {
+    #[inline]
     fn i32(self, b: &[u8]) -> i32 {
         let a = [b[0], b[1], b[2], b[3]];
         if self.big {
@@ -313,6 +344,7 @@ impl Endian {
         }
     }
 
+    #[inline]
     fn u64(self, b: &[u8]) -> u64 {
         let a = [b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]];
         if self.big {
@@ -322,6 +354,7 @@ impl Endian {
         }
     }
 
+    #[inline]
     fn f64(self, b: &[u8]) -> f64 {
         f64::from_bits(self.u64(b))
     }
@@ -700,19 +733,29 @@ impl State {
         let (i, tags) = bytes_n(i, n * 8, "node tags")?;
         let stride = 8 * (3 + extra);
         let (i, xyz) = bytes_n(i, n * stride, "node coordinates")?;
-        for (k, t) in tags.chunks_exact(8).enumerate() {
-            let tag = e.u64(t);
-            if tag == 0 {
-                return fail(&start[k * 8..], "node tag 0 is not allowed");
-            }
-            self.node_tags.push(tag);
+        let first = self.node_tags.len();
+        self.node_tags
+            .extend(tags.chunks_exact(8).map(|t| e.u64(t)));
+        if let Some(k) = self.node_tags[first..].iter().position(|&t| t == 0) {
+            return fail(&start[k * 8..], "node tag 0 is not allowed");
         }
-        for (k, rec) in xyz.chunks_exact(stride).enumerate() {
-            let p = [e.f64(rec), e.f64(&rec[8..]), e.f64(&rec[16..])];
-            if !p.iter().all(|v| v.is_finite()) {
-                return fail(&start[n * 8 + k * stride..], "non-finite node coordinate");
-            }
-            self.coords.push(p);
+        self.coords.resize(first + n, [0.0; 3]);
+        let bad = self.coords[first..]
+            .par_chunks_mut(PAR_RECORDS)
+            .enumerate()
+            .filter_map(|(c, out)| {
+                let records = xyz[c * PAR_RECORDS * stride..].chunks_exact(stride);
+                for (k, (p, rec)) in out.iter_mut().zip(records).enumerate() {
+                    *p = [e.f64(rec), e.f64(&rec[8..]), e.f64(&rec[16..])];
+                    if !p.iter().all(|v| v.is_finite()) {
+                        return Some(c * PAR_RECORDS + k);
+                    }
+                }
+                None
+            })
+            .min();
+        if let Some(k) = bad {
+            return fail(&start[n * 8 + k * stride..], "non-finite node coordinate");
         }
         Ok((i, ()))
     }
@@ -835,18 +878,41 @@ impl State {
             .lookup
             .as_ref()
             .expect("nodes are read before elements");
-        for (k, rec) in data.chunks_exact(stride).enumerate() {
-            let tag = e.u64(rec);
-            block.tags.push(tag);
-            for (j, t) in rec[8..].chunks_exact(8).enumerate() {
-                let node = e.u64(t);
-                match lookup.get(node) {
-                    Some(idx) => block.connectivity.push(idx),
-                    None => {
-                        return fail(&start[k * stride + 8 * (j + 1)..], unknown_node(tag, node))
+        block.tags = vec![0; n];
+        block.connectivity = vec![0; n * nn];
+        // Fixed-size records: decode chunks of records in parallel; report the first bad one.
+        let bad = block
+            .tags
+            .par_chunks_mut(PAR_RECORDS)
+            .zip(block.connectivity.par_chunks_mut(PAR_RECORDS * nn))
+            .enumerate()
+            .filter_map(|(c, (tags, conn))| {
+                let first = c * PAR_RECORDS;
+                let records = data[first * stride..].chunks_exact(stride);
+                for (k, ((tag, out), rec)) in tags
+                    .iter_mut()
+                    .zip(conn.chunks_exact_mut(nn))
+                    .zip(records)
+                    .enumerate()
+                {
+                    *tag = e.u64(rec);
+                    for (j, (o, t)) in out.iter_mut().zip(rec[8..].chunks_exact(8)).enumerate() {
+                        match lookup.get(e.u64(t)) {
+                            Some(idx) => *o = idx,
+                            None => return Some((first + k, j)),
+                        }
                     }
                 }
-            }
+                None
+            })
+            .min();
+        if let Some((k, j)) = bad {
+            let rec = &data[k * stride..];
+            let node = e.u64(&rec[8 * (j + 1)..]);
+            return fail(
+                &start[k * stride + 8 * (j + 1)..],
+                unknown_node(e.u64(rec), node),
+            );
         }
         Ok((i, ()))
     }
@@ -1315,6 +1381,23 @@ mod tests {
         assert_eq!(e.section, "$Elements");
         assert_eq!(e.line, 30);
         assert!(e.message.contains("node 31"), "{}", e.message);
+    }
+
+    #[test]
+    fn integers_at_the_limits() {
+        assert_eq!(
+            uint(b"18446744073709551615 x").map(|r| r.1).ok(),
+            Some(u64::MAX)
+        );
+        assert_eq!(
+            uint(b"12345678901234567890\n").map(|r| r.1).ok(),
+            Some(12_345_678_901_234_567_890)
+        );
+        assert!(uint(b"18446744073709551616").is_err());
+        assert!(uint(b"12a").is_err());
+        assert_eq!(int32(b" -2147483648 ").map(|r| r.1).ok(), Some(i32::MIN));
+        assert!(int32(b"2147483648").is_err());
+        assert!(int32(b"-").is_err());
     }
 
     #[test]
