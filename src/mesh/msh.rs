@@ -485,7 +485,7 @@ impl NodeLookup {
             (Some(&f), Some(&l)) => (f, l),
             _ => return NodeLookup::Contiguous { first: 0, n: 0 },
         };
-        if last - first + 1 == n {
+        if last - first == n - 1 {
             NodeLookup::Contiguous { first, n }
         } else if last <= 8 * n + (1 << 20) {
             let mut table = vec![u32::MAX; last as usize + 1];
@@ -667,7 +667,11 @@ impl State {
             }
             None => {
                 for _ in 0..n {
+                    let at = skip_ws(i);
                     let (r, tag) = uint(i)?;
+                    if tag == 0 {
+                        return fail(at, "node tag 0 is not allowed");
+                    }
                     let (r, x) = float(r)?;
                     let (r, y) = float(r)?;
                     let (r, z) = float(r)?;
@@ -1381,6 +1385,91 @@ mod tests {
         assert_eq!(e.section, "$Elements");
         assert_eq!(e.line, 30);
         assert!(e.message.contains("node 31"), "{}", e.message);
+    }
+
+    #[test]
+    fn extreme_node_tags_do_not_overflow() {
+        // Found by reading after fuzzing: tags 0 and u64::MAX made `last - first + 1` overflow.
+        let input = b"$MeshFormat\n2 0 8\n$EndMeshFormat\n$Nodes\n2\n0 0 0 0\n18446744073709551615 0 0 0\n$EndNodes\n";
+        let e = parse_msh(input).expect_err("tag 0");
+        assert!(e.message.contains("node tag 0"), "{e}");
+        let input = b"$MeshFormat\n2 0 8\n$EndMeshFormat\n$Nodes\n2\n1 0 0 0\n18446744073709551615 0 0 0\n$EndNodes\n";
+        let m = parse_msh(input).expect("parses");
+        assert_eq!(m.node_index(u64::MAX), Some(1));
+    }
+
+    /// A binary 4.1 mesh of `n` nodes on a line and one block of `n` point elements.
+    fn binary_points(n: u64) -> Vec<u8> {
+        let mut b = b"$MeshFormat\n4.1 1 8\n".to_vec();
+        b.extend_from_slice(&1i32.to_le_bytes());
+        b.extend_from_slice(b"\n$EndMeshFormat\n$Nodes\n");
+        for v in [1u64, n, 1, n] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        for v in [0i32, 1, 0] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b.extend_from_slice(&n.to_le_bytes());
+        (1..=n).for_each(|t| b.extend_from_slice(&t.to_le_bytes()));
+        (1..=n).for_each(|t| {
+            [t as f64, 0.0, 0.0]
+                .iter()
+                .for_each(|x| b.extend_from_slice(&x.to_le_bytes()))
+        });
+        b.extend_from_slice(b"\n$EndNodes\n$Elements\n");
+        for v in [1u64, n, 1, n] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        for v in [0i32, 1, 15] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b.extend_from_slice(&n.to_le_bytes());
+        (1..=n).for_each(|t| {
+            [t, n + 1 - t]
+                .iter()
+                .for_each(|x| b.extend_from_slice(&x.to_le_bytes()))
+        });
+        b.extend_from_slice(b"\n$EndElements\n");
+        b
+    }
+
+    #[test]
+    fn parallel_binary_blocks_keep_order_and_report_the_first_error() {
+        let n = 4 * PAR_RECORDS as u64 + 17;
+        let bytes = binary_points(n);
+        let m = parse_msh(&bytes).expect("parses");
+        assert_eq!(m.coords[40_000], [40_001.0, 0.0, 0.0]);
+        assert_eq!(m.blocks[0].tags[40_000], 40_001);
+        assert_eq!(m.blocks[0].connectivity[40_000], (n - 40_001) as u32);
+        // Break elements 40 000 and 50 000 (in different parallel chunks): the first is reported.
+        let elements = bytes
+            .windows(10)
+            .position(|w| w == b"$Elements\n")
+            .expect("elements")
+            + 10
+            + 32
+            + 20;
+        let mut bad = bytes.clone();
+        for k in [50_000usize, 40_000] {
+            let at = elements + 16 * k + 8;
+            bad[at..at + 8].copy_from_slice(&(n + 5).to_le_bytes());
+        }
+        let e = parse_msh(&bad).expect_err("unknown node");
+        assert_eq!(e.offset, elements + 16 * 40_000 + 8, "{e}");
+        assert!(e.message.contains("element 40001"), "{e}");
+        // A non-finite coordinate in the third chunk.
+        let nodes = bytes
+            .windows(7)
+            .position(|w| w == b"$Nodes\n")
+            .expect("nodes")
+            + 7
+            + 32
+            + 20;
+        let at = nodes + 8 * n as usize + 24 * 40_000 + 8;
+        let mut bad = bytes;
+        bad[at..at + 8].copy_from_slice(&f64::NAN.to_le_bytes());
+        let e = parse_msh(&bad).expect_err("NaN");
+        assert_eq!(e.offset, nodes + 8 * n as usize + 24 * 40_000, "{e}");
     }
 
     #[test]
