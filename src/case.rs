@@ -121,6 +121,23 @@ pub struct Model {
     /// `3*i + c` is component `c` of node index `i` (`conventions.md` §1).
     #[serde(default)]
     pub dofs: Option<PathBuf>,
+    /// Quadrature of the element matrices (`quadrature = { stiffness = 5, mass = 5 }`: polynomial
+    /// degrees the rules integrate exactly); omitted keys use each element type's default rule.
+    #[serde(default)]
+    pub quadrature: QuadratureDegrees,
+}
+
+/// `[model] quadrature`: the polynomial degrees of the stiffness and mass rules (methods.md: match
+/// the other code's rule when comparing against it).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct QuadratureDegrees {
+    /// Degree of the stiffness rule; `None` = the element type's default.
+    #[serde(default)]
+    pub stiffness: Option<u32>,
+    /// Degree of the mass rule; `None` = the element type's default.
+    #[serde(default)]
+    pub mass: Option<u32>,
 }
 
 /// An isotropic linear elastic material.
@@ -1076,6 +1093,18 @@ impl Case {
         }
         for (i, gm) in m.materials.iter().enumerate() {
             self.check_material(&format!("model.materials[{i}]"), &gm.material())?;
+        }
+        for (key, degree) in [
+            ("stiffness", m.quadrature.stiffness),
+            ("mass", m.quadrature.mass),
+        ] {
+            if let Some(d) = degree {
+                self.require(
+                    (1..=20).contains(&d),
+                    &format!("model.quadrature.{key}"),
+                    || format!("the rule's polynomial degree must be 1..=20 (found {d})"),
+                )?;
+            }
         }
         if m.mesh.is_none() {
             self.check_matrix_model()?;

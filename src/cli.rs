@@ -10,9 +10,13 @@ use std::time::Instant;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use serde_json::{json, Value};
 
+use crate::case::Case;
+use crate::eigen::{lowest_modes, EigenOptions};
 use crate::error::{Error, Result};
+use crate::matrix_io::{write_dof_map, write_matrix_market_symmetric};
 use crate::mesh::msh::read_msh;
 use crate::mesh::Mesh;
+use crate::model::{self, StructuralModel};
 
 /// nlrom: vibration of structures with friction contacts (bladed disks with shroud,
 /// underplatform and root joints) by reduced-order models and harmonic balance.
@@ -90,6 +94,10 @@ struct ModesArgs {
     /// Number of modes.
     #[arg(long, default_value_t = 20)]
     num: usize,
+    /// Shift the eigensolver to −(2π·F)² (F in Hz): required for a model without clamp
+    /// (free–free, six rigid-body modes); a fraction of the first elastic frequency is a good F.
+    #[arg(long, value_name = "F")]
+    shift_hz: Option<f64>,
     /// Print one JSON object on stdout.
     #[arg(long)]
     json: bool,
@@ -200,8 +208,8 @@ pub fn main() -> i32 {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Mesh(MeshCommand::Info(a)) => mesh_info(&a.file, a.json),
-        Command::Modes(_) => Err(Error::NotImplemented("nlrom modes".into())),
-        Command::Export(_) => Err(Error::NotImplemented("nlrom export".into())),
+        Command::Modes(a) => modes(&a),
+        Command::Export(a) => export(&a.case, &a.dir),
         Command::Reduce(_) => Err(Error::NotImplemented("nlrom reduce".into())),
         Command::Contact(_) => Err(Error::NotImplemented("nlrom contact".into())),
         Command::Solve(_) => Err(Error::NotImplemented("nlrom solve".into())),
@@ -299,4 +307,110 @@ fn mesh_summary_text(path: &Path, mesh: &Mesh) -> String {
         lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
     );
     s
+}
+
+/// Progress lines on stderr.
+fn log_stderr(line: &str) {
+    eprintln!("nlrom: {line}");
+}
+
+/// Loads a case and builds its structural model, logging to stderr.
+fn load_model(case_path: &Path) -> Result<(Case, StructuralModel)> {
+    let case = Case::load(case_path)?;
+    let model = model::build(&case, &mut |l| log_stderr(l))?;
+    Ok((case, model))
+}
+
+/// `nlrom modes`: natural frequencies of the model at a stage.
+fn modes(a: &ModesArgs) -> Result<()> {
+    let start = Instant::now();
+    let stage = match a.stage {
+        Stage::Full => "full",
+        Stage::Cb | Stage::Cs | Stage::Gsi => {
+            return Err(Error::NotImplemented(
+                format!("nlrom modes --stage {:?}", a.stage).to_lowercase(),
+            ))
+        }
+    };
+    let shift = match a.shift_hz {
+        Some(f) if f.is_finite() && f > 0.0 => -(2.0 * std::f64::consts::PI * f).powi(2),
+        Some(f) => {
+            return Err(Error::input(format!(
+                "--shift-hz {f}: give a positive frequency in Hz"
+            )))
+        }
+        None => 0.0,
+    };
+    let (_, model) = load_model(&a.case)?;
+    let n = model.free.n_free();
+    if a.num == 0 || a.num >= n {
+        return Err(Error::input(format!(
+            "--num {}: ask for 1 to {} modes (the model has {n} free DOF)",
+            a.num,
+            n.saturating_sub(1)
+        )));
+    }
+    let opts = EigenOptions {
+        shift,
+        ..EigenOptions::default()
+    };
+    let t = Instant::now();
+    let modes = lowest_modes(model.free.k.as_ref(), model.free.m.as_ref(), a.num, &opts).map_err(|e| {
+        if shift == 0.0 && model.free.n_free() == model.n_dofs {
+            Error::Compute(format!(
+                "{e}\nThe model has no clamp: for a free–free model pass --shift-hz F (e.g. a tenth of the first elastic frequency), or clamp a group in [model] clamp"
+            ))
+        } else {
+            e
+        }
+    })?;
+    log_stderr(&format!(
+        "{} modes in {:.2} s",
+        modes.len(),
+        t.elapsed().as_secs_f64()
+    ));
+    let freqs = modes.frequencies_hz();
+    if a.json {
+        let report = json!({
+            "stage": stage,
+            "harmonic": a.harmonic,
+            "frequencies_hz": freqs,
+            "residuals": modes.residuals,
+            "dofs": n,
+            "wall_seconds": start.elapsed().as_secs_f64(),
+        });
+        println!("{report}");
+    } else {
+        println!(
+            "{} modes of {} (stage {stage}, {n} free DOF)",
+            freqs.len(),
+            a.case.display()
+        );
+        println!("{:>5} {:>16} {:>12}", "mode", "frequency (Hz)", "residual");
+        for (i, (f, r)) in freqs.iter().zip(&modes.residuals).enumerate() {
+            println!("{:>5} {:>16.6} {:>12.2e}", i + 1, f, r);
+        }
+    }
+    Ok(())
+}
+
+/// `nlrom export`: K and M of the free (clamped) model as symmetric Matrix Market files and the
+/// DOF map of their rows.
+fn export(case_path: &Path, dir: &Path) -> Result<()> {
+    let (_, model) = load_model(case_path)?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    write_matrix_market_symmetric(&dir.join("K.mtx"), &model.free.k)?;
+    write_matrix_market_symmetric(&dir.join("M.mtx"), &model.free.m)?;
+    let mut written = vec!["K.mtx", "M.mtx"];
+    if let Some(map) = model.free_dof_map() {
+        write_dof_map(&dir.join("dofs.csv"), &map)?;
+        written.push("dofs.csv");
+    }
+    log_stderr(&format!(
+        "wrote {} in {} ({} free DOF)",
+        written.join(", "),
+        dir.display(),
+        model.free.n_free()
+    ));
+    Ok(())
 }

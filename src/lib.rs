@@ -6,17 +6,23 @@
 //! |---|---|---|
 //! | 1 import | [`mesh`] | Gmsh MSH 2.2/4.1 reader, physical groups, boundary faces |
 //! | 1 import | [`matrix_io`] | Matrix Market matrices and the DOF map (`dofs.csv`) |
+//! | 1 model | [`fe`] | 3-D elasticity: shape functions, quadrature, parallel assembly of K and M, clamping |
+//! | 1 model | [`model`] | the structural model of a case: assembled or imported K, M after clamping |
+//! | 1–2 modal | [`eigen`] | sparse shift-invert eigensolver K φ = λ M φ (lowest modes), reusable factorisation |
 //! | — | [`case`] | the TOML case file of `interface.md` |
 //! | — | [`cli`] | the command line |
 //!
-//! Later stages (FE assembly, sparse eigen, Craig–Bampton reduction, cyclic symmetry, contact,
-//! SAMA, harmonic balance, continuation, time stepping, HDF5 output) get one module each as they
-//! land; the README's status table says what works today.
+//! Later stages (Craig–Bampton reduction, cyclic symmetry, contact, SAMA, harmonic balance,
+//! continuation, time stepping, HDF5 output) get one module each as they land; the README's
+//! status table says what works today.
 
 pub mod case;
 pub mod cli;
+pub mod eigen;
 pub mod error;
+pub mod fe;
 pub mod matrix_io;
 pub mod mesh;
+pub mod model;
 
 pub use error::{Error, Result};

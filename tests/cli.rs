@@ -87,7 +87,155 @@ fn unimplemented_commands_exit_1_and_every_command_has_help() {
     assert!(Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("meshes/sector_conforming.msh")
         .exists());
+    let out = nlrom(&["modes", "case.toml", "--stage", "cb"]);
+    assert_eq!(out.status.code(), Some(1));
     let out = nlrom(&["solve", "case.toml", "-o", "r.h5"]);
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("not implemented yet"));
+}
+
+/// A case for the bundled tetra10 cube (clamped at the bottom unless `clamp` is empty).
+fn cube_case(dir: &Path, clamp: &str) -> std::path::PathBuf {
+    let mesh = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/cube_tet10.msh");
+    let case = dir.join("cube.toml");
+    let text = format!(
+        "title = \"cube\"\n[model]\nmesh = \"{}\"\nmaterial = {{ young = 210e9, poisson = 0.3, density = 7800.0 }}\nclamp = [{clamp}]\n",
+        mesh.display()
+    );
+    std::fs::write(&case, text).expect("case");
+    case
+}
+
+#[test]
+fn modes_and_export_agree() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let case = cube_case(dir.path(), "\"bottom\"");
+    let out = nlrom(&[
+        "modes",
+        case.to_str().expect("utf8"),
+        "--num",
+        "6",
+        "--json",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert_eq!(v["stage"], "full");
+    let freqs: Vec<f64> = v["frequencies_hz"]
+        .as_array()
+        .expect("list")
+        .iter()
+        .map(|x| x.as_f64().expect("f"))
+        .collect();
+    assert_eq!(freqs.len(), 6);
+    assert!(v["residuals"]
+        .as_array()
+        .expect("list")
+        .iter()
+        .all(|r| r.as_f64().expect("r") < 1e-8));
+
+    let export = dir.path().join("export");
+    let out = nlrom(&[
+        "export",
+        case.to_str().expect("utf8"),
+        "--dir",
+        export.to_str().expect("utf8"),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let k = nlrom::matrix_io::read_real_matrix(&export.join("K.mtx")).expect("K");
+    let m = nlrom::matrix_io::read_real_matrix(&export.join("M.mtx")).expect("M");
+    let dofs = nlrom::matrix_io::read_dof_map(&export.join("dofs.csv")).expect("dofs");
+    assert_eq!(k.nrows(), v["dofs"].as_u64().expect("dofs") as usize);
+    assert_eq!(dofs.len(), k.nrows());
+    let modes =
+        nlrom::eigen::lowest_modes(k.as_ref(), m.as_ref(), 6, &Default::default()).expect("modes");
+    for (a, b) in modes.frequencies_hz().iter().zip(&freqs) {
+        assert!((a / b - 1.0).abs() < 1e-10, "{a} vs {b}");
+    }
+    // The exported matrices define a matrix-only case that gives the same frequencies again.
+    let matrix_case = dir.path().join("matrices.toml");
+    std::fs::write(
+        &matrix_case,
+        "[model]\nstiffness = \"export/K.mtx\"\nmass = \"export/M.mtx\"\n",
+    )
+    .expect("case");
+    let out = nlrom(&[
+        "modes",
+        matrix_case.to_str().expect("utf8"),
+        "--num",
+        "6",
+        "--json",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let w: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    for (a, b) in w["frequencies_hz"]
+        .as_array()
+        .expect("list")
+        .iter()
+        .zip(&freqs)
+    {
+        assert!((a.as_f64().expect("f") / b - 1.0).abs() < 1e-10);
+    }
+}
+
+#[test]
+fn free_free_without_shift_is_refused_with_advice() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let case = cube_case(dir.path(), "");
+    let out = nlrom(&["modes", case.to_str().expect("utf8"), "--num", "8"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--shift-hz"), "{err}");
+    let out = nlrom(&[
+        "modes",
+        case.to_str().expect("utf8"),
+        "--num",
+        "8",
+        "--shift-hz",
+        "100",
+        "--json",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let f = v["frequencies_hz"].as_array().expect("list");
+    assert!(
+        f[5].as_f64().expect("f") < 1e-4 * f[6].as_f64().expect("f"),
+        "{f:?}"
+    );
+}
+
+#[test]
+fn bad_case_exits_2_naming_the_key() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let case = cube_case(dir.path(), "\"bottom\"");
+    let text = std::fs::read_to_string(&case)
+        .expect("read")
+        .replace("poisson = 0.3", "poisson = 0.5");
+    std::fs::write(&case, text).expect("write");
+    let out = nlrom(&["modes", case.to_str().expect("utf8")]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("cube.toml") && err.contains("model.material"),
+        "{err}"
+    );
 }

@@ -1,0 +1,431 @@
+//! The sparse eigensolver (`nlrom::eigen`) against independent references: faer's dense
+//! symmetric eigensolver on a Cholesky-transformed random pencil, the closed-form spectra of
+//! fixed–fixed and free–free spring–mass chains and of the 7-point Laplacian on a 3-D grid; plus
+//! the static solve and the input errors.
+
+use faer::prelude::Solve;
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Mat, Side};
+use nlrom::eigen::{lowest_modes, EigenOptions, Modes, ShiftInvert};
+use nlrom::Error;
+use std::f64::consts::PI;
+
+/// Spring stiffness of the chains (N/m).
+const SPRING: f64 = 1.0e6;
+/// Point mass of the chains (kg).
+const MASS: f64 = 0.5;
+
+/// A sparse matrix from (row, col, value) triplets (duplicates summed).
+fn sparse(n: usize, entries: &[(usize, usize, f64)]) -> SparseColMat<usize, f64> {
+    let t: Vec<Triplet<usize, usize, f64>> = entries
+        .iter()
+        .map(|&(i, j, v)| Triplet::new(i, j, v))
+        .collect();
+    SparseColMat::try_new_from_triplets(n, n, &t).unwrap()
+}
+
+/// `c · I` of size `n`.
+fn scaled_identity(n: usize, c: f64) -> SparseColMat<usize, f64> {
+    let e: Vec<_> = (0..n).map(|i| (i, i, c)).collect();
+    sparse(n, &e)
+}
+
+/// Stiffness of a chain of `n` masses joined by springs `SPRING`; `clamped` adds a spring to
+/// the ground at each end (fixed–fixed), otherwise both ends are free (free–free).
+fn chain_stiffness(n: usize, clamped: bool) -> SparseColMat<usize, f64> {
+    let mut e = Vec::new();
+    for i in 0..n - 1 {
+        e.extend([(i, i, SPRING), (i + 1, i + 1, SPRING)]);
+        e.extend([(i, i + 1, -SPRING), (i + 1, i, -SPRING)]);
+    }
+    if clamped {
+        e.extend([(0, 0, SPRING), (n - 1, n - 1, SPRING)]);
+    }
+    sparse(n, &e)
+}
+
+/// 7-point Laplacian stiffness (`SPRING` per grid link) of an `nx × ny × nz` grid of masses
+/// whose outside neighbours are clamped (Dirichlet boundary).
+fn lattice_stiffness(nx: usize, ny: usize, nz: usize) -> SparseColMat<usize, f64> {
+    let id = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
+    let mut e = Vec::with_capacity(7 * nx * ny * nz);
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let p = id(i, j, k);
+                e.push((p, p, 6.0 * SPRING));
+                let mut link = |q: usize| {
+                    e.push((p, q, -SPRING));
+                    e.push((q, p, -SPRING));
+                };
+                if i + 1 < nx {
+                    link(id(i + 1, j, k));
+                }
+                if j + 1 < ny {
+                    link(id(i, j + 1, k));
+                }
+                if k + 1 < nz {
+                    link(id(i, j, k + 1));
+                }
+            }
+        }
+    }
+    sparse(nx * ny * nz, &e)
+}
+
+/// The lowest `count` closed-form eigenvalues of [`lattice_stiffness`] with mass `MASS`:
+/// λ = (k/m) Σ_d 2(1 − cos(i_d π/(n_d + 1))), i_d = 1..n_d.
+fn lattice_eigenvalues(nx: usize, ny: usize, nz: usize, count: usize) -> Vec<f64> {
+    let axis = |n: usize| -> Vec<f64> {
+        (1..=n.min(count))
+            .map(|i| 2.0 * (1.0 - (i as f64 * PI / (n as f64 + 1.0)).cos()))
+            .collect()
+    };
+    let (ax, ay, az) = (axis(nx), axis(ny), axis(nz));
+    let mut all = Vec::new();
+    for x in &ax {
+        for y in &ay {
+            for z in &az {
+                all.push(SPRING / MASS * (x + y + z));
+            }
+        }
+    }
+    all.sort_by(f64::total_cmp);
+    all.truncate(count);
+    all
+}
+
+/// Largest |a − b| / |b| over the pairs.
+fn max_relative_error(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs() / y.abs())
+        .fold(0.0, f64::max)
+}
+
+/// Largest |(ΦᵀMΦ − I)_ij|.
+fn m_orthonormality_error(m: &SparseColMat<usize, f64>, phi: &Mat<f64>) -> f64 {
+    let mphi = m * phi;
+    let g = phi.transpose() * &mphi;
+    let mut worst = 0.0_f64;
+    for i in 0..g.nrows() {
+        for j in 0..g.ncols() {
+            let target = if i == j { 1.0 } else { 0.0 };
+            worst = worst.max((g[(i, j)] - target).abs());
+        }
+    }
+    worst
+}
+
+/// A small deterministic generator (SplitMix64) for the random pencil, uniform in [0, 1).
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// A random sparse symmetric positive definite matrix of size `n`: about `per_row`
+/// off-diagonal entries per row, uniform in [−off, off], and a strictly dominant diagonal
+/// `Σ|a_ij| + U(0.1, 1.1)` (so SPD by Gershgorin).
+fn random_spd(n: usize, per_row: usize, off: f64, rng: &mut Rng) -> SparseColMat<usize, f64> {
+    let mut e = Vec::new();
+    let mut row_sum = vec![0.0; n];
+    for i in 0..n {
+        for _ in 0..per_row / 2 {
+            let j = (rng.next() * n as f64) as usize % n;
+            if j == i {
+                continue;
+            }
+            let v = off * (2.0 * rng.next() - 1.0);
+            e.extend([(i, j, v), (j, i, v)]);
+            row_sum[i] += v.abs();
+            row_sum[j] += v.abs();
+        }
+    }
+    for (i, s) in row_sum.iter().enumerate() {
+        e.push((i, i, s + 0.1 + rng.next()));
+    }
+    sparse(n, &e)
+}
+
+/// Lowest `n` eigenpairs of the dense pencil (K, M) by the Cholesky transformation
+/// C = L⁻¹ K L⁻ᵀ (M = L Lᵀ) and faer's dense self-adjoint eigensolver; φ = L⁻ᵀ v.
+fn dense_reference(
+    k: &SparseColMat<usize, f64>,
+    m: &SparseColMat<usize, f64>,
+    n: usize,
+) -> (Vec<f64>, Mat<f64>) {
+    let kd = k.to_dense();
+    let md = m.to_dense();
+    let l = md.llt(Side::Lower).unwrap().L().to_owned();
+    let mut x = kd.clone();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+        l.as_ref(),
+        x.as_mut(),
+        faer::Par::Seq,
+    );
+    let mut c = x.transpose().to_owned();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+        l.as_ref(),
+        c.as_mut(),
+        faer::Par::Seq,
+    );
+    let evd = c.self_adjoint_eigen(Side::Lower).unwrap();
+    let lambda: Vec<f64> = (0..n).map(|i| evd.S()[i]).collect();
+    let mut phi = evd.U().subcols(0, n).to_owned();
+    faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+        l.transpose(),
+        phi.as_mut(),
+        faer::Par::Seq,
+    );
+    (lambda, phi)
+}
+
+/// The largest value.
+fn max(v: &[f64]) -> f64 {
+    v.iter().copied().fold(0.0, f64::max)
+}
+
+/// Every residual of `modes` is at most `tol`.
+fn assert_residuals(modes: &Modes, tol: f64) {
+    for (j, r) in modes.residuals.iter().enumerate() {
+        assert!(*r <= tol, "mode {j}: residual {r:e} > {tol:e}");
+    }
+}
+
+/// The message of an `Error::Input`, or a panic.
+fn input_message(e: Error) -> String {
+    match e {
+        Error::Input(msg) => msg,
+        other => panic!("expected Error::Input, got {other:?}"),
+    }
+}
+
+/// The message of an `Error::Compute`, or a panic.
+fn compute_message(e: Error) -> String {
+    match e {
+        Error::Compute(msg) => msg,
+        other => panic!("expected Error::Compute, got {other:?}"),
+    }
+}
+
+// (a) random sparse SPD pencil vs the dense Cholesky-transformed solution.
+#[test]
+fn random_pencil_matches_dense_reference() {
+    let mut rng = Rng(7);
+    let n_dof = 300;
+    let k = random_spd(n_dof, 8, 1.0, &mut rng);
+    let m = random_spd(n_dof, 6, 0.05, &mut rng);
+    let modes = lowest_modes(k.as_ref(), m.as_ref(), 10, &EigenOptions::default()).unwrap();
+    let (lambda_ref, phi_ref) = dense_reference(&k, &m, 10);
+    let err = max_relative_error(&modes.eigenvalues, &lambda_ref);
+    let ortho = m_orthonormality_error(&m, &modes.vectors);
+    println!(
+        "random pencil: eigenvalue error {err:.1e}, ΦᵀMΦ − I {ortho:.1e}, max residual {:.1e}",
+        max(&modes.residuals)
+    );
+    assert!(err < 1e-10, "eigenvalue relative error {err:e} ≥ 1e-10");
+    assert!(ortho < 1e-10, "ΦᵀMΦ − I: {ortho:e} ≥ 1e-10");
+    // Same modes up to sign: |φ_refᵀ M φ| = 1 (the lowest 10 are simple here).
+    let overlap = phi_ref.transpose() * (&m * &modes.vectors);
+    for j in 0..10 {
+        let o = overlap[(j, j)].abs();
+        assert!((o - 1.0).abs() < 1e-8, "mode {j}: |φ_refᵀMφ| = {o}");
+    }
+    assert_residuals(&modes, 1e-8);
+}
+
+// The dense fallback (N_dof below the Krylov subspace) against the same reference.
+#[test]
+fn small_pencil_uses_dense_path() {
+    let mut rng = Rng(11);
+    let k = random_spd(40, 6, 1.0, &mut rng);
+    let m = random_spd(40, 4, 0.05, &mut rng);
+    let modes = lowest_modes(k.as_ref(), m.as_ref(), 5, &EigenOptions::default()).unwrap();
+    let (lambda_ref, _) = dense_reference(&k, &m, 5);
+    let err = max_relative_error(&modes.eigenvalues, &lambda_ref);
+    assert!(err < 1e-12, "eigenvalue relative error {err:e} ≥ 1e-12");
+    assert!(m_orthonormality_error(&m, &modes.vectors) < 1e-12);
+    assert_residuals(&modes, 1e-10);
+}
+
+// (b) fixed–fixed chain: λ_j = (2k/m)(1 − cos(jπ/(N+1))).
+#[test]
+fn fixed_fixed_chain_closed_form() {
+    let n_dof = 2000;
+    let k = chain_stiffness(n_dof, true);
+    let m = scaled_identity(n_dof, MASS);
+    let modes = lowest_modes(k.as_ref(), m.as_ref(), 20, &EigenOptions::default()).unwrap();
+    let exact: Vec<f64> = (1..=20)
+        .map(|j| 2.0 * SPRING / MASS * (1.0 - (j as f64 * PI / (n_dof as f64 + 1.0)).cos()))
+        .collect();
+    let err = max_relative_error(&modes.eigenvalues, &exact);
+    println!(
+        "fixed–fixed chain: eigenvalue error {err:.1e}, max residual {:.1e}, {} applications",
+        max(&modes.residuals),
+        modes.operator_applications
+    );
+    assert!(err < 1e-9, "eigenvalue relative error {err:e} ≥ 1e-9");
+    assert_residuals(&modes, 1e-8);
+    assert!(m_orthonormality_error(&m, &modes.vectors) < 1e-10);
+    let f = modes.frequencies_hz();
+    assert!((f[0] - exact[0].sqrt() / (2.0 * PI)).abs() < 1e-9 * f[0]);
+}
+
+// (c) free–free chain: one rigid-body mode, then λ_j = (2k/m)(1 − cos(jπ/N)).
+#[test]
+fn free_free_chain_with_negative_shift() {
+    let n_dof = 2000;
+    let k = chain_stiffness(n_dof, false);
+    let m = scaled_identity(n_dof, MASS);
+    let exact: Vec<f64> = (0..20)
+        .map(|j| 2.0 * SPRING / MASS * (1.0 - (j as f64 * PI / n_dof as f64).cos()))
+        .collect();
+    let opts = EigenOptions {
+        shift: -0.1 * exact[1],
+        ..EigenOptions::default()
+    };
+    let modes = lowest_modes(k.as_ref(), m.as_ref(), 20, &opts).unwrap();
+    let l0 = modes.eigenvalues[0];
+    assert!(
+        l0.abs() < 1e-8 * exact[1],
+        "rigid-body λ₀ = {l0:e}, λ₁ = {:e}",
+        exact[1]
+    );
+    let err = max_relative_error(&modes.eigenvalues[1..], &exact[1..]);
+    println!("free–free chain: λ₀/λ₁ = {:.1e}, eigenvalue error {err:.1e}, residuals {:.1e} (rigid), max {:.1e}", l0 / exact[1], modes.residuals[0], max(&modes.residuals));
+    assert!(err < 1e-9, "eigenvalue relative error {err:e} ≥ 1e-9");
+    assert_residuals(&modes, 1e-8);
+    assert_eq!(
+        modes.frequencies_hz()[0],
+        0.0_f64.max(l0).sqrt() / (2.0 * PI)
+    );
+}
+
+// (c) free–free chain with σ = 0: K is singular, the documented error.
+#[test]
+fn free_free_chain_without_shift_is_an_error() {
+    let k = chain_stiffness(2000, false);
+    let m = scaled_identity(2000, MASS);
+    let msg = compute_message(
+        lowest_modes(k.as_ref(), m.as_ref(), 5, &EigenOptions::default()).unwrap_err(),
+    );
+    assert!(msg.contains("not positive definite"), "{msg}");
+    assert!(
+        msg.contains("is the model clamped? for a free–free model set a negative shift"),
+        "{msg}"
+    );
+}
+
+// A shift above the lowest eigenvalue: K − σM is indefinite.
+#[test]
+fn shift_above_an_eigenvalue_is_an_error() {
+    let k = chain_stiffness(200, true);
+    let m = scaled_identity(200, MASS);
+    let opts = EigenOptions {
+        shift: 0.1 * SPRING / MASS,
+        ..EigenOptions::default()
+    };
+    let msg = compute_message(lowest_modes(k.as_ref(), m.as_ref(), 5, &opts).unwrap_err());
+    assert!(msg.contains("at or above an eigenvalue"), "{msg}");
+}
+
+// (d) 3-D lattice, 40×40×40 = 64 000 DOF: lowest 20 in one call vs the closed form.
+#[test]
+fn lattice_3d_closed_form() {
+    let (nx, ny, nz) = (40, 40, 40);
+    let k = lattice_stiffness(nx, ny, nz);
+    let m = scaled_identity(nx * ny * nz, MASS);
+    let modes = lowest_modes(k.as_ref(), m.as_ref(), 20, &EigenOptions::default()).unwrap();
+    let exact = lattice_eigenvalues(nx, ny, nz, 20);
+    let err = max_relative_error(&modes.eigenvalues, &exact);
+    println!(
+        "3-D lattice: eigenvalue error {err:.1e}, max residual {:.1e}, {} applications",
+        max(&modes.residuals),
+        modes.operator_applications
+    );
+    assert_residuals(&modes, 1e-8);
+    assert!(
+        err < 1e-9,
+        "eigenvalue relative error {err:e} ≥ 1e-9: {:?} vs {exact:?}",
+        modes.eigenvalues
+    );
+    assert!(m_orthonormality_error(&m, &modes.vectors) < 1e-10);
+}
+
+// One factorisation serves the static solve (multi-RHS) and the modes, as Craig–Bampton needs.
+#[test]
+fn factorisation_is_reusable_for_solves_and_modes() {
+    let mut rng = Rng(3);
+    let n_dof = 150;
+    let k = random_spd(n_dof, 8, 1.0, &mut rng);
+    let m = random_spd(n_dof, 4, 0.05, &mut rng);
+    let si = ShiftInvert::new(k.as_ref(), m.as_ref(), 0.0).unwrap();
+    let b = Mat::from_fn(n_dof, 7, |i, j| ((i * 7 + j) % 13) as f64 - 6.0);
+    let mut x = b.clone();
+    si.solve_in_place(x.as_mut()).unwrap();
+    let x_ref = k.to_dense().llt(Side::Lower).unwrap().solve(&b);
+    let err = (&x - &x_ref).norm_max() / x_ref.norm_max();
+    assert!(err < 1e-12, "solve error {err:e}");
+    let modes = si.lowest_modes(6, &EigenOptions::default()).unwrap();
+    let (lambda_ref, _) = dense_reference(&k, &m, 6);
+    assert!(max_relative_error(&modes.eigenvalues, &lambda_ref) < 1e-10);
+    assert!(si.min_pivot_ratio() > 0.0 && si.factor_len() >= n_dof);
+}
+
+// (e) bad input.
+#[test]
+fn bad_input_is_reported() {
+    let k = chain_stiffness(100, true);
+    let m = scaled_identity(100, MASS);
+    let opts = EigenOptions::default();
+    let run =
+        |k: &SparseColMat<usize, f64>, m: &SparseColMat<usize, f64>, n: usize, o: &EigenOptions| {
+            input_message(lowest_modes(k.as_ref(), m.as_ref(), n, o).unwrap_err())
+        };
+    assert!(run(&k, &m, 0, &opts).contains("between 1 and N_dof − 1 = 99, got 0"));
+    assert!(run(&k, &m, 100, &opts).contains("got 100"));
+    let rect = SparseColMat::<usize, f64>::try_new_from_triplets(100, 99, &[]).unwrap();
+    assert!(run(&rect, &m, 5, &opts).contains("K is 100×99; it must be square"));
+    let small = scaled_identity(50, MASS);
+    assert!(run(&k, &small, 5, &opts).contains("same size"));
+    let mut nan = chain_stiffness(100, true);
+    nan.val_mut()[3] = f64::NAN;
+    assert!(run(&nan, &m, 5, &opts).contains("not a finite number"));
+    let upper = sparse(3, &[(0, 0, 2.0), (1, 1, 2.0), (2, 2, 2.0), (0, 1, -1.0)]);
+    assert!(run(&upper, &scaled_identity(3, 1.0), 1, &opts).contains("K is not symmetric: K[0,1]"));
+    let negative_mass = sparse(3, &[(0, 0, 1.0), (1, 1, -1.0), (2, 2, 1.0)]);
+    assert!(run(&scaled_identity(3, 1.0), &negative_mass, 1, &opts).contains("M[1,1]"));
+    let bad_tol = EigenOptions {
+        tolerance: 0.0,
+        ..EigenOptions::default()
+    };
+    assert!(run(&k, &m, 5, &bad_tol).contains("tolerance"));
+    let bad_shift = EigenOptions {
+        shift: f64::NAN,
+        ..EigenOptions::default()
+    };
+    assert!(run(&k, &m, 5, &bad_shift).contains("not a finite number"));
+    let empty = SparseColMat::<usize, f64>::try_new_from_triplets(0, 0, &[]).unwrap();
+    assert!(run(&empty, &empty, 1, &opts).contains("empty"));
+}
+
+// (e) misuse of a factorisation.
+#[test]
+fn bad_requests_to_a_factorisation_are_reported() {
+    let k = chain_stiffness(100, true);
+    let m = scaled_identity(100, MASS);
+    let si = ShiftInvert::new(k.as_ref(), m.as_ref(), -1.0).unwrap();
+    let other_shift = EigenOptions::default();
+    assert!(input_message(si.lowest_modes(3, &other_shift).unwrap_err())
+        .contains("differs from the shift"));
+    let mut wrong_rows = Mat::<f64>::zeros(99, 2);
+    assert!(input_message(si.solve_in_place(wrong_rows.as_mut()).unwrap_err()).contains("99 rows"));
+}
