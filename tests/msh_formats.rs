@@ -365,3 +365,51 @@ fn file_not_found_is_an_io_error() {
     assert_eq!(err.exit_code(), 2);
     assert!(err.to_string().contains("no/such/file.msh"));
 }
+
+#[test]
+fn periodic_links_map_frontier_corners_by_rotation() {
+    // Gmsh writes $Periodic for the frontier surfaces (and, in 4.1, their curves and points): the
+    // row-major affine map is a rotation by ±α = 2π/24 about z that takes every master node of a
+    // listed pair onto its slave node (to 1e-12 of the model size). Only corner nodes are listed
+    // (methods.md).
+    let alpha = 2.0 * std::f64::consts::PI / 24.0;
+    for (rel, links) in [
+        ("meshes/sector_conforming.msh", 18),
+        ("meshes/formats/sector_conforming.v41-binary.msh", 18),
+        ("meshes/formats/sector_conforming.v22-ascii.msh", 2),
+        ("meshes/formats/sector_conforming.v22-binary.msh", 2),
+    ] {
+        let m = load(rel);
+        assert_eq!(m.periodic.len(), links, "{rel}");
+        let size = m.size();
+        let mut pairs = 0;
+        for link in &m.periodic {
+            let a = &link.affine;
+            assert_eq!(a.len(), 16, "{rel}");
+            assert!(
+                (a[0] - alpha.cos()).abs() < 1e-12
+                    && (a[1].abs() - alpha.sin()).abs() < 1e-12
+                    && a[1] == -a[4],
+                "{rel}: {a:?}"
+            );
+            for &(slave, master) in &link.nodes {
+                let (p, q) = (m.coords[master as usize], m.coords[slave as usize]);
+                let image: Vec<f64> = (0..3)
+                    .map(|r| {
+                        a[4 * r] * p[0] + a[4 * r + 1] * p[1] + a[4 * r + 2] * p[2] + a[4 * r + 3]
+                    })
+                    .collect();
+                let d = ((image[0] - q[0]).powi(2)
+                    + (image[1] - q[1]).powi(2)
+                    + (image[2] - q[2]).powi(2))
+                .sqrt();
+                assert!(
+                    d < 1e-12 * size,
+                    "{rel}: pair ({slave}, {master}) off by {d}"
+                );
+                pairs += 1;
+            }
+        }
+        assert!(pairs > 0, "{rel}");
+    }
+}

@@ -108,7 +108,8 @@ pub struct PeriodicLink {
     pub entity: i32,
     /// The master entity tag.
     pub master: i32,
-    /// Row-major 4×4 affine transform from master to slave (empty if the file gives none).
+    /// Row-major 4×4 affine transform that maps master positions to slave positions (empty if
+    /// the file gives none).
     pub affine: Vec<f64>,
     /// (slave node index, master node index).
     pub nodes: Vec<(u32, u32)>,

@@ -1388,6 +1388,36 @@ mod tests {
     }
 
     #[test]
+    fn parametric_node_blocks_are_read_past() {
+        // 4.1 ASCII: a parametric curve block (x y z u) and a parametric surface block (x y z u v).
+        let text = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n2 3 1 3\n1 4 1 1\n1\n0 0 0 0.5\n2 5 1 2\n2\n3\n1 0 0 0.1 0.2\n0 1 0 0.3 0.4\n$EndNodes\n$Elements\n1 1 1 1\n2 5 2 1\n1 1 2 3\n$EndElements\n";
+        let m = parse_msh(text.as_bytes()).expect("parses");
+        assert_eq!(
+            m.coords,
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+        );
+        // The same in binary: tags, then (x y z u v) per node of the surface block.
+        let mut b = b"$MeshFormat\n4.1 1 8\n".to_vec();
+        b.extend_from_slice(&1i32.to_le_bytes());
+        b.extend_from_slice(b"\n$EndMeshFormat\n$Nodes\n");
+        for v in [1u64, 2, 1, 2] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        for v in [2i32, 5, 1] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b.extend_from_slice(&2u64.to_le_bytes());
+        b.extend_from_slice(&1u64.to_le_bytes());
+        b.extend_from_slice(&2u64.to_le_bytes());
+        for v in [1.0f64, 2.0, 3.0, 0.1, 0.2, 4.0, 5.0, 6.0, 0.3, 0.4] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b.extend_from_slice(b"\n$EndNodes\n");
+        let m = parse_msh(&b).expect("parses");
+        assert_eq!(m.coords, vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+    }
+
+    #[test]
     fn extreme_node_tags_do_not_overflow() {
         // Found by reading after fuzzing: tags 0 and u64::MAX made `last - first + 1` overflow.
         let input = b"$MeshFormat\n2 0 8\n$EndMeshFormat\n$Nodes\n2\n0 0 0 0\n18446744073709551615 0 0 0\n$EndNodes\n";
