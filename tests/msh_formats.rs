@@ -10,9 +10,10 @@ use std::path::{Path, PathBuf};
 use nlrom::mesh::msh::read_msh;
 use nlrom::mesh::{ElementType, Mesh, MshVersion};
 
-const MODELS: [&str; 9] = [
+const MODELS: [&str; 10] = [
     "sector_conforming",
     "sector_nonconforming",
+    "sector8",
     "cube_tet4",
     "cube_tet10",
     "bar_hex20",
@@ -372,13 +373,15 @@ fn periodic_links_map_frontier_corners_by_rotation() {
     // row-major affine map is a rotation by ±α = 2π/24 about z that takes every master node of a
     // listed pair onto its slave node (to 1e-12 of the model size). Only corner nodes are listed
     // (methods.md).
-    let alpha = 2.0 * std::f64::consts::PI / 24.0;
-    for (rel, links) in [
-        ("meshes/sector_conforming.msh", 18),
-        ("meshes/formats/sector_conforming.v41-binary.msh", 18),
-        ("meshes/formats/sector_conforming.v22-ascii.msh", 2),
-        ("meshes/formats/sector_conforming.v22-binary.msh", 2),
+    for (rel, links, sectors) in [
+        ("meshes/sector_conforming.msh", 18, 24.0),
+        ("meshes/formats/sector_conforming.v41-binary.msh", 18, 24.0),
+        ("meshes/formats/sector_conforming.v22-ascii.msh", 2, 24.0),
+        ("meshes/formats/sector_conforming.v22-binary.msh", 2, 24.0),
+        ("meshes/sector8.msh", 18, 8.0),
+        ("meshes/formats/sector8.v22-binary.msh", 2, 8.0),
     ] {
+        let alpha = 2.0 * std::f64::consts::PI / sectors;
         let m = load(rel);
         assert_eq!(m.periodic.len(), links, "{rel}");
         let size = m.size();

@@ -5,6 +5,7 @@ Usage::
 
     python3 tools/make_meshes.py            # all models
     python3 tools/make_meshes.py --only sector_conforming cube_tet4
+    python3 tools/make_meshes.py --only sector8
     python3 tools/make_meshes.py --list
 
 Every model is written in four variants:
@@ -441,6 +442,8 @@ def make_sector(name: str, p: SectorParams, out_dir: Path, reference_contact: np
     assert len(en[0]) == 1
     report["excitation_node"] = int(en[0][0])
     report["excitation_xyz"] = [float(v) for v in en[1]]
+    (etype,), (etags,), _ = gmsh.model.mesh.getElements(3)
+    report["min_sicn"] = float(np.min(gmsh.model.mesh.getElementQualities(etags, "minSICN")))
     report.update(mesh_stats())
     write_variants(name, out_dir)
     gmsh.finalize()
@@ -598,13 +601,22 @@ def make_mixed(name: str, order: int, incomplete: bool, out_dir: Path) -> dict:
 def sector_params(variant: str, **overrides) -> SectorParams:
     """Parameters of the bundled sector variants; overrides allow new variants (e.g. n_sectors=6)."""
     p = SectorParams(**overrides)
+    if variant == "sector8":
+        # N = 8 (alpha = 45 deg), coarse, for full-annulus tests (8 copies merged at the frontiers).
+        # Thicker disk and shroud, wider and thicker blade than the N = 24 sector so that coarse
+        # elements stay valid (min SICN 0.15); the shroud still spans exactly theta in [0, alpha].
+        base = dict(n_sectors=8, z_max=0.04, chord=0.04, thickness=0.008, taper=0.008,
+                    shroud_height=0.02, shroud_z_max=0.04, h_disk=0.03, h_blade=0.012,
+                    h_shroud=0.025, h_contact=0.01)
+        base.update(overrides)
+        p = SectorParams(**base)
     if variant == "nonconforming":
         p.target_size_factor = 0.6 if p.target_size_factor is None else p.target_size_factor
     return p
 
 
 MODELS = ["sector_conforming", "sector_nonconforming", "cube_tet4", "cube_tet10",
-          "bar_hex20", "bar_tet10", "mixed_o1", "mixed_o2", "mixed_o2i"]
+          "bar_hex20", "bar_tet10", "mixed_o1", "mixed_o2", "mixed_o2i", "sector8"]
 
 
 def build_all(out_dir: Path, only: list[str] | None) -> None:
@@ -623,6 +635,8 @@ def build_all(out_dir: Path, only: list[str] | None) -> None:
             reference_contact, info = make_sector(job, sector_params("conforming"), out_dir)
         elif job == "sector_nonconforming":
             _, info = make_sector(job, sector_params("nonconforming"), out_dir, reference_contact)
+        elif job == "sector8":
+            _, info = make_sector(job, sector_params("sector8"), out_dir)
         elif job == "cube_tet4":
             info = make_cube(job, 1, 0.15, out_dir)
         elif job == "cube_tet10":
