@@ -9,6 +9,7 @@
 //! | 1 model | [`fe`] | 3-D elasticity: shape functions, quadrature, parallel assembly of K and M, clamping |
 //! | 1 model | [`model`] | the structural model of a case: assembled or imported K, M after clamping |
 //! | 1–2 modal | [`eigen`] | sparse shift-invert eigensolver K φ = λ M φ (lowest modes), reusable factorisation |
+//! | 2 cyclic | [`cyclic`] | cyclic-symmetry geometry: sector rotation R_α, frontier node pairing, harmonic indices k_n |
 //! | — | [`case`] | the TOML case file of `interface.md` |
 //! | — | [`cli`] | the command line |
 //!
@@ -18,6 +19,7 @@
 
 pub mod case;
 pub mod cli;
+pub mod cyclic;
 pub mod eigen;
 pub mod error;
 pub mod fe;
