@@ -65,7 +65,7 @@ fn eigen(c: &mut Criterion) {
     let opts = EigenOptions::default();
     let mut group = c.benchmark_group(format!("eigen_lattice_{}", nx * ny * nz));
     group.sample_size(10);
-    group.measurement_time(Duration::from_secs(60));
+    group.measurement_time(Duration::from_secs(90));
     group.bench_function("factorise", |b| {
         b.iter(|| ShiftInvert::new(k.as_ref(), m.as_ref(), 0.0).expect("factorises"))
     });

@@ -1,7 +1,13 @@
 //! The sparse eigensolver (`nlrom::eigen`) against independent references: faer's dense
 //! symmetric eigensolver on a Cholesky-transformed random pencil, the closed-form spectra of
-//! fixed–fixed and free–free spring–mass chains and of the 7-point Laplacian on a 3-D grid; plus
-//! the static solve and the input errors.
+//! fixed–fixed and free–free spring–mass chains, of the 7-point Laplacian on clamped and free 3-D
+//! grids (with repeated eigenvalues) and of a diagonal pencil with massless DOFs; plus the static
+//! solve, the singular/indefinite shifted matrix and the input errors.
+//!
+//! Tolerances: eigenvalues of well-conditioned problems (random pencil, lattices) to 1e-10
+//! relative; the chains, whose K has the condition number ≈ 4N²/π² ≈ 1.6e6, to 1e-9 (round-off
+//! alone allows ~ε·κ ≈ 4e-10); residuals to the solver's default tolerance 1e-8; M-orthonormality
+//! to 1e-10.
 
 use faer::prelude::Solve;
 use faer::sparse::{SparseColMat, Triplet};
@@ -10,9 +16,9 @@ use nlrom::eigen::{lowest_modes, EigenOptions, Modes, ShiftInvert};
 use nlrom::Error;
 use std::f64::consts::PI;
 
-/// Spring stiffness of the chains (N/m).
+/// Spring stiffness of the chains and lattices (N/m).
 const SPRING: f64 = 1.0e6;
-/// Point mass of the chains (kg).
+/// Point mass of the chains and lattices (kg).
 const MASS: f64 = 0.5;
 
 /// A sparse matrix from (row, col, value) triplets (duplicates summed).
@@ -44,19 +50,24 @@ fn chain_stiffness(n: usize, clamped: bool) -> SparseColMat<usize, f64> {
     sparse(n, &e)
 }
 
-/// 7-point Laplacian stiffness (`SPRING` per grid link) of an `nx × ny × nz` grid of masses
-/// whose outside neighbours are clamped (Dirichlet boundary).
-fn lattice_stiffness(nx: usize, ny: usize, nz: usize) -> SparseColMat<usize, f64> {
+/// 7-point Laplacian stiffness (`SPRING` per grid link) of an `nx × ny × nz` grid of masses;
+/// `clamped`: the outside neighbours are fixed (Dirichlet), otherwise the grid is free (Neumann,
+/// one rigid-body mode).
+fn lattice_stiffness(nx: usize, ny: usize, nz: usize, clamped: bool) -> SparseColMat<usize, f64> {
     let id = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
     let mut e = Vec::with_capacity(7 * nx * ny * nz);
     for k in 0..nz {
         for j in 0..ny {
             for i in 0..nx {
                 let p = id(i, j, k);
-                e.push((p, p, 6.0 * SPRING));
+                if clamped {
+                    e.push((p, p, 6.0 * SPRING));
+                }
                 let mut link = |q: usize| {
-                    e.push((p, q, -SPRING));
-                    e.push((q, p, -SPRING));
+                    e.extend([(p, q, -SPRING), (q, p, -SPRING)]);
+                    if !clamped {
+                        e.extend([(p, p, SPRING), (q, q, SPRING)]);
+                    }
                 };
                 if i + 1 < nx {
                     link(id(i + 1, j, k));
@@ -74,14 +85,16 @@ fn lattice_stiffness(nx: usize, ny: usize, nz: usize) -> SparseColMat<usize, f64
 }
 
 /// The lowest `count` closed-form eigenvalues of [`lattice_stiffness`] with mass `MASS`:
-/// λ = (k/m) Σ_d 2(1 − cos(i_d π/(n_d + 1))), i_d = 1..n_d.
-fn lattice_eigenvalues(nx: usize, ny: usize, nz: usize, count: usize) -> Vec<f64> {
+/// λ = (k/m) Σ_d 2(1 − cos(i_d π/(n_d + 1))), i_d = 1..n_d when clamped;
+/// λ = (k/m) Σ_d 2(1 − cos(i_d π/n_d)), i_d = 0..n_d − 1 when free.
+fn lattice_eigenvalues(dims: [usize; 3], clamped: bool, count: usize) -> Vec<f64> {
     let axis = |n: usize| -> Vec<f64> {
-        (1..=n.min(count))
-            .map(|i| 2.0 * (1.0 - (i as f64 * PI / (n as f64 + 1.0)).cos()))
+        let (first, denominator) = if clamped { (1, n + 1) } else { (0, n) };
+        (first..first + n.min(count))
+            .map(|i| 2.0 * (1.0 - (i as f64 * PI / denominator as f64).cos()))
             .collect()
     };
-    let (ax, ay, az) = (axis(nx), axis(ny), axis(nz));
+    let (ax, ay, az) = (axis(dims[0]), axis(dims[1]), axis(dims[2]));
     let mut all = Vec::new();
     for x in &ax {
         for y in &ay {
@@ -341,10 +354,10 @@ fn shift_above_an_eigenvalue_is_an_error() {
 #[test]
 fn lattice_3d_closed_form() {
     let (nx, ny, nz) = (40, 40, 40);
-    let k = lattice_stiffness(nx, ny, nz);
+    let k = lattice_stiffness(nx, ny, nz, true);
     let m = scaled_identity(nx * ny * nz, MASS);
     let modes = lowest_modes(k.as_ref(), m.as_ref(), 20, &EigenOptions::default()).unwrap();
-    let exact = lattice_eigenvalues(nx, ny, nz, 20);
+    let exact = lattice_eigenvalues([nx, ny, nz], true, 20);
     let err = max_relative_error(&modes.eigenvalues, &exact);
     println!(
         "3-D lattice: eigenvalue error {err:.1e}, max residual {:.1e}, {} applications",
@@ -353,11 +366,87 @@ fn lattice_3d_closed_form() {
     );
     assert_residuals(&modes, 1e-8);
     assert!(
-        err < 1e-9,
-        "eigenvalue relative error {err:e} ≥ 1e-9: {:?} vs {exact:?}",
+        err < 1e-10,
+        "eigenvalue relative error {err:e} ≥ 1e-10: {:?} vs {exact:?}",
         modes.eigenvalues
     );
     assert!(m_orthonormality_error(&m, &modes.vectors) < 1e-10);
+}
+
+// A free 3-D lattice (12×12×14, one rigid-body mode, double eigenvalues from the x–y symmetry)
+// with a negative shift: the rigid-body mode and the closed-form Neumann spectrum.
+#[test]
+fn free_lattice_with_negative_shift() {
+    let dims = [12, 12, 14];
+    let k = lattice_stiffness(dims[0], dims[1], dims[2], false);
+    let m = scaled_identity(dims.iter().product(), MASS);
+    let exact = lattice_eigenvalues(dims, false, 12);
+    let opts = EigenOptions {
+        shift: -0.05 * exact[1],
+        ..EigenOptions::default()
+    };
+    let modes = lowest_modes(k.as_ref(), m.as_ref(), 12, &opts).unwrap();
+    let l0 = modes.eigenvalues[0];
+    let err = max_relative_error(&modes.eigenvalues[1..], &exact[1..]);
+    println!(
+        "free lattice: λ₀/λ₁ = {:.1e}, eigenvalue error {err:.1e}, max residual {:.1e}",
+        l0 / exact[1],
+        max(&modes.residuals)
+    );
+    assert!(l0.abs() < 1e-8 * exact[1], "rigid-body λ₀ = {l0:e}");
+    assert!(err < 1e-10, "eigenvalue relative error {err:e} ≥ 1e-10");
+    assert_residuals(&modes, 1e-8);
+    assert!(m_orthonormality_error(&m, &modes.vectors) < 1e-10);
+}
+
+// A negative shift far too close to 0 (λ_max/|σ| ≈ 2e14): the elastic modes cannot be resolved,
+// and the call says so instead of returning them.
+#[test]
+fn free_lattice_with_tiny_shift_fails_loudly() {
+    let k = lattice_stiffness(12, 12, 14, false);
+    let m = scaled_identity(12 * 12 * 14, MASS);
+    let opts = EigenOptions {
+        shift: -1e-7,
+        ..EigenOptions::default()
+    };
+    let msg = compute_message(lowest_modes(k.as_ref(), m.as_ref(), 5, &opts).unwrap_err());
+    assert!(
+        msg.contains("relative residual") && msg.contains("σ ≈ −0.01·λ₁"),
+        "{msg}"
+    );
+}
+
+/// K = diag((i + 1)·1e3) and M = diag(1 for odd i, 0 for even i) of size `n`: the massless even
+/// DOFs have infinite eigenvalues, the finite ones are 2e3, 4e3, 6e3, …
+fn massless_pencil(n: usize) -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>) {
+    let k: Vec<_> = (0..n).map(|i| (i, i, (i + 1) as f64 * 1e3)).collect();
+    let m: Vec<_> = (0..n).map(|i| (i, i, (i % 2) as f64)).collect();
+    (sparse(n, &k), sparse(n, &m))
+}
+
+// Massless DOFs (M positive semi-definite) are allowed: their λ = ∞ is never among the lowest.
+#[test]
+fn massless_dofs_are_allowed() {
+    for n_dof in [50, 400] {
+        let (k, m) = massless_pencil(n_dof);
+        let modes = lowest_modes(k.as_ref(), m.as_ref(), 5, &EigenOptions::default()).unwrap();
+        let exact = [2e3, 4e3, 6e3, 8e3, 10e3];
+        let err = max_relative_error(&modes.eigenvalues, &exact);
+        assert!(err < 1e-12, "N_dof = {n_dof}: eigenvalue error {err:e}");
+        assert_residuals(&modes, 1e-10);
+    }
+}
+
+// More modes than finite eigenvalues: an error, not infinite or garbage eigenvalues.
+#[test]
+fn too_few_finite_eigenvalues_is_an_error() {
+    let (k, m) = massless_pencil(50);
+    let err = lowest_modes(k.as_ref(), m.as_ref(), 30, &EigenOptions::default()).unwrap_err();
+    let msg = compute_message(err);
+    assert!(
+        msg.contains("mode 26") && msg.contains("massless DOFs"),
+        "{msg}"
+    );
 }
 
 // One factorisation serves the static solve (multi-RHS) and the modes, as Craig–Bampton needs.

@@ -18,7 +18,9 @@ Solvers, each in a fresh process under `/usr/bin/time -f "%e %M"` (process wall 
   * scipy-superlu:  `scipy.sparse.linalg.eigsh(K, N, M, sigma=SIGMA, which='LM', tol=ARPACK_TOL)`:
                     ARPACK shift-invert mode with SuperLU of K − σM (scipy's default path).
   * scipy-cholmod:  the same eigsh call with `OPinv` = a LinearOperator solving with CHOLMOD's
-                    Cholesky of K − σM (scikit-sparse; skipped if it does not import).
+                    Cholesky of K − σM (scikit-sparse; skipped if it does not import). On Debian 12:
+                    `apt-get install libsuitesparse-dev` and `pip install scikit-sparse==0.4.16`
+                    (0.5 needs SuiteSparse 7, Debian 12 has 5.12).
 "solve s" is measured inside each process around factorisation + eigensolver (file reading
 excluded); "process s" and "peak MB" cover the whole process, reading included. The eigenvalue
 columns give the largest relative difference to nlrom's eigenvalues and to the closed form. A

@@ -29,71 +29,118 @@ use crate::error::{Error, Result};
 /// is treated as lost to round-off (rank-deficient block) and replaced by a random direction.
 const DEFLATION_RATIO: f64 = 1e-10;
 /// Round-off floor of the Ritz residuals, relative to the largest Ritz value (≈ ‖A‖₂): a pair
-/// counts as converged once `‖A x − θ x‖₂ ≤ tol · θ + NOISE_FLOOR · θ_max`. Without it a pair
-/// with θ ≪ θ_max (an elastic mode next to rigid-body modes and a shift very close to 0) could
-/// never converge; the residual check after the back-transformation then reports it.
-const NOISE_FLOOR: f64 = 1e3 * f64::EPSILON;
+/// counts as converged once `‖A x − θ x‖₂ ≤ tol · θ + NOISE_FLOOR · θ_max`. Round-off in the
+/// applications of A keeps the residual estimates at about ε θ_max, so without the floor a pair
+/// with θ ≪ θ_max (an elastic mode next to rigid-body modes with a shift very close to 0) would
+/// never converge; the residual check after the back-transformation judges it instead.
+const NOISE_FLOOR: f64 = 10.0 * f64::EPSILON;
 
-/// Parameters of one block Krylov–Schur run.
-pub(super) struct BlockParams {
+/// Sizes of a block Krylov–Schur iteration.
+pub(super) struct BlockSizes {
     /// Number of wanted eigenpairs n (largest θ).
     pub wanted: usize,
     /// Block size b (columns per operator application).
     pub block: usize,
     /// Basis size m before a restart; `n + 2b ≤ m` and `m + b ≤ N_dof`.
     pub max_dim: usize,
-    /// Largest number of restarts.
-    pub max_restarts: usize,
-    /// Relative Ritz residual accepted: `‖A x − θ x‖₂ ≤ tolerance · θ + NOISE_FLOOR · θ_max`.
-    pub tolerance: f64,
 }
 
-/// Largest eigenpairs of `op`: θ descending and the orthonormal Ritz vectors (`N_dof × n`).
-pub(super) fn largest_eigenpairs(
-    op: &Operator<'_, '_>,
-    p: &BlockParams,
-) -> Result<(Vec<f64>, Mat<f64>)> {
-    let (b, m) = (p.block, p.max_dim);
-    let mut rng = SplitMix(0x5EED_0FEE_1600);
-    let mut v = Mat::<f64>::zeros(op.n_dof(), m + b);
-    let mut h = Mat::<f64>::zeros(m, m);
-    for c in 0..b {
-        orthonormal_random_column(v.as_mut(), c, &mut rng);
+/// The state of a block Krylov–Schur iteration: basis, projected matrix, coupling to the next
+/// block. [`BlockKrylov::converge`] can be called again with a tighter tolerance and continues
+/// from where the previous call stopped.
+pub(super) struct BlockKrylov {
+    sizes: BlockSizes,
+    /// Basis `V` (`N_dof × (m + b)`): `active` columns with known image, then the next block.
+    v: Mat<f64>,
+    /// Projected matrix `H = Vᵀ A V` (`m × m`, leading `active × active` block in use).
+    h: Mat<f64>,
+    /// R factor B of the next block: `A V − V H = V_next B E_lastᵀ`.
+    coupling: Mat<f64>,
+    active: usize,
+    rng: SplitMix,
+}
+
+impl BlockKrylov {
+    /// A new iteration for `op` with a random orthonormal start block.
+    pub(super) fn new(n_dof: usize, sizes: BlockSizes) -> Self {
+        let (b, m) = (sizes.block, sizes.max_dim);
+        let mut rng = SplitMix(0x5EED_0FEE_1600);
+        let mut v = Mat::<f64>::zeros(n_dof, m + b);
+        for c in 0..b {
+            orthonormal_random_column(v.as_mut(), c, &mut rng);
+        }
+        BlockKrylov {
+            sizes,
+            v,
+            h: Mat::zeros(m, m),
+            coupling: Mat::zeros(b, b),
+            active: 0,
+            rng,
+        }
     }
-    let mut active = 0;
-    let mut coupling = Mat::<f64>::zeros(b, b);
-    for restart in 0..=p.max_restarts {
-        while active + b <= m {
-            coupling = expand(op, v.as_mut(), h.as_mut(), active, b, &mut rng)?;
-            active += b;
+
+    /// Iterates (at most `max_restarts` thick restarts) until the wanted Ritz pairs satisfy
+    /// `‖A x − θ x‖₂ ≤ tolerance · θ + NOISE_FLOOR · θ_max`; returns θ descending and the
+    /// orthonormal Ritz vectors (`N_dof × n`).
+    pub(super) fn converge(
+        &mut self,
+        op: &Operator<'_, '_>,
+        tolerance: f64,
+        max_restarts: usize,
+    ) -> Result<(Vec<f64>, Mat<f64>)> {
+        let (n, b, m) = (self.sizes.wanted, self.sizes.block, self.sizes.max_dim);
+        for restart in 0..=max_restarts {
+            while self.active + b <= m {
+                self.coupling = expand(
+                    op,
+                    self.v.as_mut(),
+                    self.h.as_mut(),
+                    self.active,
+                    b,
+                    &mut self.rng,
+                )?;
+                self.active += b;
+            }
+            let active = self.active;
+            let (theta, s) = rayleigh_ritz(self.h.as_ref().get(..active, ..active))?;
+            let residuals = ritz_residuals(
+                self.coupling.as_ref(),
+                s.as_ref().get(active - b..active, ..),
+            );
+            let floor = NOISE_FLOOR * theta[0].abs();
+            let converged = (0..n)
+                .filter(|&i| residuals[i] <= tolerance * theta[i] + floor)
+                .count();
+            if converged == n {
+                let y = self.v.as_ref().get(.., ..active) * s.as_ref().get(.., ..n);
+                return Ok((theta[..n].to_vec(), y));
+            }
+            if restart == max_restarts {
+                return Err(not_converged(converged, &self.sizes, max_restarts));
+            }
+            let keep = (n + (m - n) / 2).min(m - b);
+            thick_restart(
+                self.v.as_mut(),
+                self.h.as_mut(),
+                s.as_ref(),
+                &theta,
+                active,
+                keep,
+                b,
+            );
+            self.active = keep;
         }
-        let (theta, s) = rayleigh_ritz(h.as_ref().get(..active, ..active))?;
-        let residuals = ritz_residuals(coupling.as_ref(), s.as_ref().get(active - b..active, ..));
-        let floor = NOISE_FLOOR * theta[0].abs();
-        let converged = (0..p.wanted)
-            .filter(|&i| residuals[i] <= p.tolerance * theta[i] + floor)
-            .count();
-        if converged == p.wanted {
-            let y = v.as_ref().get(.., ..active) * s.as_ref().get(.., ..p.wanted);
-            return Ok((theta[..p.wanted].to_vec(), y));
-        }
-        if restart == p.max_restarts {
-            return Err(not_converged(converged, p));
-        }
-        let keep = (p.wanted + (m - p.wanted) / 2).min(m - b);
-        thick_restart(v.as_mut(), h.as_mut(), s.as_ref(), &theta, active, keep, b);
-        active = keep;
+        Err(not_converged(0, &self.sizes, max_restarts))
     }
-    Err(not_converged(0, p))
 }
 
 /// The error for a run that used up its restarts with `converged` of the wanted pairs.
-fn not_converged(converged: usize, p: &BlockParams) -> Error {
+fn not_converged(converged: usize, sizes: &BlockSizes, max_restarts: usize) -> Error {
     Error::Compute(format!(
-        "the block Krylov–Schur iteration converged {converged} of {} modes in {} restarts; \
-         raise max_restarts or subspace_dim (now {}), or check the shift (a shift far below the \
-         wanted eigenvalues slows convergence)",
-        p.wanted, p.max_restarts, p.max_dim
+        "the block Krylov–Schur iteration converged {converged} of {} modes in {max_restarts} \
+         restarts; raise max_restarts or subspace_dim (now {}), or check the shift (a shift far \
+         below the wanted eigenvalues slows convergence)",
+        sizes.wanted, sizes.max_dim
     ))
 }
 

@@ -129,30 +129,12 @@ impl<'a> ShiftInvert<'a> {
         shift: f64,
     ) -> Result<Self> {
         input::check_pencil(k, m)?;
-        if !shift.is_finite() {
-            return Err(Error::input(format!(
-                "shift = {shift} is not a finite number; use 0 for a clamped model or a negative \
-                 value for a free–free one"
-            )));
-        }
-        let shifted = if shift == 0.0 {
-            None
-        } else {
-            Some(shifted_matrix(k, m, shift)?)
-        };
+        check_shift(shift)?;
+        let shifted = (shift != 0.0)
+            .then(|| shifted_matrix(k, m, shift))
+            .transpose()?;
         let a = shifted.as_ref().map_or(k, |s| s.as_ref());
-        let symbolic = factorize_symbolic_cholesky(
-            a.symbolic(),
-            Side::Lower,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(|e| {
-            Error::Compute(format!(
-                "symbolic Cholesky analysis of K − σM failed ({e:?}); the factor is too large for \
-                 this machine"
-            ))
-        })?;
+        let symbolic = symbolic_analysis(a)?;
         let l_values = factorize_numeric(&symbolic, a, shift)?;
         let mut this = ShiftInvert {
             k,
@@ -368,6 +350,33 @@ fn diagonal_entry(a: SparseColMatRef<'_, usize, f64>, j: usize) -> f64 {
         Ok(p) => a.val_of_col(j)[p],
         Err(_) => 0.0,
     }
+}
+
+/// σ must be finite.
+fn check_shift(shift: f64) -> Result<()> {
+    if shift.is_finite() {
+        return Ok(());
+    }
+    Err(Error::input(format!(
+        "shift = {shift} is not a finite number; use 0 for a clamped model or a negative value \
+         for a free–free one"
+    )))
+}
+
+/// AMD ordering and symbolic Cholesky analysis of the pattern of `a` (lower triangle).
+fn symbolic_analysis(a: SparseColMatRef<'_, usize, f64>) -> Result<SymbolicCholesky<usize>> {
+    factorize_symbolic_cholesky(
+        a.symbolic(),
+        Side::Lower,
+        SymmetricOrdering::Amd,
+        CholeskySymbolicParams::default(),
+    )
+    .map_err(|e| {
+        Error::Compute(format!(
+            "symbolic Cholesky analysis of K − σM failed ({e:?}); the factor is too large for \
+             this machine"
+        ))
+    })
 }
 
 /// K − σM on the union of the two patterns.
