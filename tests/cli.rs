@@ -106,51 +106,51 @@ fn cube_case(dir: &Path, clamp: &str) -> std::path::PathBuf {
     case
 }
 
-#[test]
-fn modes_and_export_agree() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let case = cube_case(dir.path(), "\"bottom\"");
-    let out = nlrom(&[
-        "modes",
-        case.to_str().expect("utf8"),
-        "--num",
-        "6",
-        "--json",
-    ]);
+/// Runs nlrom, asserts exit status 0 (showing stderr otherwise) and returns stdout.
+fn run_ok(args: &[&str]) -> Vec<u8> {
+    let out = nlrom(args);
     assert_eq!(
         out.status.code(),
         Some(0),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    out.stdout
+}
+
+/// `nlrom modes CASE --json` with `extra` arguments: the JSON report.
+fn modes_json(case: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec!["modes", case.to_str().expect("utf8"), "--json"];
+    args.extend_from_slice(extra);
+    serde_json::from_slice(&run_ok(&args)).expect("one JSON object on stdout")
+}
+
+/// A list of numbers from a JSON report.
+fn numbers(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array()
+        .expect("list")
+        .iter()
+        .map(|x| x.as_f64().expect("number"))
+        .collect()
+}
+
+#[test]
+fn modes_and_export_agree() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let case = cube_case(dir.path(), "\"bottom\"");
+    let v = modes_json(&case, &["--num", "6"]);
     assert_eq!(v["stage"], "full");
-    let freqs: Vec<f64> = v["frequencies_hz"]
-        .as_array()
-        .expect("list")
-        .iter()
-        .map(|x| x.as_f64().expect("f"))
-        .collect();
+    let freqs = numbers(&v["frequencies_hz"]);
     assert_eq!(freqs.len(), 6);
-    assert!(v["residuals"]
-        .as_array()
-        .expect("list")
-        .iter()
-        .all(|r| r.as_f64().expect("r") < 1e-8));
+    assert!(numbers(&v["residuals"]).iter().all(|&r| r < 1e-8));
 
     let export = dir.path().join("export");
-    let out = nlrom(&[
+    run_ok(&[
         "export",
         case.to_str().expect("utf8"),
         "--dir",
         export.to_str().expect("utf8"),
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let k = nlrom::matrix_io::read_real_matrix(&export.join("K.mtx")).expect("K");
     let m = nlrom::matrix_io::read_real_matrix(&export.join("M.mtx")).expect("M");
     let dofs = nlrom::matrix_io::read_dof_map(&export.join("dofs.csv")).expect("dofs");
@@ -168,27 +168,9 @@ fn modes_and_export_agree() {
         "[model]\nstiffness = \"export/K.mtx\"\nmass = \"export/M.mtx\"\n",
     )
     .expect("case");
-    let out = nlrom(&[
-        "modes",
-        matrix_case.to_str().expect("utf8"),
-        "--num",
-        "6",
-        "--json",
-    ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let w: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
-    for (a, b) in w["frequencies_hz"]
-        .as_array()
-        .expect("list")
-        .iter()
-        .zip(&freqs)
-    {
-        assert!((a.as_f64().expect("f") / b - 1.0).abs() < 1e-10);
+    let again = numbers(&modes_json(&matrix_case, &["--num", "6"])["frequencies_hz"]);
+    for (a, b) in again.iter().zip(&freqs) {
+        assert!((a / b - 1.0).abs() < 1e-10, "{a} vs {b}");
     }
 }
 
@@ -200,27 +182,8 @@ fn free_free_without_shift_is_refused_with_advice() {
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--shift-hz"), "{err}");
-    let out = nlrom(&[
-        "modes",
-        case.to_str().expect("utf8"),
-        "--num",
-        "8",
-        "--shift-hz",
-        "100",
-        "--json",
-    ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
-    let f = v["frequencies_hz"].as_array().expect("list");
-    assert!(
-        f[5].as_f64().expect("f") < 1e-4 * f[6].as_f64().expect("f"),
-        "{f:?}"
-    );
+    let f = numbers(&modes_json(&case, &["--num", "8", "--shift-hz", "100"])["frequencies_hz"]);
+    assert!(f[5] < 1e-4 * f[6], "{f:?}");
 }
 
 #[test]

@@ -263,6 +263,11 @@ fn malformed_files_name_the_file_and_the_line() {
         ("%%MatrixMarket matrix coordinate real general\n3 3 1\n1 1 nan\n", "K.mtx: line 3: value 'nan' is not finite"),
         ("%%MatrixMarket matrix coordinate real symmetric\n3 3 2\n2 1 1.0\n1 3 1.0\n", "K.mtx: line 4: entry (1, 3) is above the diagonal, but line 3 stores the other triangle"),
     ];
+    assert_errors_start_with(&cases);
+}
+
+/// Every (file text, expected message start) pair: reading the text fails with that message.
+fn assert_errors_start_with(cases: &[(&str, &str)]) {
     for (text, expected) in cases {
         let msg = read_error(text);
         assert!(
@@ -292,13 +297,7 @@ fn more_malformed_files() {
             "K.mtx: line 6: end of file after 3 values, but a 2 x 2 general array needs 4",
         ),
     ];
-    for (text, expected) in cases {
-        let msg = read_error(text);
-        assert!(
-            msg.starts_with(expected),
-            "expected '{expected}', got '{msg}'"
-        );
-    }
+    assert_errors_start_with(&cases);
 }
 
 #[test]
