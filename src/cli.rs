@@ -224,9 +224,9 @@ fn run(cli: Cli) -> Result<()> {
 fn mesh_info(path: &Path, as_json: bool) -> Result<()> {
     let start = Instant::now();
     let mesh = read_msh(path)?;
-    let mut report = mesh_summary(&mesh);
-    report["wall_seconds"] = json!(start.elapsed().as_secs_f64());
     if as_json {
+        let mut report = mesh_summary(&mesh);
+        report["wall_seconds"] = json!(start.elapsed().as_secs_f64());
         println!("{report}");
     } else {
         print!("{}", mesh_summary_text(path, &mesh));
@@ -317,7 +317,7 @@ fn log_stderr(line: &str) {
 /// Loads a case and builds its structural model, logging to stderr.
 fn load_model(case_path: &Path) -> Result<(Case, StructuralModel)> {
     let case = Case::load(case_path)?;
-    let model = model::build(&case, &mut |l| log_stderr(l))?;
+    let model = model::build(&case, &mut log_stderr)?;
     Ok((case, model))
 }
 
