@@ -10,6 +10,8 @@
 //! | 1 model | [`model`] | the structural model of a case: assembled or imported K, M after clamping |
 //! | 1–2 modal | [`eigen`] | sparse shift-invert eigensolver K φ = λ M φ (lowest modes), reusable factorisation |
 //! | 2 cyclic | [`cyclic`] | cyclic-symmetry geometry: sector rotation R_α, frontier node pairing, harmonic indices k_n |
+//! | 2 ROM | [`rom`] | the reduced-order model per harmonic index: matrices and reduced-DOF description |
+//! | 3–4 | [`harmonics`] | real harmonic layout (conventions §4) and the `HarmonicForce` interface |
 //! | — | [`case`] | the TOML case file of `interface.md` |
 //! | — | [`cli`] | the command line |
 //!
@@ -23,8 +25,10 @@ pub mod cyclic;
 pub mod eigen;
 pub mod error;
 pub mod fe;
+pub mod harmonics;
 pub mod matrix_io;
 pub mod mesh;
 pub mod model;
+pub mod rom;
 
 pub use error::{Error, Result};

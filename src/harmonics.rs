@@ -1,0 +1,126 @@
+//! Harmonic vectors in the real layout of `conventions.md` §4, and the interface every nonlinear
+//! force of the harmonic balance implements.
+//!
+//! A periodic signal of the normalised time τ = ω t (one period = 2π) is
+//! q(τ) = Re Σ_{n=0..H} Q⁽ⁿ⁾ e^{i n τ} = Q⁽⁰⁾ + Σ_{n≥1} (Re Q⁽ⁿ⁾ cos nτ − Im Q⁽ⁿ⁾ sin nτ).
+//! The real unknown vector of `n_dof` such signals is harmonic-major (SAMA paper, eq. 22):
+//! `[Q⁽⁰⁾ of every DOF; for n = 1..H, for every DOF: Re Q⁽ⁿ⁾, Im Q⁽ⁿ⁾]`, length `n_dof·(2H+1)`.
+//!
+//! This module is the contract between the contact elements (which evaluate forces and Jacobians in
+//! this layout) and the harmonic-balance solver (which assembles and solves in it).
+
+use faer::MatMut;
+
+use crate::error::{Error, Result};
+
+/// Number of harmonics H and time samples N_t per period used by the alternating
+/// frequency/time (AFT) evaluation of nonlinear forces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HarmonicLayout {
+    /// Highest temporal harmonic H ≥ 0 (n = 0 is the static part).
+    pub harmonics: usize,
+    /// Samples per period N_t ≥ 2H + 2 (`conventions.md` §4).
+    pub time_samples: usize,
+}
+
+impl HarmonicLayout {
+    /// Validates `time_samples ≥ 2H + 2`.
+    pub fn new(harmonics: usize, time_samples: usize) -> Result<Self> {
+        if time_samples < 2 * harmonics + 2 {
+            return Err(Error::input(format!(
+                "[harmonic_balance] time_samples = {time_samples} is too small for harmonics = {harmonics}: the AFT needs N_t ≥ 2H + 2 = {} samples per period (the default is the smallest power of two ≥ 4(H+1) = {})",
+                2 * harmonics + 2,
+                Self::default_samples(harmonics)
+            )));
+        }
+        Ok(HarmonicLayout {
+            harmonics,
+            time_samples,
+        })
+    }
+
+    /// The layout with the default number of samples, the smallest power of two ≥ 4(H+1).
+    pub fn with_default_samples(harmonics: usize) -> Self {
+        HarmonicLayout {
+            harmonics,
+            time_samples: Self::default_samples(harmonics),
+        }
+    }
+
+    /// The smallest power of two ≥ 4(H+1) (`conventions.md` §4).
+    pub fn default_samples(harmonics: usize) -> usize {
+        (4 * (harmonics + 1)).next_power_of_two()
+    }
+
+    /// Real coefficients per DOF, 2H + 1.
+    pub fn coefficients(&self) -> usize {
+        2 * self.harmonics + 1
+    }
+
+    /// Length of the real harmonic vector of `n_dof` DOFs, `n_dof·(2H+1)`.
+    pub fn len(&self, n_dof: usize) -> usize {
+        n_dof * self.coefficients()
+    }
+
+    /// Index of the static coefficient Q⁽⁰⁾ of `dof` in a vector of `n_dof` DOFs.
+    pub fn static_index(&self, dof: usize) -> usize {
+        dof
+    }
+
+    /// Index of Re Q⁽ⁿ⁾ of `dof` (n ≥ 1) in a vector of `n_dof` DOFs; Im Q⁽ⁿ⁾ follows at `+1`.
+    pub fn cos_index(&self, n: usize, dof: usize, n_dof: usize) -> usize {
+        debug_assert!(n >= 1 && n <= self.harmonics && dof < n_dof);
+        n_dof + 2 * ((n - 1) * n_dof + dof)
+    }
+}
+
+/// A nonlinear force acting on `n_dofs()` DOFs, evaluated on harmonic vectors
+/// (real layout above, length `layout.len(n_dofs())`).
+///
+/// The harmonic balance residual is r(Q, ω) = D̄(ω) Q − F̄_e + F_nl(Q) (SAMA paper eq. 19): the
+/// force returned here is the force the element exerts *on the structure with a minus sign*, i.e.
+/// the internal force that appears on the left-hand side with the elastic forces (a linear spring k
+/// gives F_nl = k Q).
+pub trait HarmonicForce: Send + Sync {
+    /// Memory carried from one evaluation to the next (e.g. the slider positions at the start of
+    /// the period, from the previous converged continuation point).
+    type State: Clone + Send + Sync + std::fmt::Debug;
+
+    /// Number of DOFs the force reads and acts on.
+    fn n_dofs(&self) -> usize;
+
+    /// The state for the first evaluation (e.g. sliders at rest, from the static solution).
+    fn initial_state(&self) -> Self::State;
+
+    /// Adds the harmonic coefficients F_nl(Q) to `force` and, when given, ∂F_nl/∂Q to
+    /// `jacobian` (square, `layout.len(n_dofs())`). `state` holds the starting memory on entry
+    /// and the converged end-of-period memory on return.
+    fn evaluate(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &mut Self::State,
+        force: &mut [f64],
+        jacobian: Option<MatMut<'_, f64>>,
+    ) -> Result<()>;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layout_indices_are_harmonic_major() {
+        let layout = HarmonicLayout::new(2, 8).unwrap();
+        assert_eq!(layout.len(3), 15);
+        assert_eq!(layout.static_index(2), 2);
+        assert_eq!(layout.cos_index(1, 0, 3), 3);
+        assert_eq!(layout.cos_index(1, 2, 3), 7);
+        assert_eq!(layout.cos_index(2, 0, 3), 9);
+        assert_eq!(layout.cos_index(2, 2, 3), 13);
+        assert_eq!(HarmonicLayout::default_samples(3), 16);
+        assert_eq!(HarmonicLayout::default_samples(7), 32);
+        assert!(HarmonicLayout::new(3, 7).is_err());
+        assert!(HarmonicLayout::new(3, 8).is_ok());
+    }
+}
