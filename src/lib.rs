@@ -11,6 +11,7 @@
 //! | 1–2 modal | [`eigen`] | sparse shift-invert eigensolver K φ = λ M φ (lowest modes), reusable factorisation |
 //! | 2 cyclic | [`cyclic`] | cyclic-symmetry geometry: sector rotation R_α, frontier node pairing, harmonic indices k_n |
 //! | 2 ROM | [`rom`] | the reduced-order model per harmonic index: matrices and reduced-DOF description |
+//! | 3 contact | [`contact`] | friction contact law, AFT evaluation, analytic Jacobians, contact pairs |
 //! | 3–4 | [`harmonics`] | real harmonic layout (conventions §4) and the `HarmonicForce` interface |
 //! | — | [`case`] | the TOML case file of `interface.md` |
 //! | — | [`cli`] | the command line |
@@ -21,6 +22,7 @@
 
 pub mod case;
 pub mod cli;
+pub mod contact;
 pub mod cyclic;
 pub mod eigen;
 pub mod error;
