@@ -4,5 +4,10 @@
 //!
 //! * [`law`]: the single-sample time-discrete law (normal force, stick/slip/separation with slider
 //!   memory, 1-D and 2-D variants) and its partial derivatives.
+//! * [`aft`]: realfft transforms between the real harmonic layout and time samples.
+//! * [`element`]: one element over a period — periodic marching, forces, the analytic Jacobian,
+//!   stick/slip/separation fractions, dissipated energy, hysteresis loop.
 
+pub mod aft;
+pub mod element;
 pub mod law;
