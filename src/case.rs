@@ -721,18 +721,22 @@ pub enum MarchScheme {
     Newmark,
     /// Newmark with an adaptive step.
     Adaptive,
-    /// Exact integration of a piecewise-linear system between state changes.
+    /// Piecewise-linear Newmark: contact states predicted unchanged, verified, corrected at
+    /// transitions (Gastaldi & Berruti 2018, Appendix A.4).
     PiecewiseLinear,
+    /// Piecewise-linear Newmark with the adaptive step.
+    AdaptivePiecewiseLinear,
     /// Quasi-static stepping (no inertia).
     QuasiStatic,
 }
 
 impl MarchScheme {
     /// All schemes, in documentation order.
-    pub const ALL: [MarchScheme; 4] = [
+    pub const ALL: [MarchScheme; 5] = [
         MarchScheme::Newmark,
         MarchScheme::Adaptive,
         MarchScheme::PiecewiseLinear,
+        MarchScheme::AdaptivePiecewiseLinear,
         MarchScheme::QuasiStatic,
     ];
 
@@ -742,6 +746,7 @@ impl MarchScheme {
             MarchScheme::Newmark => "newmark",
             MarchScheme::Adaptive => "adaptive",
             MarchScheme::PiecewiseLinear => "piecewise-linear",
+            MarchScheme::AdaptivePiecewiseLinear => "adaptive-piecewise-linear",
             MarchScheme::QuasiStatic => "quasi-static",
         }
     }
@@ -755,7 +760,7 @@ impl std::str::FromStr for MarchScheme {
             .into_iter()
             .find(|m| m.as_str() == s)
             .ok_or_else(|| {
-                format!("unknown scheme '{s}'; expected newmark, adaptive, piecewise-linear or quasi-static")
+                format!("unknown scheme '{s}'; expected newmark, adaptive, piecewise-linear, adaptive-piecewise-linear or quasi-static")
             })
     }
 }

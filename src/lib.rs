@@ -12,6 +12,7 @@
 //! | 2 cyclic | [`cyclic`] | cyclic-symmetry geometry: sector rotation R_α, frontier node pairing, harmonic indices k_n |
 //! | 2 ROM | [`rom`] | the reduced-order model per harmonic index: matrices and reduced-DOF description |
 //! | 3 contact | [`contact`] | friction contact law, AFT evaluation, analytic Jacobians, contact pairs |
+//! | — | [`march`] | time marching: Newmark, adaptive step, piecewise-linear Newmark, quasi-static (Gastaldi & Berruti 2018) |
 //! | 3–4 | [`harmonics`] | real harmonic layout (conventions §4) and the `HarmonicForce` interface |
 //! | — | [`case`] | the TOML case file of `interface.md` |
 //! | — | [`cli`] | the command line |
@@ -28,6 +29,7 @@ pub mod eigen;
 pub mod error;
 pub mod fe;
 pub mod harmonics;
+pub mod march;
 pub mod matrix_io;
 pub mod mesh;
 pub mod model;

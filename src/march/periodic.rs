@@ -1,0 +1,86 @@
+//! Steady-state detection and the harmonics of the last period: what lets a march be compared
+//! with a harmonic-balance point.
+//!
+//! Periodicity: the state at the end of period p is compared with the end of period p − 1,
+//! e_p = max(|Δq|_∞ / A, |Δq̇|_∞ / (ω A)) with A the largest half peak-to-peak displacement of a DOF
+//! in period p. Harmonics: Q⁽⁰⁾ = (1/T)∫q dt, Q⁽ⁿ⁾ = (2/T)∫q e^{−inωt} dt (n ≥ 1), so that
+//! q(t) = Re Σ Q⁽ⁿ⁾ e^{inωt} (`conventions.md` §4); the integrals by the trapezoidal rule over the
+//! recorded (possibly non-uniform) instants.
+
+use super::dense::norm_inf;
+use super::integrate::{MarchHistory, PeriodSummary};
+use super::system::MarchSystem;
+
+/// The summary of the period recorded at history indices `first..=last` (`first` is the previous
+/// period's end). `prev_end` is (q, q̇) at `first`; `compare` is false for the first period.
+pub fn summarize(
+    h: &MarchHistory,
+    sys: &MarchSystem,
+    omega: f64,
+    first: usize,
+    last: usize,
+    prev_end: &(Vec<f64>, Vec<f64>),
+    compare: bool,
+) -> PeriodSummary {
+    let n = sys.n;
+    let ne = sys.elements.len();
+    let mut amp: f64 = 0.0;
+    for d in 0..n {
+        let (lo, hi) = (first..=last)
+            .map(|k| h.q[k * n + d])
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+        amp = amp.max(0.5 * (hi - lo));
+    }
+    let amp = if amp > 0.0 { amp } else { sys.displacement_scale };
+    let periodicity_error = compare.then(|| {
+        let q = &h.q[last * n..(last + 1) * n];
+        let v = &h.v[last * n..(last + 1) * n];
+        let dq: Vec<f64> = q.iter().zip(&prev_end.0).map(|(a, b)| a - b).collect();
+        let dv: Vec<f64> = v.iter().zip(&prev_end.1).map(|(a, b)| a - b).collect();
+        (norm_inf(&dq) / amp).max(norm_inf(&dv) / (omega * amp))
+    });
+    let state_changes = (first + 1..=last)
+        .filter(|&k| h.state[k * ne..(k + 1) * ne] != h.state[(k - 1) * ne..k * ne])
+        .count();
+    PeriodSummary {
+        end_index: last,
+        periodicity_error,
+        state_changes,
+        steps: last - first,
+    }
+}
+
+/// Harmonics 0..=`harmonics` of every DOF over the instants `first..=last` (one period), as
+/// (Re, Im) pairs: `[dof][n]`.
+pub fn harmonics(
+    h: &MarchHistory,
+    n_dof: usize,
+    omega: f64,
+    first: usize,
+    last: usize,
+    harmonics: usize,
+) -> Vec<Vec<(f64, f64)>> {
+    let span = h.time[last] - h.time[first];
+    (0..n_dof)
+        .map(|d| {
+            (0..=harmonics)
+                .map(|m| {
+                    let value = |k: usize| {
+                        let (s, c) = (m as f64 * omega * h.time[k]).sin_cos();
+                        let q = h.q[k * n_dof + d];
+                        (q * c, -q * s)
+                    };
+                    let (mut re, mut im) = (0.0, 0.0);
+                    for k in first..last {
+                        let dt = h.time[k + 1] - h.time[k];
+                        let (a, b) = (value(k), value(k + 1));
+                        re += 0.5 * dt * (a.0 + b.0);
+                        im += 0.5 * dt * (a.1 + b.1);
+                    }
+                    let scale = if m == 0 { 1.0 } else { 2.0 } / span;
+                    (re * scale, im * scale)
+                })
+                .collect()
+        })
+        .collect()
+}
