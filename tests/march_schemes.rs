@@ -76,7 +76,10 @@ fn linear_sdof_reaches_the_exact_steady_state() {
         assert!(out.steady_period.is_some(), "{scheme}: not steady");
         let (re, im) = out.harmonics[0][1];
         let err = (re - exact.0).hypot(im - exact.1) / exact.0.hypot(exact.1);
-        assert!(err < 2e-4, "{scheme}: first harmonic ({re}, {im}) vs {exact:?}: {err}");
+        assert!(
+            err < 2e-4,
+            "{scheme}: first harmonic ({re}, {im}) vs {exact:?}: {err}"
+        );
     }
 }
 
@@ -95,7 +98,12 @@ fn jenkins(kt: f64, fs: f64, u: f64, w: f64) -> (f64, f64) {
 /// Harmonic balance of m q̈ + c q̇ + k q + f_t(q) = F cos θ with H harmonics (real Fourier
 /// coefficients [a0, a1, b1, …]), AFT with `nt` samples (the element marched over periods until
 /// its end slider repeats), Newton with a finite-difference Jacobian. Returns the coefficients.
-fn harmonic_balance(p: (f64, f64, f64, f64, f64, f64), omega: f64, h: usize, nt: usize) -> Vec<f64> {
+fn harmonic_balance(
+    p: (f64, f64, f64, f64, f64, f64),
+    omega: f64,
+    h: usize,
+    nt: usize,
+) -> Vec<f64> {
     let (m, c, k, f, kt, fs) = p;
     let nx = 2 * h + 1;
     let theta = |j: usize| 2.0 * std::f64::consts::PI * j as f64 / nt as f64;
@@ -186,7 +194,11 @@ fn jenkins_oscillator_matches_harmonic_balance_h7() {
     let hb = harmonic_balance(p, omega, 7, 512);
     let hb_amp = hb[1].hypot(hb[2]);
     let hb1 = harmonic_balance(p, omega, 1, 512);
-    assert!((hb1[1].hypot(hb1[2]) - 1.0).abs() < 2e-3, "H=1 HB: {}", hb1[1].hypot(hb1[2]));
+    assert!(
+        (hb1[1].hypot(hb1[2]) - 1.0).abs() < 2e-3,
+        "H=1 HB: {}",
+        hb1[1].hypot(hb1[2])
+    );
     for scheme in [MarchScheme::PiecewiseLinear, MarchScheme::Newmark] {
         let mut s = settings(scheme, omega, 200, 800);
         s.stop_at_steady = true;
@@ -199,12 +211,18 @@ fn jenkins_oscillator_matches_harmonic_balance_h7() {
         let rel = (amp - hb_amp).abs() / hb_amp;
         eprintln!("{scheme}: steady after {steady} periods, march |Q1| = {amp:.6}, HB(H=7) = {hb_amp:.6}, rel {rel:.2e}");
         assert!(rel < 0.01, "{scheme}: {amp} vs HB {hb_amp}");
-        assert!((amp - 1.0).abs() < 0.03, "{scheme}: {amp} vs one-harmonic 1.0");
+        assert!(
+            (amp - 1.0).abs() < 0.03,
+            "{scheme}: {amp} vs one-harmonic 1.0"
+        );
         // the higher harmonics agree too (3rd harmonic, relative to the first)
         let (r3, i3) = out.harmonics[0][3];
         let d3 = (r3 - hb[5]).hypot(-i3 - hb[6]) / hb_amp;
         eprintln!("{scheme}: third harmonic differs by {d3:.2e} of |Q1|");
-        assert!(d3 < 0.002, "{scheme}: third harmonic differs by {d3} of |Q1|");
+        assert!(
+            d3 < 0.002,
+            "{scheme}: third harmonic differs by {d3} of |Q1|"
+        );
     }
 }
 
@@ -239,8 +257,15 @@ fn jenkins_energy_per_cycle_and_energy_balance() {
     let a = 0.5 * (hi - lo);
     let closed = 4.0 * fs * (a - fs / kt);
     eprintln!("A = {a:.6}, W_fric = {w_fric:.6}, closed form {closed:.6}, W_in = {w_in:.6}, W_visc = {w_visc:.6}");
-    assert!((w_fric - closed).abs() < 2e-3 * closed, "{w_fric} vs {closed}");
-    assert!((w_in - w_visc - w_fric).abs() < 2e-3 * w_in, "balance {w_in} vs {}", w_visc + w_fric);
+    assert!(
+        (w_fric - closed).abs() < 2e-3 * closed,
+        "{w_fric} vs {closed}"
+    );
+    assert!(
+        (w_in - w_visc - w_fric).abs() < 2e-3 * w_in,
+        "balance {w_in} vs {}",
+        w_visc + w_fric
+    );
 }
 
 /// Piecewise-linear Newmark solves the same implicit step as standard Newmark: at the same step
@@ -260,13 +285,20 @@ fn piecewise_linear_equals_standard_newmark_at_the_same_step() {
     let (a, b) = (&runs[0].history, &runs[1].history);
     assert_eq!(a.len(), b.len());
     let scale = a.q.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    let diff = a.q.iter().zip(&b.q).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+    let diff =
+        a.q.iter()
+            .zip(&b.q)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
     eprintln!("max |q_std − q_pl| / max|q| = {:.2e}", diff / scale);
     assert!(diff < 1e-9 * scale, "{diff} vs scale {scale}");
     assert_eq!(a.state, b.state, "the contact states differ");
     let frac = runs[1].single_iteration_fraction();
     let changes: usize = runs[1].periods.iter().map(|p| p.state_changes).sum();
-    assert!(changes >= 20, "the run should cross many transitions, saw {changes}");
+    assert!(
+        changes >= 20,
+        "the run should cross many transitions, saw {changes}"
+    );
     eprintln!(
         "iterations: standard {}, piecewise-linear {} (single-iteration steps {:.1} %)",
         runs[0].total_iterations,
@@ -356,7 +388,11 @@ fn newmark_schemes_converge_at_second_order_between_transitions() {
         s.tolerance = 1e-14;
         let out = march(&sys, &s).unwrap();
         let h = &out.history;
-        let i = h.time.iter().position(|&t| (t - t_w).abs() < 1e-9).expect("t_w on the grid");
+        let i = h
+            .time
+            .iter()
+            .position(|&t| (t - t_w).abs() < 1e-9)
+            .expect("t_w on the grid");
         assert!(h.state.iter().all(|&c| c == 1), "left stick");
         h.q[i]
     };
@@ -366,7 +402,11 @@ fn newmark_schemes_converge_at_second_order_between_transitions() {
         let e1 = (run(scheme, dt) - reference).abs();
         let e2 = (run(scheme, dt / 2.0) - reference).abs();
         let e4 = (run(scheme, dt / 4.0) - reference).abs();
-        eprintln!("{scheme}: errors {e1:.3e} {e2:.3e} {e4:.3e}, ratios {:.3} {:.3}", e1 / e2, e2 / e4);
+        eprintln!(
+            "{scheme}: errors {e1:.3e} {e2:.3e} {e4:.3e}, ratios {:.3} {:.3}",
+            e1 / e2,
+            e2 / e4
+        );
         assert!((e1 / e2 - 4.0).abs() < 0.4 && (e2 / e4 - 4.0).abs() < 0.4);
     }
 }
@@ -381,13 +421,57 @@ fn bad_settings_are_input_errors() {
         assert!(e.to_string().contains(needle), "{e} lacks '{needle}'");
     };
     let base = settings(MarchScheme::Newmark, 1.0, 1, 100);
-    check(MarchSettings { time_step: Some(0.0), ..base.clone() }, "time step must be > 0");
-    check(MarchSettings { time_step: Some(-1e-3), ..base.clone() }, "time step must be > 0");
-    check(MarchSettings { step_ratio: 0.4, ..base.clone() }, "1/π");
+    check(
+        MarchSettings {
+            time_step: Some(0.0),
+            ..base.clone()
+        },
+        "time step must be > 0",
+    );
+    check(
+        MarchSettings {
+            time_step: Some(-1e-3),
+            ..base.clone()
+        },
+        "time step must be > 0",
+    );
+    check(
+        MarchSettings {
+            step_ratio: 0.4,
+            ..base.clone()
+        },
+        "1/π",
+    );
     // 𝕋_stick = 2π/√2 ≈ 4.44 s: Δτ = 2 s is Δτ/𝕋 = 0.45 > 1/π
-    check(MarchSettings { time_step: Some(2.0), ..base.clone() }, "0.318");
-    check(MarchSettings { omega: 0.0, ..base.clone() }, "frequency");
-    check(MarchSettings { periods: 0, ..base.clone() }, "periods");
+    check(
+        MarchSettings {
+            time_step: Some(2.0),
+            ..base.clone()
+        },
+        "0.318",
+    );
+    check(
+        MarchSettings {
+            omega: 0.0,
+            ..base.clone()
+        },
+        "frequency",
+    );
+    check(
+        MarchSettings {
+            periods: 0,
+            ..base.clone()
+        },
+        "periods",
+    );
     // the piecewise-linear scheme is not bound by the corrector's limit
-    assert!(march(&sys, &MarchSettings { time_step: Some(2.0), scheme: MarchScheme::PiecewiseLinear, ..base }).is_ok());
+    assert!(march(
+        &sys,
+        &MarchSettings {
+            time_step: Some(2.0),
+            scheme: MarchScheme::PiecewiseLinear,
+            ..base
+        }
+    )
+    .is_ok());
 }

@@ -200,7 +200,12 @@ mod tests {
             for a in 0..3 {
                 let kq: f64 = (0..3).map(|b| k[a * 3 + b] * q[b]).sum();
                 let f_lin = r[a] - kq;
-                assert!((f_lin - f_law[a]).abs() < 1e-12, "{:?}: {f_lin} vs {}", s.state, f_law[a]);
+                assert!(
+                    (f_lin - f_law[a]).abs() < 1e-12,
+                    "{:?}: {f_lin} vs {}",
+                    s.state,
+                    f_law[a]
+                );
             }
             if !seen.contains(&s.state) {
                 seen.push(s.state);

@@ -89,7 +89,10 @@ impl MarchSettings {
             }
         }
         if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
-            return bad(format!("`tolerance` must be > 0 (found {})", self.tolerance));
+            return bad(format!(
+                "`tolerance` must be > 0 (found {})",
+                self.tolerance
+            ));
         }
         if !(self.steady_tolerance.is_finite() && self.steady_tolerance > 0.0) {
             return bad(format!(
@@ -150,7 +153,15 @@ impl MarchHistory {
         self.time.is_empty()
     }
 
-    fn push(&mut self, sys: &MarchSystem, omega: f64, t: f64, kin: &Kinematics, s: &[LawSample], it: u32) {
+    fn push(
+        &mut self,
+        sys: &MarchSystem,
+        omega: f64,
+        t: f64,
+        kin: &Kinematics,
+        s: &[LawSample],
+        it: u32,
+    ) {
         self.time.push(t);
         self.q.extend_from_slice(&kin.q);
         self.v.extend_from_slice(&kin.v);
@@ -360,8 +371,14 @@ pub fn march(sys: &MarchSystem, settings: &MarchSettings) -> Result<MarchOutcome
     } else {
         0
     };
-    let harmonics =
-        periodic::harmonics(&history, sys.n, settings.omega, first_of_last, last.end_index, settings.harmonics);
+    let harmonics = periodic::harmonics(
+        &history,
+        sys.n,
+        settings.omega,
+        first_of_last,
+        last.end_index,
+        settings.harmonics,
+    );
     let steps = history.len() - 1;
     Ok(MarchOutcome {
         scheme: settings.scheme,

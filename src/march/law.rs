@@ -1,22 +1,13 @@
-//! The single-sample time-discrete friction law used by the march (`methods.md`, "Node-to-node
-//! contact element with normal load variation"; Gastaldi & Berruti 2018 §3, Table 1).
-//!
-//! f_n = max(n0 + k_n v, 0). If f_n = 0: separation, f_t = 0, slider w ← u_t. Else the trial force
-//! f_tr = k_t (u_t − w): stick if |f_tr| ≤ μ f_n (f_t = f_tr, w unchanged), otherwise slip with
-//! f_t = μ f_n sgn(f_tr) and w ← u_t − f_t/k_t.
+//! The march's view of the time-discrete friction law of [`crate::contact::law`] (the same law and
+//! parameters as the harmonic balance; `methods.md`, "Node-to-node contact element"): one
+//! tangential direction with normal load variation, and the contact state of Gastaldi & Berruti
+//! 2018 Table 1 (lift-off, stick, slip with its sign) that the piecewise-linear schemes predict and
+//! verify.
 
-/// Friction parameters of one element.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FrictionParams {
-    /// Tangential contact stiffness k_t (N/m).
-    pub kt: f64,
-    /// Normal contact stiffness k_n (N/m).
-    pub kn: f64,
-    /// Friction coefficient μ.
-    pub mu: f64,
-    /// Static normal load n0 (N); negative: initial gap −n0/k_n.
-    pub n0: f64,
-}
+use crate::contact::law::{normal_force, tangential_1d, Regime};
+
+/// Friction parameters k_t (N/m), k_n (N/m), μ, n0 (N) — the contact module's.
+pub use crate::contact::law::ContactParams as FrictionParams;
 
 /// Direction of slip.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -63,7 +54,7 @@ impl ContactState {
 /// The law's output for one sample.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LawSample {
-    /// Friction force f_t (N).
+    /// Friction force f_t (N, internal-force sign: a stuck element is the spring k_t (u_t − w)).
     pub f_t: f64,
     /// Normal force f_n ≥ 0 (N).
     pub f_n: f64,
@@ -74,40 +65,21 @@ pub struct LawSample {
 }
 
 /// One sample of the law at tangential displacement `ut` (m), normal approach `v` (m; `None`:
-/// constant normal load n0) and slider `w` (m) from the previous sample.
+/// constant normal load max(n0, 0)) and slider `w` (m) from the previous sample:
+/// f_n = max(n0 + k_n v, 0), then [`tangential_1d`] with the limit μ f_n.
 pub fn sample(p: &FrictionParams, ut: f64, v: Option<f64>, w: f64) -> LawSample {
-    let f_n = match v {
-        Some(v) => (p.n0 + p.kn * v).max(0.0),
-        None => p.n0.max(0.0),
+    let f_n = normal_force(p, v.unwrap_or(0.0));
+    let (f_t, slider, regime) = tangential_1d(p.kt, p.mu * f_n, f_n <= 0.0, ut, w);
+    let state = match regime {
+        Regime::Separation => ContactState::Separated,
+        Regime::Stick => ContactState::Stick,
+        Regime::Slip if f_t.is_sign_negative() => ContactState::Slip(Sign::Negative),
+        Regime::Slip => ContactState::Slip(Sign::Positive),
     };
-    if f_n <= 0.0 {
-        return LawSample {
-            f_t: 0.0,
-            f_n: 0.0,
-            state: ContactState::Separated,
-            slider: ut,
-        };
-    }
-    let trial = p.kt * (ut - w);
-    let limit = p.mu * f_n;
-    if trial.abs() <= limit {
-        return LawSample {
-            f_t: trial,
-            f_n,
-            state: ContactState::Stick,
-            slider: w,
-        };
-    }
-    let sign = if trial > 0.0 {
-        Sign::Positive
-    } else {
-        Sign::Negative
-    };
-    let f_t = sign.value() * limit;
     LawSample {
         f_t,
         f_n,
-        state: ContactState::Slip(sign),
-        slider: ut - f_t / p.kt,
+        state,
+        slider,
     }
 }

@@ -28,10 +28,16 @@ pub fn summarize(
     for d in 0..n {
         let (lo, hi) = (first..=last)
             .map(|k| h.q[k * n + d])
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+                (lo.min(x), hi.max(x))
+            });
         amp = amp.max(0.5 * (hi - lo));
     }
-    let amp = if amp > 0.0 { amp } else { sys.displacement_scale };
+    let amp = if amp > 0.0 {
+        amp
+    } else {
+        sys.displacement_scale
+    };
     let periodicity_error = compare.then(|| {
         let q = &h.q[last * n..(last + 1) * n];
         let v = &h.v[last * n..(last + 1) * n];

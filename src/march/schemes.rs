@@ -178,17 +178,19 @@ pub fn standard_step(
     let sys = ctx.sys;
     let (n, dt) = (sys.n, ctx.dt);
     let key = dt.to_bits();
-    if !cache.structural.contains_key(&key) {
-        let s = dynamic_matrix(sys, dt, &sys.stiffness);
-        let inv = dense::inverse(&s, n).ok_or_else(|| {
-            Error::Compute(format!(
-                "the Newmark matrix M/(βΔτ²) + γC/(βΔτ) + K is singular (Δτ = {dt:e} s): the model needs mass"
-            ))
-        })?;
-        cache.structural.insert(key, inv);
-        cache.factorisations += 1;
-    }
-    let sinv = &cache.structural[&key];
+    let sinv = match cache.structural.entry(key) {
+        std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
+        std::collections::hash_map::Entry::Vacant(e) => {
+            let s = dynamic_matrix(sys, dt, &sys.stiffness);
+            let inv = dense::inverse(&s, n).ok_or_else(|| {
+                Error::Compute(format!(
+                    "the Newmark matrix M/(βΔτ²) + γC/(βΔτ) + K is singular (Δτ = {dt:e} s): the model needs mass"
+                ))
+            })?;
+            cache.factorisations += 1;
+            e.insert(inv)
+        }
+    };
     let (qs, vs) = newmark_predictors(start, dt);
     let mut q = start.q.clone();
     let mut f = vec![0.0; n];

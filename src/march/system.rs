@@ -127,7 +127,9 @@ impl MarchSystem {
     /// Whether M is symmetric positive definite (needed by the dynamic schemes).
     pub fn mass_is_positive_definite(&self) -> bool {
         let n = self.n;
-        let m = faer::Mat::from_fn(n, n, |i, j| 0.5 * (self.mass[i * n + j] + self.mass[j * n + i]));
+        let m = faer::Mat::from_fn(n, n, |i, j| {
+            0.5 * (self.mass[i * n + j] + self.mass[j * n + i])
+        });
         n > 0 && m.llt(faer::Side::Lower).is_ok()
     }
 
