@@ -17,6 +17,7 @@ use crate::matrix_io::{write_dof_map, write_matrix_market_symmetric};
 use crate::mesh::msh::read_msh;
 use crate::mesh::Mesh;
 use crate::model::{self, StructuralModel};
+use crate::sama;
 
 /// nlrom: vibration of structures with friction contacts (bladed disks with shroud,
 /// underplatform and root joints) by reduced-order models and harmonic balance.
@@ -211,7 +212,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Modes(a) => modes(&a),
         Command::Export(a) => export(&a.case, &a.dir),
         Command::Reduce(_) => Err(Error::NotImplemented("nlrom reduce".into())),
-        Command::Contact(_) => Err(Error::NotImplemented("nlrom contact".into())),
+        Command::Contact(a) => contact(&a.case, a.json),
         Command::Solve(_) => Err(Error::NotImplemented("nlrom solve".into())),
         Command::March(_) => Err(Error::NotImplemented("nlrom march".into())),
         Command::Run(_) => Err(Error::NotImplemented("nlrom run".into())),
@@ -412,5 +413,61 @@ fn export(case_path: &Path, dir: &Path) -> Result<()> {
         dir.display(),
         model.free.n_free()
     ));
+    Ok(())
+}
+
+/// `nlrom contact`: the contact pairs of every `[[contact]]` of the case (SAMA or node-to-node).
+fn contact(case_path: &Path, as_json: bool) -> Result<()> {
+    let start = Instant::now();
+    let case = Case::load(case_path)?;
+    if case.contact.is_empty() {
+        return Err(Error::input(format!(
+            "{}: the case has no [[contact]] table; add one with `contact`, `target`, `mu`, `kt`, `kn`, `n0` (see interface.md)",
+            case_path.display()
+        )));
+    }
+    let Some(mesh_path) = &case.model.mesh else {
+        return Err(Error::input(format!(
+            "{}: [[contact]] needs `model.mesh` (the groups and coordinates of the contact and target nodes)",
+            case_path.display()
+        )));
+    };
+    let mesh = read_msh(mesh_path)?;
+    case.check_groups(&mesh)?;
+    let cyclic = case
+        .cyclic
+        .as_ref()
+        .map(crate::cyclic::CyclicGeometry::from_case)
+        .transpose()?;
+    let interfaces = sama::build_interfaces(&case, &mesh, cyclic.as_ref())?;
+    for iface in &interfaces {
+        log_stderr(&format!(
+            "contact '{}': σ = {}, {} of {} contact nodes projected",
+            iface.name,
+            iface.sigma,
+            iface.pairs.len(),
+            iface.contact_nodes
+        ));
+        if !iface.unprojected.is_empty() {
+            log_stderr(&format!(
+                "warning: contact '{}': {} contact node(s) do not project onto the target surface (listed under \"unprojected\")",
+                iface.name,
+                iface.unprojected.len()
+            ));
+        }
+    }
+    if as_json {
+        let list: Vec<Value> = interfaces
+            .iter()
+            .map(sama::report::interface_json)
+            .collect();
+        let report = json!({
+            "interfaces": list,
+            "wall_seconds": start.elapsed().as_secs_f64(),
+        });
+        println!("{report}");
+    } else {
+        print!("{}", sama::report::interfaces_text(&interfaces));
+    }
     Ok(())
 }

@@ -13,6 +13,7 @@
 //! | 2 ROM | [`rom`] | the reduced-order model per harmonic index: matrices and reduced-DOF description |
 //! | 3 contact | [`contact`] | friction contact law, AFT evaluation, analytic Jacobians, contact pairs |
 //! | — | [`march`] | time marching: Newmark, adaptive step, piecewise-linear Newmark, quasi-static (Gastaldi & Berruti 2018) |
+//! | 3 contact | [`sama`] | contact pairs: target placement, projection, SAMA weights (eqs 28–32), node-to-node |
 //! | 3–4 | [`harmonics`] | real harmonic layout (conventions §4) and the `HarmonicForce` interface |
 //! | — | [`case`] | the TOML case file of `interface.md` |
 //! | — | [`cli`] | the command line |
@@ -34,5 +35,6 @@ pub mod matrix_io;
 pub mod mesh;
 pub mod model;
 pub mod rom;
+pub mod sama;
 
 pub use error::{Error, Result};

@@ -1,0 +1,183 @@
+//! Projection of a contact node onto the target surface (SAMA paper §4, step 1; Fig. 6): the
+//! virtual node t_v, the target face containing it, and the local frame there (`conventions.md` §3).
+//!
+//! The BVH of the flat search mesh gives the nearest sub-triangle; its barycentric coordinates give
+//! a first (u, v) on the face, refined on the face's isoparametric map x(u, v) = Σ N_i(u, v) x_i by
+//! Gauss–Newton on ½|x_c − x(u, v)|², with (u, v) kept in the reference element. When the result
+//! is on the face's border (the nearest point may then lie on a neighbouring curved face), the
+//! faces sharing a node with it are tried too and the nearest point wins.
+
+use parry3d_f64::math::Vector as PVec;
+use parry3d_f64::query::PointQueryWithLocation;
+
+use crate::mesh::faces::surface_shape;
+use crate::mesh::ElementType;
+
+use super::geom::{cross, dot, norm, scale, sub, unit};
+use super::surface::{is_triangle, reference_node, subdivision, TargetSurface};
+
+/// The projection of a point onto the target surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Projection {
+    /// Index of the target face (into [`TargetSurface::faces`]).
+    pub face: usize,
+    /// Reference coordinates (u, v) of t_v on that face (inside the reference element).
+    pub uv: [f64; 2],
+    /// The virtual node t_v (m), a point of the face.
+    pub point: [f64; 3],
+    /// Local frame at t_v, rows t1, t2, n: n = the face's outward unit normal (towards the contact
+    /// body), t1 = the face's first edge (corner 1 − corner 0) projected on the tangent plane and
+    /// normalised, t2 = n × t1 (right-handed).
+    pub frame: [[f64; 3]; 3],
+    /// Signed normal gap (x_c − t_v)·n (m): positive = the contact node is outside the target body
+    /// (open gap), negative = interpenetration.
+    pub gap: f64,
+    /// Distance |x_c − t_v| (m).
+    pub distance: f64,
+    /// Length (m) of the tangential part of x_c − t_v: zero (to round-off) when t_v is the
+    /// orthogonal projection inside the face, positive when the node projects outside the surface.
+    pub tangential_offset: f64,
+}
+
+/// Largest number of Gauss–Newton iterations on one face.
+const MAX_ITERATIONS: usize = 40;
+
+/// The reference point (u, v) moved into the reference element (triangle or [−1, 1]²).
+fn clamp_reference(kind: ElementType, uv: [f64; 2]) -> [f64; 2] {
+    if is_triangle(kind) {
+        let (mut u, mut v) = (uv[0].max(0.0), uv[1].max(0.0));
+        if u + v > 1.0 {
+            // nearest point of the hypotenuse u + v = 1
+            let s = (0.5 * (1.0 + u - v)).clamp(0.0, 1.0);
+            u = s;
+            v = 1.0 - s;
+        }
+        [u, v]
+    } else {
+        [uv[0].clamp(-1.0, 1.0), uv[1].clamp(-1.0, 1.0)]
+    }
+}
+
+/// Position x(u, v) and tangents ∂x/∂u, ∂x/∂v of a face with node positions `xs`.
+fn evaluate(kind: ElementType, xs: &[[f64; 3]], uv: [f64; 2]) -> [[f64; 3]; 3] {
+    let (n, d) = surface_shape(kind, uv[0], uv[1]);
+    let mut out = [[0.0; 3]; 3];
+    for ((x, nk), dk) in xs.iter().zip(&n).zip(&d) {
+        for c in 0..3 {
+            out[0][c] += nk * x[c];
+            out[1][c] += dk[0] * x[c];
+            out[2][c] += dk[1] * x[c];
+        }
+    }
+    out
+}
+
+/// The point of the face (node positions `xs`) nearest to `x`, by Gauss–Newton from `uv0` with
+/// the iterate kept inside the reference element; returns its reference coordinates.
+pub fn closest_on_face(kind: ElementType, xs: &[[f64; 3]], x: [f64; 3], uv0: [f64; 2]) -> [f64; 2] {
+    let mut uv = clamp_reference(kind, uv0);
+    for _ in 0..MAX_ITERATIONS {
+        let [p, xu, xv] = evaluate(kind, xs, uv);
+        let r = sub(x, p);
+        let (a, b, c) = (dot(xu, xu), dot(xu, xv), dot(xv, xv));
+        let det = a * c - b * b;
+        if det.is_nan() || det <= 0.0 {
+            break;
+        }
+        let (gu, gv) = (dot(xu, r), dot(xv, r));
+        let du = (c * gu - b * gv) / det;
+        let dv = (a * gv - b * gu) / det;
+        let next = clamp_reference(kind, [uv[0] + du, uv[1] + dv]);
+        let step = (next[0] - uv[0]).abs() + (next[1] - uv[1]).abs();
+        uv = next;
+        if step < 1e-15 {
+            break;
+        }
+    }
+    uv
+}
+
+/// The local frame (rows t1, t2, n) of a face at reference point `uv` (`conventions.md` §3).
+pub fn local_frame(kind: ElementType, xs: &[[f64; 3]], uv: [f64; 2]) -> [[f64; 3]; 3] {
+    let [_, xu, xv] = evaluate(kind, xs, uv);
+    let n = unit(cross(xu, xv));
+    let edge = sub(xs[1], xs[0]);
+    let t1 = unit(sub(edge, scale(dot(edge, n), n)));
+    let t2 = cross(n, t1);
+    [t1, t2, n]
+}
+
+impl TargetSurface {
+    /// The projection of `x` onto face `f`, starting the search at reference point `uv0`.
+    pub fn project_on_face(&self, f: usize, x: [f64; 3], uv0: [f64; 2]) -> Projection {
+        let kind = self.faces[f].kind;
+        let xs = self.face_points(f);
+        let uv = closest_on_face(kind, &xs, x, uv0);
+        let [point, _, _] = evaluate(kind, &xs, uv);
+        let frame = local_frame(kind, &xs, uv);
+        let d = sub(x, point);
+        let gap = dot(d, frame[2]);
+        Projection {
+            face: f,
+            uv,
+            point,
+            frame,
+            gap,
+            distance: norm(d),
+            tangential_offset: norm(sub(d, scale(gap, frame[2]))),
+        }
+    }
+
+    /// The projection of `x` onto the surface, or `None` when no face comes closer than
+    /// `search_radius` (m). The BVH gives the nearest flat sub-triangle; the point is refined on
+    /// the curved face; if it lands on the face's border, the neighbouring faces are tried too.
+    pub fn project(&self, x: [f64; 3], search_radius: f64) -> Option<Projection> {
+        let (_, (tri, location)) = self
+            .trimesh()
+            .project_local_point_and_get_location_with_max_dist(
+                PVec::new(x[0], x[1], x[2]),
+                false,
+                search_radius,
+            )?;
+        let (f, s) = self.sub_triangle(tri);
+        let bary = location.barycentric_coordinates()?;
+        let kind = self.faces[f].kind;
+        let corners = subdivision(kind)[s];
+        let mut uv0 = [0.0; 2];
+        for (b, &local) in bary.iter().zip(&corners) {
+            let r = reference_node(kind, local);
+            uv0[0] += b * r[0];
+            uv0[1] += b * r[1];
+        }
+        let best = self.project_on_face(f, x, uv0);
+        if best.tangential_offset <= 1e-9 * self.mean_edge {
+            return Some(best);
+        }
+        Some(self.best_among_neighbours(f, x, best))
+    }
+
+    /// The nearest of `first` and the projections onto the faces sharing a node with face `f`
+    /// (ties in distance, within 1e-12 of the mean edge, go to the smaller tangential offset).
+    fn best_among_neighbours(&self, f: usize, x: [f64; 3], first: Projection) -> Projection {
+        let tie = 1e-12 * self.mean_edge;
+        let mut best = first;
+        for g in self.neighbours(f) {
+            if g == f {
+                continue;
+            }
+            let kind = self.faces[g].kind;
+            let centre = if is_triangle(kind) {
+                [1.0 / 3.0, 1.0 / 3.0]
+            } else {
+                [0.0, 0.0]
+            };
+            let p = self.project_on_face(g, x, centre);
+            let closer = p.distance < best.distance - tie;
+            let tied = (p.distance - best.distance).abs() <= tie;
+            if closer || (tied && p.tangential_offset < best.tangential_offset) {
+                best = p;
+            }
+        }
+        best
+    }
+}

@@ -1,0 +1,125 @@
+//! The `nlrom contact` report (`interface.md`): JSON object and text table of the interfaces.
+
+use serde_json::{json, Value};
+
+use crate::case::ContactModel;
+
+use super::ContactInterface;
+
+/// The model's spelling in the case file and the report.
+pub fn model_name(model: ContactModel) -> &'static str {
+    match model {
+        ContactModel::Sama => "sama",
+        ContactModel::NodeToNode => "node-to-node",
+    }
+}
+
+/// One interface as the JSON object of `interface.md` (`contact` output), with extra keys: per
+/// pair the frame rows `t1`, `t2`, the `virtual_point`, signed `gap`, target `face` tag and its
+/// reference coordinates, tributary `area`, the pair parameters `kt`, `kn`, `n0` (eq 31) and the
+/// node's preload share `n0_node`; per interface the unprojected nodes' details and tolerances.
+pub fn interface_json(iface: &ContactInterface) -> Value {
+    let pairs: Vec<Value> = iface
+        .pairs
+        .iter()
+        .map(|p| {
+            json!({
+                "contact_node": p.contact_node,
+                "targets": p.targets,
+                "weights": p.weights,
+                "distance": p.distance,
+                "gap": p.gap,
+                "normal": p.frame[2],
+                "t1": p.frame[0],
+                "t2": p.frame[1],
+                "virtual_point": p.virtual_point,
+                "face": p.face,
+                "reference": p.reference,
+                "area": p.area,
+                "kt": p.kt,
+                "kn": p.kn,
+                "n0": p.n0,
+                "n0_node": p.n0_node,
+            })
+        })
+        .collect();
+    let details: Vec<Value> = iface
+        .unprojected
+        .iter()
+        .map(|u| {
+            json!({
+                "node": u.node,
+                "distance": u.distance,
+                "tangential_offset": u.tangential_offset,
+            })
+        })
+        .collect();
+    json!({
+        "name": iface.name,
+        "model": model_name(iface.model),
+        "sigma": iface.sigma,
+        "contact_nodes": iface.contact_nodes,
+        "projected": iface.pairs.len(),
+        "pairs": pairs,
+        "unprojected": iface.unprojected.iter().map(|u| u.node).collect::<Vec<u64>>(),
+        "unprojected_detail": details,
+        "sum_kt": iface.sum_kt,
+        "sum_kn": iface.sum_kn,
+        "sum_n0": iface.sum_n0,
+        "max_distance": iface.max_distance,
+        "coincident_tolerance": iface.coincident_tolerance,
+    })
+}
+
+/// A readable summary: one header per interface and one row per contact node.
+pub fn interfaces_text(interfaces: &[ContactInterface]) -> String {
+    let mut s = String::new();
+    for iface in interfaces {
+        let max_gap = iface.pairs.iter().map(|p| p.gap.abs()).fold(0.0, f64::max);
+        s += &format!(
+            "contact '{}': model {}, σ = {}, {} contact nodes, {} projected, {} unprojected\n",
+            iface.name,
+            model_name(iface.model),
+            iface.sigma,
+            iface.contact_nodes,
+            iface.pairs.len(),
+            iface.unprojected.len()
+        );
+        s += &format!(
+            "  Σ kt = {:.6e} N/m, Σ kn = {:.6e} N/m, Σ n0 = {:.6e} N, max |gap| = {:.3e} m\n",
+            iface.sum_kt, iface.sum_kn, iface.sum_n0, max_gap
+        );
+        s += &format!(
+            "  {:>8} {:>10} {:>11} {:>11}  targets (weight)\n",
+            "node", "gap (m)", "n0 (N)", "area (m²)"
+        );
+        for p in &iface.pairs {
+            let targets: Vec<String> = p
+                .targets
+                .iter()
+                .zip(&p.weights)
+                .map(|(t, w)| format!("{t} ({w:.4})"))
+                .collect();
+            s += &format!(
+                "  {:>8} {:>10.2e} {:>11.4e} {:>11.4e}  {}\n",
+                p.contact_node,
+                p.gap,
+                p.n0_node,
+                p.area,
+                targets.join(", ")
+            );
+        }
+        if !iface.unprojected.is_empty() {
+            let list: Vec<String> = iface
+                .unprojected
+                .iter()
+                .map(|u| match u.distance {
+                    Some(d) => format!("{} (nearest {:.3e} m)", u.node, d),
+                    None => format!("{} (no face within {:.3e} m)", u.node, iface.max_distance),
+                })
+                .collect();
+            s += &format!("  unprojected: {}\n", list.join(", "));
+        }
+    }
+    s
+}

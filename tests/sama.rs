@@ -1,0 +1,392 @@
+//! SAMA and node-to-node contact pairs on the bundled shrouded sector (N = 24): conforming and
+//! non-conforming shroud faces (issue 6 acceptance), and the `nlrom contact` command.
+
+use std::path::Path;
+use std::process::Command;
+
+use faer::c64;
+use nlrom::case::{Case, ContactModel};
+use nlrom::cyclic::{match_frontiers, CyclicGeometry};
+use nlrom::mesh::faces::group_faces;
+use nlrom::mesh::msh::read_msh;
+use nlrom::mesh::Mesh;
+use nlrom::sama::{build_interfaces, ContactInterface};
+
+fn case(name: &str) -> Case {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("cases/{name}.toml"));
+    Case::load(&path).unwrap()
+}
+
+fn setup(name: &str) -> (Case, Mesh, CyclicGeometry) {
+    let case = case(name);
+    let mesh = read_msh(case.model.mesh.as_ref().unwrap()).unwrap();
+    let geom = CyclicGeometry::from_case(case.cyclic.as_ref().unwrap()).unwrap();
+    (case, mesh, geom)
+}
+
+fn interface(case: &Case, mesh: &Mesh, geom: &CyclicGeometry) -> ContactInterface {
+    let mut v = build_interfaces(case, mesh, Some(geom)).unwrap();
+    assert_eq!(v.len(), 1);
+    v.pop().unwrap()
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Frame rows orthonormal and right-handed (t1 × t2 = n).
+fn check_frame(f: &[[f64; 3]; 3]) {
+    for i in 0..3 {
+        for j in 0..3 {
+            let e = if i == j { 1.0 } else { 0.0 };
+            assert!((dot(f[i], f[j]) - e).abs() < 1e-14, "{f:?}");
+        }
+    }
+    let c = [
+        f[0][1] * f[1][2] - f[0][2] * f[1][1],
+        f[0][2] * f[1][0] - f[0][0] * f[1][2],
+        f[0][0] * f[1][1] - f[0][1] * f[1][0],
+    ];
+    assert!(dist(c, f[2]) < 1e-14, "{f:?}");
+}
+
+/// Checks of eqs 30–32 that hold for any interface, to 1e-12.
+fn check_sums(iface: &ContactInterface, kt: f64, kn: f64, n0: f64) {
+    for p in &iface.pairs {
+        let w: f64 = p.weights.iter().sum();
+        assert!((w - 1.0).abs() < 1e-12, "eq 30 at node {}", p.contact_node);
+        assert!(p.weights.iter().all(|&w| (0.0..=1.0).contains(&w)));
+        let st: f64 = p.kt.iter().sum();
+        let sn: f64 = p.kn.iter().sum();
+        let s0: f64 = p.n0.iter().sum();
+        assert!(
+            (st - kt).abs() <= 1e-12 * kt,
+            "Σ k_tj at {}",
+            p.contact_node
+        );
+        assert!(
+            (sn - kn).abs() <= 1e-12 * kn,
+            "Σ k_nj at {}",
+            p.contact_node
+        );
+        assert!((s0 - p.n0_node).abs() <= 1e-12 * p.n0_node.abs());
+        check_frame(&p.frame);
+    }
+    let n = iface.pairs.len() as f64;
+    assert!((iface.sum_kt - n * kt).abs() <= 1e-12 * n * kt);
+    assert!((iface.sum_kn - n * kn).abs() <= 1e-12 * n * kn);
+    assert!((iface.sum_n0 - n0).abs() <= 1e-12 * n0, "{}", iface.sum_n0);
+}
+
+#[test]
+fn conforming_shroud_gives_one_target_per_node() {
+    let (case, mesh, geom) = setup("shroud_conforming");
+    let c = &case.contact[0];
+    let iface = interface(&case, &mesh, &geom);
+    // The target face (θ = 0) is brought onto the contact face (θ = α) by R_α: σ = +1.
+    assert_eq!(iface.sigma, 1);
+    assert_eq!(iface.model, ContactModel::NodeToNode);
+    assert_eq!(iface.contact_nodes, 65);
+    assert_eq!(iface.pairs.len(), 65);
+    assert!(iface.unprojected.is_empty());
+    check_sums(&iface, c.kt, c.kn, c.n0);
+
+    // Independent pairing: the cyclic frontier matcher on the two shroud faces.
+    let fp = match_frontiers(&mesh, &geom, "shroud_target", "shroud_contact").unwrap();
+    for p in &iface.pairs {
+        assert_eq!(p.weights, vec![1.0]);
+        let k = fp.high.iter().position(|&h| h == p.contact_index).unwrap();
+        assert_eq!(p.target_indices, vec![fp.low[k]], "node {}", p.contact_node);
+        let xt = geom.rotate_point(mesh.coords[fp.low[k] as usize], 1);
+        assert!(dist(xt, mesh.coords[p.contact_index as usize]) < 1e-12);
+        assert!(p.distance < 1e-12 && p.gap.abs() < 1e-12);
+    }
+
+    // SAMA on the same mesh reproduces the node-to-node pairs exactly.
+    let mut sama_case = case.clone();
+    sama_case.contact[0].model = ContactModel::Sama;
+    let sama = interface(&sama_case, &mesh, &geom);
+    assert_eq!(sama.sigma, 1);
+    assert_eq!(sama.pairs.len(), 65);
+    for (a, b) in sama.pairs.iter().zip(&iface.pairs) {
+        assert_eq!(a.contact_node, b.contact_node);
+        assert_eq!(a.targets, b.targets);
+        assert_eq!(a.weights, vec![1.0]);
+        assert_eq!(a.n0, b.n0);
+    }
+}
+
+#[test]
+fn conforming_shroud_normal_points_to_the_contact_body() {
+    let (case, mesh, geom) = setup("shroud_conforming");
+    let iface = interface(&case, &mesh, &geom);
+    // The contact face lies on the plane θ = α; the contact body (this sector's shroud) is at
+    // θ < α, so n = −e_θ(α) = (sin α, −cos α, 0).
+    let a = geom.alpha;
+    for p in &iface.pairs {
+        assert!(
+            dist(p.frame[2], [a.sin(), -a.cos(), 0.0]) < 1e-12,
+            "{:?}",
+            p.frame
+        );
+    }
+}
+
+#[test]
+fn tributary_areas_sum_to_the_shroud_face_and_share_the_preload() {
+    let (case, mesh, geom) = setup("shroud_conforming");
+    let iface = interface(&case, &mesh, &geom);
+    // Shroud face: r ∈ [0.25, 0.26] × z ∈ [0, 0.03].
+    let total: f64 = iface.pairs.iter().map(|p| p.area).sum();
+    assert!((total - 0.01 * 0.03).abs() < 1e-12 * 3e-4, "{total}");
+    // Same total from the faces' own area rule (independent quadrature of |∂x/∂u × ∂x/∂v|).
+    let faces = group_faces(&mesh, "shroud_contact").unwrap();
+    let by_faces: f64 = faces
+        .iter()
+        .map(|f| {
+            let xs: Vec<[f64; 3]> = f.nodes.iter().map(|&n| mesh.coords[n as usize]).collect();
+            nlrom::mesh::faces::face_area(f.kind, &xs)
+        })
+        .sum();
+    assert!((total - by_faces).abs() < 1e-15);
+    for p in &iface.pairs {
+        let share = case.contact[0].n0 * p.area / total;
+        assert!((p.n0_node - share).abs() < 1e-12 * share);
+    }
+}
+
+#[test]
+fn nonconforming_shroud_weights_satisfy_eqs_29_to_32() {
+    let (case, mesh, geom) = setup("shroud_nonconforming");
+    let c = &case.contact[0];
+    let iface = interface(&case, &mesh, &geom);
+    assert_eq!(iface.sigma, 1);
+    assert_eq!(iface.pairs.len(), 65);
+    assert!(iface.unprojected.is_empty());
+    check_sums(&iface, c.kt, c.kn, c.n0);
+    let faces = group_faces(&mesh, "shroud_target").unwrap();
+    let mut multi = 0;
+    for p in &iface.pairs {
+        let xc = mesh.coords[p.contact_index as usize];
+        // Same plane: the contact node is its own virtual node.
+        assert!(p.distance < 1e-12 && p.gap.abs() < 1e-12, "{}", p.distance);
+        assert!(dist(p.virtual_point, xc) < 1e-12);
+        // t_v inside its face: barycentric coordinates in the (flat) face's corner triangle,
+        // computed from the placed corner positions, all ≥ 0.
+        let face = faces.iter().find(|f| f.surface_tag == p.face).unwrap();
+        let corners: Vec<[f64; 3]> = face.nodes[..3]
+            .iter()
+            .map(|&n| geom.rotate_point(mesh.coords[n as usize], 1))
+            .collect();
+        let b = barycentric(&corners, p.virtual_point);
+        assert!(
+            b.iter().all(|&x| x >= -1e-12),
+            "{b:?} at node {}",
+            p.contact_node
+        );
+        // Every target node belongs to that face.
+        assert!(p.target_indices.iter().all(|t| face.nodes.contains(t)));
+        // Eq 29 recomputed: w_j·d_j is the same for all j (d_j in the contact plane).
+        if p.targets.len() > 1 {
+            multi += 1;
+            assert_eq!(p.targets.len(), 6, "triangle6 faces: n_T = 6");
+            let wd: Vec<f64> = p
+                .target_indices
+                .iter()
+                .zip(&p.weights)
+                .map(|(&t, w)| {
+                    let xt = geom.rotate_point(mesh.coords[t as usize], 1);
+                    let d = [
+                        p.virtual_point[0] - xt[0],
+                        p.virtual_point[1] - xt[1],
+                        p.virtual_point[2] - xt[2],
+                    ];
+                    let dn = dot(d, p.frame[2]);
+                    w * (dot(d, d) - dn * dn).sqrt()
+                })
+                .collect();
+            for x in &wd {
+                assert!((x - wd[0]).abs() < 1e-12 * wd[0], "{wd:?}");
+            }
+        } else {
+            let xt = geom.rotate_point(mesh.coords[p.target_indices[0] as usize], 1);
+            // Coincident within the tolerance (one unstructured target node lies 8e-8 m from a
+            // contact node; eq 29 then gives it weight 1).
+            let d = dist(xt, xc);
+            assert!(
+                d <= iface.coincident_tolerance,
+                "node {}: {d:e}",
+                p.contact_node
+            );
+        }
+    }
+    assert!(multi > 20, "{multi} non-coincident contact nodes");
+}
+
+/// Barycentric coordinates of `p` in the triangle `t` (p in its plane).
+fn barycentric(t: &[[f64; 3]], p: [f64; 3]) -> [f64; 3] {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let (v0, v1, v2) = (sub(t[1], t[0]), sub(t[2], t[0]), sub(p, t[0]));
+    let (d00, d01, d11) = (dot(v0, v0), dot(v0, v1), dot(v1, v1));
+    let (d20, d21) = (dot(v2, v0), dot(v2, v1));
+    let den = d00 * d11 - d01 * d01;
+    let v = (d11 * d20 - d01 * d21) / den;
+    let w = (d00 * d21 - d01 * d20) / den;
+    [1.0 - v - w, v, w]
+}
+
+#[test]
+fn nonconforming_node_to_node_is_an_error_listing_nodes() {
+    let (mut case, mesh, geom) = setup("shroud_nonconforming");
+    case.contact[0].model = ContactModel::NodeToNode;
+    let e = build_interfaces(&case, &mesh, Some(&geom)).unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    let msg = e.to_string();
+    assert!(
+        msg.contains("'shroud'") && msg.contains("do not conform"),
+        "{msg}"
+    );
+    assert!(msg.contains("model = \"sama\""), "{msg}");
+    assert!(msg.contains(" at ("), "lists nodes with coordinates: {msg}");
+}
+
+#[test]
+fn rigid_motions_give_zero_relative_displacement() {
+    let (case, mesh, geom) = setup("shroud_nonconforming");
+    let iface = interface(&case, &mesh, &geom);
+    let d = [1.3e-5, -0.7e-5, 2.1e-5];
+    let cd = d.map(|x| c64::new(x, 0.0));
+    // Both surfaces translated by d in the contact sector's axes: the target nodes' own
+    // displacement is R^{-σ} d (harmonic index 0, φ = 0).
+    let ut = geom
+        .rotate_vector(d, -iface.sigma)
+        .map(|x| c64::new(x, 0.0));
+    // Rigid rotation of the whole annulus about the axis (k = 0): u = ω × x.
+    let w = [0.0, 0.0, 1e-4];
+    let spin = |x: [f64; 3]| {
+        [
+            w[1] * x[2] - w[2] * x[1],
+            w[2] * x[0] - w[0] * x[2],
+            w[0] * x[1] - w[1] * x[0],
+        ]
+        .map(|v| c64::new(v, 0.0))
+    };
+    for p in &iface.pairs {
+        for &t in &p.target_indices {
+            let r = iface.relative_displacement(p, 0.0, cd, ut);
+            assert!(r.iter().all(|x| x.norm() < 1e-20), "{r:?}");
+            // Rotation: only exact for coincident pairs; for the others u_c − R u_t = ω × (x_c − R x_t).
+            let xc = mesh.coords[p.contact_index as usize];
+            let xt = mesh.coords[t as usize];
+            let r = iface.relative_displacement(p, 0.0, spin(xc), spin(xt));
+            let xt_placed = geom.rotate_point(xt, iface.sigma);
+            let expect = spin([
+                xc[0] - xt_placed[0],
+                xc[1] - xt_placed[1],
+                xc[2] - xt_placed[2],
+            ]);
+            for k in 0..3 {
+                let e: c64 = (0..3).map(|m| expect[m] * p.frame[k][m]).sum();
+                assert!((r[k] - e).norm() < 1e-18, "{r:?} vs {e:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn pair_forces_are_the_adjoint_of_the_relative_displacement() {
+    let (case, mesh, geom) = setup("shroud_nonconforming");
+    let iface = interface(&case, &mesh, &geom);
+    let phi = 2.0 * std::f64::consts::PI * 5.0 / 24.0;
+    let p = &iface.pairs[7];
+    let u_c = [c64::new(0.3, -1.1), c64::new(0.7, 0.2), c64::new(-0.4, 0.9)];
+    let u_t = [c64::new(-0.2, 0.5), c64::new(1.3, -0.6), c64::new(0.1, 0.8)];
+    let f = [c64::new(0.9, 0.4), c64::new(-0.5, 1.2), c64::new(0.6, -0.3)];
+    let r = iface.relative_displacement(p, phi, u_c, u_t);
+    let (f_c, f_t) = iface.pair_forces(p, phi, f);
+    // rᴴ f = u_cᴴ f_c + u_tᴴ f_t
+    let lhs: c64 = (0..3).map(|k| r[k].conj() * f[k]).sum();
+    let rhs: c64 = (0..3)
+        .map(|k| u_c[k].conj() * f_c[k] + u_t[k].conj() * f_t[k])
+        .sum();
+    assert!((lhs - rhs).norm() < 1e-14, "{lhs} vs {rhs}");
+    // The target's displacement enters with e^{iσφ} R^σ: a target motion u_t = e^{-iσφ} R^{-σ} u
+    // cancels a contact motion u.
+    let e = c64::new(0.0, -(iface.sigma as f64) * phi).exp();
+    let back = geom.rotate_vector([1.0, 0.0, 0.0], -iface.sigma);
+    let ut = back.map(|x| e * x);
+    let uc = [c64::new(1.0, 0.0), c64::new(0.0, 0.0), c64::new(0.0, 0.0)];
+    let r = iface.relative_displacement(p, phi, uc, ut);
+    assert!(r.iter().all(|x| x.norm() < 1e-15), "{r:?}");
+}
+
+fn nlrom(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_nlrom"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("runs")
+}
+
+#[test]
+fn contact_command_json_has_the_contract_keys() {
+    let out = nlrom(&["contact", "cases/shroud_nonconforming.toml", "--json"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let i = &v["interfaces"][0];
+    assert_eq!(i["name"], "shroud");
+    assert_eq!(i["model"], "sama");
+    assert_eq!(i["sigma"], 1);
+    assert_eq!(i["contact_nodes"], 65);
+    assert_eq!(i["pairs"].as_array().unwrap().len(), 65);
+    assert_eq!(i["unprojected"].as_array().unwrap().len(), 0);
+    let p = &i["pairs"][0];
+    for key in ["contact_node", "targets", "weights", "distance", "normal"] {
+        assert!(!p[key].is_null(), "pair key {key}");
+    }
+    let n0 = i["sum_n0"].as_f64().unwrap();
+    assert!((n0 - 113.0).abs() < 1e-12 * 113.0);
+    assert!((i["sum_kt"].as_f64().unwrap() - 65.0e8).abs() < 1e-12 * 65e8);
+    assert!(v["wall_seconds"].as_f64().is_some());
+
+    let text = nlrom(&["contact", "cases/shroud_conforming.toml"]);
+    assert_eq!(text.status.code(), Some(0));
+    let s = String::from_utf8_lossy(&text.stdout);
+    assert!(
+        s.contains("model node-to-node, σ = 1, 65 contact nodes, 65 projected"),
+        "{s}"
+    );
+}
+
+#[test]
+fn contact_command_bad_input_exits_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = env!("CARGO_MANIFEST_DIR");
+    let text = std::fs::read_to_string(format!("{root}/cases/shroud_conforming.toml"))
+        .unwrap()
+        .replace("../meshes/", &format!("{root}/meshes/"))
+        .replace("target = \"shroud_target\"", "target = \"hub\"");
+    let path = dir.path().join("bad.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = nlrom(&["contact", path.to_str().unwrap(), "--json"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("do not face each other") && err.contains("'hub'"),
+        "{err}"
+    );
+
+    let out = nlrom(&["contact", "cases/sector_modes.toml"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no [[contact]]"));
+}
