@@ -58,27 +58,15 @@ pub fn mat_mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
     c
 }
 
-/// Rotation matrix by `angle` (rad) about the unit vector `axis` (Rodrigues, right-hand rule).
+/// Rotation matrix (row-major) by `angle` (rad) about the direction `axis` (right-hand rule).
 pub fn rotation_about(axis: [f64; 3], angle: f64) -> [[f64; 3]; 3] {
-    let a = unit(axis);
-    let (s, c) = angle.sin_cos();
-    let c1 = 1.0 - c;
+    let axis = nalgebra::Unit::new_normalize(nalgebra::Vector3::from(axis));
+    let r = nalgebra::Rotation3::from_axis_angle(&axis, angle);
+    let m = r.matrix();
     [
-        [
-            c + c1 * a[0] * a[0],
-            c1 * a[0] * a[1] - s * a[2],
-            c1 * a[0] * a[2] + s * a[1],
-        ],
-        [
-            c1 * a[1] * a[0] + s * a[2],
-            c + c1 * a[1] * a[1],
-            c1 * a[1] * a[2] - s * a[0],
-        ],
-        [
-            c1 * a[2] * a[0] - s * a[1],
-            c1 * a[2] * a[1] + s * a[0],
-            c + c1 * a[2] * a[2],
-        ],
+        [m[(0, 0)], m[(0, 1)], m[(0, 2)]],
+        [m[(1, 0)], m[(1, 1)], m[(1, 2)]],
+        [m[(2, 0)], m[(2, 1)], m[(2, 2)]],
     ]
 }
 
