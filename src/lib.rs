@@ -15,6 +15,7 @@
 //! | — | [`march`] | time marching: Newmark, adaptive step, piecewise-linear Newmark, quasi-static (Gastaldi & Berruti 2018) |
 //! | 3 contact | [`sama`] | contact pairs: target placement, projection, SAMA weights (eqs 28–32), node-to-node |
 //! | 3–4 | [`harmonics`] | real harmonic layout (conventions §4) and the `HarmonicForce` interface |
+//! | 5 output | [`output`] | HDF5 files: the ROM file and the results file (atomic writes, h5py-readable) |
 //! | — | [`case`] | the TOML case file of `interface.md` |
 //! | — | [`cli`] | the command line |
 //!
@@ -34,6 +35,7 @@ pub mod march;
 pub mod matrix_io;
 pub mod mesh;
 pub mod model;
+pub mod output;
 pub mod rom;
 pub mod sama;
 
