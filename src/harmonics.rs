@@ -103,6 +103,23 @@ pub trait HarmonicForce: Send + Sync {
         force: &mut [f64],
         jacobian: Option<MatMut<'_, f64>>,
     ) -> Result<()>;
+
+    /// Adds ∂F_nl/∂p to `out` (length `layout.len(n_dofs())`) for the force's own scalar
+    /// parameter p (for the contact elements: the static normal load n0, see the implementor),
+    /// at the periodic solution reached from `state` (which is not changed). The default reports
+    /// that the force has no such parameter.
+    fn parameter_derivative(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &Self::State,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let _ = (layout, q, state, out);
+        Err(Error::Compute(
+            "this nonlinear force has no parameter derivative (∂F/∂p)".into(),
+        ))
+    }
 }
 
 #[cfg(test)]

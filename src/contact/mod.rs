@@ -10,4 +10,6 @@
 
 pub mod aft;
 pub mod element;
+pub mod kinematics;
 pub mod law;
+pub mod pairs;

@@ -1,0 +1,193 @@
+//! Relative kinematics of a contact pair in the real harmonic layout, including the inter-sector
+//! rotation and per-harmonic phase of cyclic symmetry (`conventions.md` §2–3; SAMA paper eq. 33
+//! and the relative-to-absolute transformation of eqs 26–27).
+//!
+//! For temporal harmonic n the target displacement seen from the contact node's sector is
+//! e^{iθ_n} R^σ Q_t⁽ⁿ⁾ with θ_n = σ·φ_{k_n} (φ_k = 2πk/N, k_n the harmonic index of harmonic n),
+//! R = R_α the sector rotation and σ ∈ {−1, 0, 1}. The local relative harmonics are
+//! r⁽ⁿ⁾ = F (Q_c⁽ⁿ⁾ − e^{iθ_n} R^σ Q_t⁽ⁿ⁾) for a 3×3 matrix F of local directions (rows). In the
+//! real layout the pair (Re, Im) of the target is rotated by θ_n:
+//! (Re, Im) → (cos θ_n Re − sin θ_n Im, sin θ_n Re + cos θ_n Im).
+//!
+//! Node values are stored component by component, each in the signal order of
+//! [`super::aft`]: `[x coefficients; y coefficients; z coefficients]`, 3·(2H+1) numbers. The
+//! transpose ([`relative_transpose`]) maps local force coefficients back to the two nodes
+//! (contact: Fᵀ g; target: −e^{−iθ_n} (F R^σ)ᵀ g), the Galerkin counterpart of the complex
+//! cyclic transformation (Hermitian transpose).
+
+use crate::error::{Error, Result};
+
+/// A 3×3 matrix, row-major.
+pub type Mat3 = [[f64; 3]; 3];
+
+/// cos θ_n, sin θ_n of the inter-sector phase for n = 0..=H.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Phases {
+    cos: Vec<f64>,
+    sin: Vec<f64>,
+}
+
+impl Phases {
+    /// No phase (contact inside one sector, σ = 0, or k_n = 0 for all n) for H harmonics.
+    pub fn zero(harmonics: usize) -> Self {
+        Phases {
+            cos: vec![1.0; harmonics + 1],
+            sin: vec![0.0; harmonics + 1],
+        }
+    }
+
+    /// θ_n = σ·2πk_n/N for the harmonic indices `k` (entry n = k_n, n = 0..=H) of an N-sector
+    /// structure. k_0 must be 0 (the static part is real).
+    pub fn cyclic(sigma: i32, k: &[usize], sectors: usize) -> Result<Self> {
+        if k.first().is_some_and(|&k0| k0 != 0) || k.iter().any(|&kn| kn >= sectors.max(1)) {
+            return Err(Error::input(format!(
+                "inter-sector phase: harmonic indices {k:?} must start with k_0 = 0 and lie in 0..{sectors} (conventions §2)"
+            )));
+        }
+        let (cos, sin) = k
+            .iter()
+            .map(|&kn| {
+                let theta = sigma as f64 * 2.0 * std::f64::consts::PI * kn as f64 / sectors as f64;
+                let (s, c) = theta.sin_cos();
+                (c, s)
+            })
+            .unzip();
+        Ok(Phases { cos, sin })
+    }
+
+    /// Highest harmonic H covered.
+    pub fn harmonics(&self) -> usize {
+        self.cos.len() - 1
+    }
+}
+
+/// Product a·b of 3×3 matrices.
+pub fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
+    let mut c = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            c[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+        }
+    }
+    c
+}
+
+/// Local relative harmonics `out` = F (Q_c − e^{iθ} R^σ Q_t) (3·m, component-major) from the
+/// contact node's `qc` and, unless the target is the ground, the target's `qt` (3·m each).
+/// `frame` is F (rows: local directions) and `target_frame` = F R^σ.
+pub fn relative_local(
+    frame: &Mat3,
+    target_frame: &Mat3,
+    phases: &Phases,
+    qc: &[f64],
+    qt: Option<&[f64]>,
+    out: &mut [f64],
+) {
+    let m = qc.len() / 3;
+    for a in 0..3 {
+        let o = &mut out[a * m..(a + 1) * m];
+        o.fill(0.0);
+        for i in 0..3 {
+            let fa = frame[a][i];
+            if fa != 0.0 {
+                for (ov, qv) in o.iter_mut().zip(&qc[i * m..(i + 1) * m]) {
+                    *ov += fa * qv;
+                }
+            }
+        }
+    }
+    let Some(qt) = qt else { return };
+    let h = (m - 1) / 2;
+    for i in 0..3 {
+        let t = &qt[i * m..(i + 1) * m];
+        for a in 0..3 {
+            let g = target_frame[a][i];
+            if g == 0.0 {
+                continue;
+            }
+            let o = &mut out[a * m..(a + 1) * m];
+            o[0] -= g * t[0];
+            for n in 1..=h {
+                let (c, s) = (phases.cos[n], phases.sin[n]);
+                let (re, im) = (t[2 * n - 1], t[2 * n]);
+                o[2 * n - 1] -= g * (c * re - s * im);
+                o[2 * n] -= g * (s * re + c * im);
+            }
+        }
+    }
+}
+
+/// The transpose of [`relative_local`]: node force coefficients `fc` = Fᵀ g and, if given,
+/// `ft` = −e^{−iθ} (F R^σ)ᵀ g from local force coefficients `g` (all 3·m, overwritten).
+pub fn relative_transpose(
+    frame: &Mat3,
+    target_frame: &Mat3,
+    phases: &Phases,
+    g: &[f64],
+    fc: &mut [f64],
+    ft: Option<&mut [f64]>,
+) {
+    let m = g.len() / 3;
+    for i in 0..3 {
+        let o = &mut fc[i * m..(i + 1) * m];
+        o.fill(0.0);
+        for a in 0..3 {
+            let fa = frame[a][i];
+            if fa != 0.0 {
+                for (ov, gv) in o.iter_mut().zip(&g[a * m..(a + 1) * m]) {
+                    *ov += fa * gv;
+                }
+            }
+        }
+    }
+    let Some(ft) = ft else { return };
+    let h = (m - 1) / 2;
+    for i in 0..3 {
+        let o = &mut ft[i * m..(i + 1) * m];
+        o.fill(0.0);
+        for a in 0..3 {
+            let t = target_frame[a][i];
+            if t == 0.0 {
+                continue;
+            }
+            let ga = &g[a * m..(a + 1) * m];
+            o[0] -= t * ga[0];
+            for n in 1..=h {
+                let (c, s) = (phases.cos[n], phases.sin[n]);
+                let (re, im) = (ga[2 * n - 1], ga[2 * n]);
+                o[2 * n - 1] -= t * (c * re + s * im);
+                o[2 * n] -= t * (-s * re + c * im);
+            }
+        }
+    }
+}
+
+/// Errors unless `frame` has orthonormal rows forming a right-handed frame (t1 × t2 = n), to
+/// 1e-9; `context` names the pair.
+pub fn check_frame(frame: &Mat3, context: &str) -> Result<()> {
+    let dot = |a: &[f64; 3], b: &[f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let mut worst: f64 = 0.0;
+    for i in 0..3 {
+        for j in 0..3 {
+            let target = if i == j { 1.0 } else { 0.0 };
+            let d = dot(&frame[i], &frame[j]);
+            worst = worst.max(if d.is_finite() {
+                (d - target).abs()
+            } else {
+                f64::INFINITY
+            });
+        }
+    }
+    let (t1, t2, n) = (frame[0], frame[1], frame[2]);
+    let cross = [
+        t1[1] * t2[2] - t1[2] * t2[1],
+        t1[2] * t2[0] - t1[0] * t2[2],
+        t1[0] * t2[1] - t1[1] * t2[0],
+    ];
+    if worst > 1e-9 || dot(&cross, &n) < 0.0 {
+        return Err(Error::input(format!(
+            "{context}: the local frame rows t1 = {t1:?}, t2 = {t2:?}, n = {n:?} are not an orthonormal right-handed frame (t1 × t2 = n, conventions §3)"
+        )));
+    }
+    Ok(())
+}

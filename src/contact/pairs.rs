@@ -1,0 +1,512 @@
+//! A set of node-to-node contact pairs acting on a vector of physical DOFs, as one
+//! [`HarmonicForce`] (SAMA paper, Battiato 2021: node-to-node elements §3 eqs 13–14, 25–27;
+//! weighted pairs eqs 31–32; cyclic-symmetry relative displacement eq. 33).
+//!
+//! Each [`ContactPair`] joins a contact node c (3 rows of the DOF vector, x y z) to a target node
+//! t (3 rows) or to the ground, with a local frame (t1, t2, n) in the global axes, the
+//! inter-sector rotation σ ∈ {−1, 0, 1} and its own contact parameters (SAMA's weighted k_t, k_n,
+//! n0). The local relative motion is (u1, u2, v) = (t1·r, t2·r, −n·r) with
+//! r = u_c − e^{iσφ_{k_n}} R_α^σ u_t per harmonic ([`super::kinematics`]); the element forces
+//! return to the nodes through the transpose, and the Jacobian is Lᵀ J_local L (eq. 26 with the
+//! kinematic map L in place of eq. 27's R).
+//!
+//! Pairs are evaluated in parallel (rayon, per-pair results then summed in pair order, so the
+//! result does not depend on the number of threads).
+
+use std::sync::{Arc, Mutex};
+
+use faer::MatMut;
+use rayon::prelude::*;
+
+use crate::contact::aft::{check_finite, gather, global_index, Aft};
+use crate::contact::element::{
+    evaluate as evaluate_element, ElementReport, HysteresisLoop, LocalElement, Workspace,
+};
+use crate::contact::kinematics::{
+    check_frame, mat_mul, relative_local, relative_transpose, Mat3, Phases,
+};
+use crate::contact::law::{ContactParams, Variant};
+use crate::error::{Error, Result};
+use crate::harmonics::{HarmonicForce, HarmonicLayout};
+
+/// One contact pair.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactPair {
+    /// Rows (0-based, in the DOF vector of the set) of the contact node's x, y, z displacement.
+    pub contact: [usize; 3],
+    /// Rows of the target node's x, y, z displacement; `None`: the target is the ground.
+    pub target: Option<[usize; 3]>,
+    /// Local frame, rows t1, t2, n (unit vectors in the global axes; n points from the target
+    /// towards the contact body, `conventions.md` §3).
+    pub frame: Mat3,
+    /// Inter-sector rotation of the target: σ ∈ {−1, 0, 1} (0: same sector).
+    pub sigma: i32,
+    /// Contact parameters of this pair (SAMA: already multiplied by the pair's weight, eq. 31).
+    pub params: ContactParams,
+    /// ∂n0/∂p: rate of this pair's preload per unit of the parameter of
+    /// [`HarmonicForce::parameter_derivative`] (SAMA: the weight w_j, so p is the contact's
+    /// total preload; 1 for an unweighted pair).
+    pub preload_rate: f64,
+}
+
+/// Cyclic symmetry data for pairs with σ ≠ 0 (`conventions.md` §2).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SectorCoupling {
+    /// Number of sectors N.
+    pub sectors: usize,
+    /// R_α, the rotation by +α = 2π/N about the axis (e.g. `CyclicGeometry::rotation(1)`).
+    pub rotation: Mat3,
+    /// Harmonic index k_n of each temporal harmonic n = 0..=H (at least H+1 entries; k_0 = 0).
+    pub harmonic_indices: Vec<usize>,
+}
+
+/// Slider states (w1, w2) (m) of every pair at the start of the period.
+pub type PairState = Vec<[f64; 2]>;
+
+/// Pairs with precomputed signed frames.
+#[derive(Clone, Debug)]
+struct Prepared {
+    /// P = [t1; t2; −n]: local (u1, u2, v) = P r.
+    frame: Mat3,
+    /// P R^σ.
+    target_frame: Mat3,
+}
+
+/// A set of contact pairs as one nonlinear force (see the module documentation).
+pub struct PairSet {
+    n_dofs: usize,
+    variant: Variant,
+    pairs: Vec<ContactPair>,
+    prepared: Vec<Prepared>,
+    coupling: Option<SectorCoupling>,
+    aft: Mutex<Option<Arc<Aft>>>,
+}
+
+impl std::fmt::Debug for PairSet {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PairSet")
+            .field("n_dofs", &self.n_dofs)
+            .field("variant", &self.variant)
+            .field("pairs", &self.pairs.len())
+            .finish()
+    }
+}
+
+/// Pairs evaluated in parallel per block (bounds the memory of per-pair Jacobians).
+const BLOCK: usize = 256;
+
+/// Per-pair results before they are summed.
+#[derive(Default)]
+struct PairOut {
+    /// Node force coefficients [contact (3m); target (3m)].
+    force: Vec<f64>,
+    /// ∂(node forces)/∂n0 of the pair.
+    dn0: Vec<f64>,
+    /// Node Jacobian, row-major (6m or 3m)².
+    jacobian: Vec<f64>,
+}
+
+/// Buffers of one thread.
+struct Buffers {
+    ws: Workspace,
+    q: Vec<f64>,
+    x: Vec<f64>,
+    g: Vec<f64>,
+    jl: Vec<f64>,
+}
+
+impl PairSet {
+    /// Checks the pairs (rows < `n_dofs`, orthonormal right-handed frames, valid parameters,
+    /// σ ∈ {−1, 0, 1} with a coupling when σ ≠ 0) and prepares them.
+    pub fn new(
+        n_dofs: usize,
+        variant: Variant,
+        pairs: Vec<ContactPair>,
+        coupling: Option<SectorCoupling>,
+    ) -> Result<Self> {
+        let mut prepared = Vec::with_capacity(pairs.len());
+        for (i, p) in pairs.iter().enumerate() {
+            let context = format!("contact pair {i}");
+            p.params.validate(&context)?;
+            check_frame(&p.frame, &context)?;
+            let rows = p.contact.iter().chain(p.target.iter().flatten());
+            if let Some(r) = rows.into_iter().find(|&&r| r >= n_dofs) {
+                return Err(Error::input(format!(
+                    "{context}: DOF row {r} is out of range (the contact DOF vector has {n_dofs} rows)"
+                )));
+            }
+            if !(-1..=1).contains(&p.sigma) || (p.sigma != 0 && coupling.is_none()) {
+                return Err(Error::input(format!(
+                    "{context}: σ = {} needs σ ∈ {{−1, 0, 1}} and, when σ ≠ 0, the cyclic-symmetry coupling (sectors, R_α, harmonic indices)",
+                    p.sigma
+                )));
+            }
+            if !p.preload_rate.is_finite() {
+                return Err(Error::input(format!(
+                    "{context}: preload rate {} is not finite",
+                    p.preload_rate
+                )));
+            }
+            let f = p.frame;
+            let frame = [f[0], f[1], [-f[2][0], -f[2][1], -f[2][2]]];
+            let rot = match (p.sigma, &coupling) {
+                (0, _) | (_, None) => [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                (1, Some(c)) => c.rotation,
+                (_, Some(c)) => transpose(&c.rotation),
+            };
+            prepared.push(Prepared {
+                frame,
+                target_frame: mat_mul(&frame, &rot),
+            });
+        }
+        Ok(PairSet {
+            n_dofs,
+            variant,
+            pairs,
+            prepared,
+            coupling,
+            aft: Mutex::new(None),
+        })
+    }
+
+    /// The pairs.
+    pub fn pairs(&self) -> &[ContactPair] {
+        &self.pairs
+    }
+
+    /// Per-pair state over the period (fractions, dissipated energy) and, if `loops`, the
+    /// hysteresis samples, for the harmonics `q` from the starting state `state` (not changed).
+    pub fn reports(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &PairState,
+        loops: bool,
+    ) -> Result<Vec<(ElementReport, Option<HysteresisLoop>)>> {
+        let (aft, phases) = self.prepare(layout, q, state)?;
+        let m = layout.coefficients();
+        let mut out = Vec::with_capacity(self.pairs.len());
+        let mut b = buffers(&aft, m);
+        for (i, slider) in state.iter().enumerate() {
+            let mut s = *slider;
+            self.evaluate_pair(i, &aft, &phases, layout, q, &mut s, false, false, &mut b)?;
+            out.push((b.ws.report(), loops.then(|| b.ws.hysteresis())));
+        }
+        Ok(out)
+    }
+
+    /// The shared AFT plan for `layout`, the phases per σ, and input checks.
+    fn prepare(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &PairState,
+    ) -> Result<(Arc<Aft>, [Phases; 3])> {
+        if q.len() != layout.len(self.n_dofs) || state.len() != self.pairs.len() {
+            return Err(Error::Compute(format!(
+                "contact pairs: harmonic vector of length {} and {} slider states for {} DOFs × {} coefficients and {} pairs",
+                q.len(),
+                state.len(),
+                self.n_dofs,
+                layout.coefficients(),
+                self.pairs.len()
+            )));
+        }
+        check_finite(q, "contact pairs")?;
+        let aft = {
+            let mut cache = self.aft.lock().unwrap_or_else(|e| e.into_inner());
+            match cache.as_ref() {
+                Some(a) if a.layout() == *layout => a.clone(),
+                _ => {
+                    let a = Arc::new(Aft::new(*layout)?);
+                    *cache = Some(a.clone());
+                    a
+                }
+            }
+        };
+        let h = layout.harmonics;
+        let phases = match &self.coupling {
+            None => [Phases::zero(h), Phases::zero(h), Phases::zero(h)],
+            Some(c) => {
+                if c.harmonic_indices.len() < h + 1 {
+                    return Err(Error::input(format!(
+                        "contact pairs: {} harmonic indices given for H = {h} harmonics (need k_0..k_H)",
+                        c.harmonic_indices.len()
+                    )));
+                }
+                let k = &c.harmonic_indices[..=h];
+                [
+                    Phases::cyclic(-1, k, c.sectors)?,
+                    Phases::zero(h),
+                    Phases::cyclic(1, k, c.sectors)?,
+                ]
+            }
+        };
+        Ok((aft, phases))
+    }
+
+    /// Evaluates pair `i`: local element on the relative harmonics; leaves the node forces in
+    /// `b.q` ([contact; target], 3m each) and, with `jacobian`, the local Jacobian in `b.ws`.
+    #[allow(clippy::too_many_arguments)]
+    fn evaluate_pair(
+        &self,
+        i: usize,
+        aft: &Aft,
+        phases: &[Phases; 3],
+        layout: &HarmonicLayout,
+        q: &[f64],
+        slider: &mut [f64; 2],
+        jacobian: bool,
+        forces: bool,
+        b: &mut Buffers,
+    ) -> Result<()> {
+        let pair = &self.pairs[i];
+        let prep = &self.prepared[i];
+        let m = layout.coefficients();
+        let ph = &phases[(pair.sigma + 1) as usize];
+        for (c, &row) in pair.contact.iter().enumerate() {
+            gather(layout, q, row, self.n_dofs, &mut b.q[c * m..(c + 1) * m]);
+        }
+        if let Some(t) = pair.target {
+            for (c, &row) in t.iter().enumerate() {
+                gather(
+                    layout,
+                    q,
+                    row,
+                    self.n_dofs,
+                    &mut b.q[(3 + c) * m..(4 + c) * m],
+                );
+            }
+        }
+        let (qc, qt) = b.q.split_at(3 * m);
+        relative_local(
+            &prep.frame,
+            &prep.target_frame,
+            ph,
+            qc,
+            pair.target.map(|_| qt),
+            &mut b.x,
+        );
+        let element = LocalElement {
+            params: pair.params,
+            variant: self.variant,
+            tangential: 2,
+            normal: true,
+        };
+        evaluate_element(&element, aft, &b.x, slider, &mut b.g, jacobian, &mut b.ws)?;
+        if forces {
+            let (fc, ft) = b.q.split_at_mut(3 * m);
+            relative_transpose(
+                &prep.frame,
+                &prep.target_frame,
+                ph,
+                &b.g,
+                fc,
+                pair.target.map(|_| ft),
+            );
+        }
+        Ok(())
+    }
+
+    /// Node-space results of pair `i` (forces, ∂/∂n0, Jacobian Lᵀ J L).
+    #[allow(clippy::too_many_arguments)]
+    fn pair_out(
+        &self,
+        i: usize,
+        aft: &Aft,
+        phases: &[Phases; 3],
+        layout: &HarmonicLayout,
+        q: &[f64],
+        slider: &mut [f64; 2],
+        jacobian: bool,
+        b: &mut Buffers,
+    ) -> Result<PairOut> {
+        self.evaluate_pair(i, aft, phases, layout, q, slider, jacobian, true, b)?;
+        let pair = &self.pairs[i];
+        let prep = &self.prepared[i];
+        let ph = &phases[(pair.sigma + 1) as usize];
+        let m = layout.coefficients();
+        let sides = if pair.target.is_some() { 2 } else { 1 };
+        let np = 3 * m * sides;
+        let mut out = PairOut {
+            force: b.q[..np].to_vec(),
+            ..PairOut::default()
+        };
+        if !jacobian {
+            return Ok(out);
+        }
+        let nl = 3 * m;
+        let (jac, cols) = b.ws.jacobian();
+        // Local ∂F/∂n0 (last column) to the nodes.
+        let local_dn0: Vec<f64> = (0..nl).map(|r| jac[r * cols + nl]).collect();
+        out.dn0 = vec![0.0; 6 * m];
+        {
+            let (fc, ft) = out.dn0.split_at_mut(3 * m);
+            let ft = pair.target.map(|_| ft);
+            relative_transpose(&prep.frame, &prep.target_frame, ph, &local_dn0, fc, ft);
+        }
+        out.dn0.truncate(np);
+        // J L: row r of J_local times L is the transpose map of that row.
+        b.jl.clear();
+        b.jl.resize(nl * 6 * m, 0.0);
+        for r in 0..nl {
+            let row = &jac[r * cols..r * cols + nl];
+            let (fc, ft) = b.jl[r * 6 * m..(r + 1) * 6 * m].split_at_mut(3 * m);
+            relative_transpose(
+                &prep.frame,
+                &prep.target_frame,
+                ph,
+                row,
+                fc,
+                pair.target.map(|_| ft),
+            );
+        }
+        // Lᵀ (J L): the transpose map of every column.
+        out.jacobian = vec![0.0; np * np];
+        let mut col = vec![0.0; nl];
+        let mut node = vec![0.0; 6 * m];
+        for c in 0..np {
+            for (r, v) in col.iter_mut().enumerate() {
+                *v = b.jl[r * 6 * m + c];
+            }
+            let (fc, ft) = node.split_at_mut(3 * m);
+            relative_transpose(
+                &prep.frame,
+                &prep.target_frame,
+                ph,
+                &col,
+                fc,
+                pair.target.map(|_| ft),
+            );
+            for (r, v) in node[..np].iter().enumerate() {
+                out.jacobian[r * np + c] = *v;
+            }
+        }
+        Ok(out)
+    }
+
+    /// Row in the DOF vector of node-space index `p` (side, component, coefficient) of pair `i`.
+    fn node_row(&self, i: usize, p: usize, m: usize) -> usize {
+        let pair = &self.pairs[i];
+        let side = p / (3 * m);
+        let comp = (p % (3 * m)) / m;
+        if side == 0 {
+            pair.contact[comp]
+        } else {
+            pair.target.expect("target side exists")[comp]
+        }
+    }
+
+    /// Evaluates every pair in parallel blocks and sums into the outputs.
+    fn run(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &mut PairState,
+        force: Option<&mut [f64]>,
+        mut jacobian: Option<MatMut<'_, f64>>,
+        mut dn0: Option<&mut [f64]>,
+    ) -> Result<()> {
+        let (aft, phases) = self.prepare(layout, q, state)?;
+        let m = layout.coefficients();
+        let want_jac = jacobian.is_some() || dn0.is_some();
+        let mut force = force;
+        for (block, sliders) in state.chunks_mut(BLOCK).enumerate() {
+            let first = block * BLOCK;
+            let outs: Vec<Result<PairOut>> = sliders
+                .par_iter_mut()
+                .enumerate()
+                .map_init(
+                    || buffers(&aft, m),
+                    |b, (k, slider)| {
+                        self.pair_out(first + k, &aft, &phases, layout, q, slider, want_jac, b)
+                    },
+                )
+                .collect();
+            for (k, out) in outs.into_iter().enumerate() {
+                let out = out?;
+                let i = first + k;
+                let np = out.force.len();
+                let index =
+                    |p: usize| global_index(layout, p % m, self.node_row(i, p, m), self.n_dofs);
+                if let Some(f) = force.as_deref_mut() {
+                    for (p, v) in out.force.iter().enumerate() {
+                        f[index(p)] += v;
+                    }
+                }
+                if let Some(d) = dn0.as_deref_mut() {
+                    let rate = self.pairs[i].preload_rate;
+                    for (p, v) in out.dn0.iter().enumerate() {
+                        d[index(p)] += rate * v;
+                    }
+                }
+                if let Some(j) = jacobian.as_mut() {
+                    let rows: Vec<usize> = (0..np).map(index).collect();
+                    for (r, &gr) in rows.iter().enumerate() {
+                        for (c, &gc) in rows.iter().enumerate() {
+                            j[(gr, gc)] += out.jacobian[r * np + c];
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn buffers(aft: &Aft, m: usize) -> Buffers {
+    Buffers {
+        ws: Workspace::new(aft),
+        q: vec![0.0; 6 * m],
+        x: vec![0.0; 3 * m],
+        g: vec![0.0; 3 * m],
+        jl: Vec::new(),
+    }
+}
+
+fn transpose(a: &Mat3) -> Mat3 {
+    let mut t = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            t[i][j] = a[j][i];
+        }
+    }
+    t
+}
+
+impl HarmonicForce for PairSet {
+    type State = PairState;
+
+    fn n_dofs(&self) -> usize {
+        self.n_dofs
+    }
+
+    /// Sliders at rest at the origin of the relative motion.
+    fn initial_state(&self) -> PairState {
+        vec![[0.0; 2]; self.pairs.len()]
+    }
+
+    fn evaluate(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &mut PairState,
+        force: &mut [f64],
+        jacobian: Option<MatMut<'_, f64>>,
+    ) -> Result<()> {
+        self.run(layout, q, state, Some(force), jacobian, None)
+    }
+
+    /// ∂F/∂p with each pair's preload moving as ∂n0_j/∂p = `preload_rate` (SAMA: p = the
+    /// contact's total preload n0).
+    fn parameter_derivative(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &PairState,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let mut s = state.clone();
+        self.run(layout, q, &mut s, None, None, Some(out))
+    }
+}
