@@ -8,16 +8,8 @@ use nlrom::contact::element::{evaluate, LocalElement, Workspace};
 use nlrom::contact::law::{ContactParams, Variant};
 use nlrom::harmonics::HarmonicLayout;
 
-/// A small deterministic generator (xorshift) for random harmonic inputs.
-struct Rng(u64);
-impl Rng {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    }
-}
+mod contact_common;
+use contact_common::Rng;
 
 fn params(kt: f64, kn: f64, mu: f64, n0: f64) -> ContactParams {
     ContactParams::new(kt, kn, mu, n0, "test").unwrap()

@@ -11,18 +11,8 @@ use nlrom::contact::pairs::{ContactPair, PairSet, SectorCoupling};
 use nlrom::cyclic::{harmonic_indices, CyclicGeometry};
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 
-struct Rng(u64);
-impl Rng {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    }
-    fn vec(&mut self, n: usize, scale: f64) -> Vec<f64> {
-        (0..n).map(|_| scale * self.uniform()).collect()
-    }
-}
+mod contact_common;
+use contact_common::Rng;
 
 /// A rotation matrix from a random axis and angle (Rodrigues).
 fn random_rotation(rng: &mut Rng) -> Mat3 {

@@ -105,14 +105,7 @@ pub fn relative_local(
             if g == 0.0 {
                 continue;
             }
-            let o = &mut out[a * m..(a + 1) * m];
-            o[0] -= g * t[0];
-            for n in 1..=h {
-                let (c, s) = (phases.cos[n], phases.sin[n]);
-                let (re, im) = (t[2 * n - 1], t[2 * n]);
-                o[2 * n - 1] -= g * (c * re - s * im);
-                o[2 * n] -= g * (s * re + c * im);
-            }
+            subtract_phased(g, phases, 1.0, t, &mut out[a * m..(a + 1) * m], h);
         }
     }
 }
@@ -150,15 +143,26 @@ pub fn relative_transpose(
             if t == 0.0 {
                 continue;
             }
-            let ga = &g[a * m..(a + 1) * m];
-            o[0] -= t * ga[0];
-            for n in 1..=h {
-                let (c, s) = (phases.cos[n], phases.sin[n]);
-                let (re, im) = (ga[2 * n - 1], ga[2 * n]);
-                o[2 * n - 1] -= t * (c * re + s * im);
-                o[2 * n] -= t * (-s * re + c * im);
-            }
+            subtract_phased(t, phases, -1.0, &g[a * m..(a + 1) * m], o, h);
         }
+    }
+}
+
+/// `out` −= `scale`·e^{±iθ_n}·`signal` for every harmonic (sign `direction` = ±1 of the phase).
+fn subtract_phased(
+    scale: f64,
+    phases: &Phases,
+    direction: f64,
+    signal: &[f64],
+    out: &mut [f64],
+    h: usize,
+) {
+    out[0] -= scale * signal[0];
+    for n in 1..=h {
+        let (c, s) = (phases.cos[n], direction * phases.sin[n]);
+        let (re, im) = (signal[2 * n - 1], signal[2 * n]);
+        out[2 * n - 1] -= scale * (c * re - s * im);
+        out[2 * n] -= scale * (s * re + c * im);
     }
 }
 

@@ -106,6 +106,16 @@ struct PairOut {
     jacobian: Vec<f64>,
 }
 
+/// The inputs shared by all pairs of one evaluation.
+#[derive(Clone, Copy)]
+struct Inputs<'a> {
+    aft: &'a Aft,
+    /// Phases for σ = −1, 0, 1.
+    phases: &'a [Phases; 3],
+    layout: &'a HarmonicLayout,
+    q: &'a [f64],
+}
+
 /// Buffers of one thread.
 struct Buffers {
     ws: Workspace,
@@ -187,9 +197,15 @@ impl PairSet {
         let m = layout.coefficients();
         let mut out = Vec::with_capacity(self.pairs.len());
         let mut b = buffers(&aft, m);
+        let input = Inputs {
+            aft: &aft,
+            phases: &phases,
+            layout,
+            q,
+        };
         for (i, slider) in state.iter().enumerate() {
             let mut s = *slider;
-            self.evaluate_pair(i, &aft, &phases, layout, q, &mut s, false, false, &mut b)?;
+            self.evaluate_pair(i, &input, &mut s, false, false, &mut b)?;
             out.push((b.ws.report(), loops.then(|| b.ws.hysteresis())));
         }
         Ok(out)
@@ -247,19 +263,21 @@ impl PairSet {
 
     /// Evaluates pair `i`: local element on the relative harmonics; leaves the node forces in
     /// `b.q` ([contact; target], 3m each) and, with `jacobian`, the local Jacobian in `b.ws`.
-    #[allow(clippy::too_many_arguments)]
     fn evaluate_pair(
         &self,
         i: usize,
-        aft: &Aft,
-        phases: &[Phases; 3],
-        layout: &HarmonicLayout,
-        q: &[f64],
+        input: &Inputs<'_>,
         slider: &mut [f64; 2],
         jacobian: bool,
         forces: bool,
         b: &mut Buffers,
     ) -> Result<()> {
+        let Inputs {
+            aft,
+            phases,
+            layout,
+            q,
+        } = *input;
         let pair = &self.pairs[i];
         let prep = &self.prepared[i];
         let m = layout.coefficients();
@@ -309,23 +327,19 @@ impl PairSet {
     }
 
     /// Node-space results of pair `i` (forces, ∂/∂n0, Jacobian Lᵀ J L).
-    #[allow(clippy::too_many_arguments)]
     fn pair_out(
         &self,
         i: usize,
-        aft: &Aft,
-        phases: &[Phases; 3],
-        layout: &HarmonicLayout,
-        q: &[f64],
+        input: &Inputs<'_>,
         slider: &mut [f64; 2],
         jacobian: bool,
         b: &mut Buffers,
     ) -> Result<PairOut> {
-        self.evaluate_pair(i, aft, phases, layout, q, slider, jacobian, true, b)?;
+        self.evaluate_pair(i, input, slider, jacobian, true, b)?;
         let pair = &self.pairs[i];
         let prep = &self.prepared[i];
-        let ph = &phases[(pair.sigma + 1) as usize];
-        let m = layout.coefficients();
+        let ph = &input.phases[(pair.sigma + 1) as usize];
+        let m = input.layout.coefficients();
         let sides = if pair.target.is_some() { 2 } else { 1 };
         let np = 3 * m * sides;
         let mut out = PairOut {
@@ -411,6 +425,12 @@ impl PairSet {
         let m = layout.coefficients();
         let want_jac = jacobian.is_some() || dn0.is_some();
         let mut force = force;
+        let input = Inputs {
+            aft: &aft,
+            phases: &phases,
+            layout,
+            q,
+        };
         for (block, sliders) in state.chunks_mut(BLOCK).enumerate() {
             let first = block * BLOCK;
             let outs: Vec<Result<PairOut>> = sliders
@@ -418,9 +438,7 @@ impl PairSet {
                 .enumerate()
                 .map_init(
                     || buffers(&aft, m),
-                    |b, (k, slider)| {
-                        self.pair_out(first + k, &aft, &phases, layout, q, slider, want_jac, b)
-                    },
+                    |b, (k, slider)| self.pair_out(first + k, &input, slider, want_jac, b),
                 )
                 .collect();
             for (k, out) in outs.into_iter().enumerate() {
