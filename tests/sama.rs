@@ -390,3 +390,52 @@ fn contact_command_bad_input_exits_2() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no [[contact]]"));
 }
+
+#[test]
+fn swapped_groups_give_sigma_minus_one_and_the_inverse_pairs() {
+    let (mut case, mesh, geom) = setup("shroud_conforming");
+    let forward = interface(&case, &mesh, &geom);
+    let c = &mut case.contact[0];
+    std::mem::swap(&mut c.contact, &mut c.target);
+    let back = interface(&case, &mesh, &geom);
+    // The contact face (θ = α) is now the target: R_α^{-1} brings it onto θ = 0.
+    assert_eq!(back.sigma, -1);
+    assert_eq!(back.pairs.len(), 65);
+    for p in &back.pairs {
+        let q = forward
+            .pairs
+            .iter()
+            .find(|q| q.contact_index == p.target_indices[0])
+            .unwrap();
+        assert_eq!(q.target_indices, vec![p.contact_index]);
+        // Outward normal of the (rotated) θ = α face, towards the shroud at θ > 0: +e_θ(0) = +y.
+        assert!(
+            dist(p.frame[2], [0.0, 1.0, 0.0]) < 1e-12,
+            "{:?}",
+            p.frame[2]
+        );
+    }
+}
+
+#[test]
+fn sector8_model_places_the_target_with_its_own_sector_angle() {
+    let (mut case, _, _) = setup("shroud_conforming");
+    let root = env!("CARGO_MANIFEST_DIR");
+    case.model.mesh = Some(Path::new(root).join("meshes/sector8.msh"));
+    case.cyclic.as_mut().unwrap().sectors = 8;
+    let mesh = read_msh(case.model.mesh.as_ref().unwrap()).unwrap();
+    let geom = CyclicGeometry::from_case(case.cyclic.as_ref().unwrap()).unwrap();
+    let iface = interface(&case, &mesh, &geom);
+    assert_eq!(iface.sigma, 1);
+    assert_eq!(iface.pairs.len(), 45);
+    let fp = match_frontiers(&mesh, &geom, "shroud_target", "shroud_contact").unwrap();
+    for p in &iface.pairs {
+        let k = fp.high.iter().position(|&h| h == p.contact_index).unwrap();
+        assert_eq!(p.target_indices, vec![fp.low[k]]);
+    }
+    // With the wrong sector count (24 instead of 8) the faces do not meet under any rotation.
+    case.cyclic.as_mut().unwrap().sectors = 24;
+    let wrong = CyclicGeometry::from_case(case.cyclic.as_ref().unwrap()).unwrap();
+    let e = build_interfaces(&case, &mesh, Some(&wrong)).unwrap_err();
+    assert!(e.to_string().contains("do not face each other"), "{e}");
+}

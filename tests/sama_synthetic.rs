@@ -344,9 +344,9 @@ impl Rng {
     }
 }
 
-/// A curved height field z = f(x, y) over [0, 1]², `n × n` cells of quadratic faces (triangle6
-/// pairs or quad8/quad9), nodes (mid-side included) jittered in x, y and lying exactly on the
-/// surface.
+/// A curved height field z = f(x, y) over [0, 1]², `n × n` cells of faces (triangle3/6 pairs or
+/// quad8/quad9), nodes (mid-side included) jittered in x, y and lying exactly on the surface
+/// (triangle3 faces use the corner nodes only: a faceted surface).
 fn curved_surface(kind: ElementType, n: usize, rng: &mut Rng) -> TargetSurface {
     let f = |x: f64, y: f64| 0.15 * (3.0 * x).sin() * (2.0 * y).cos() + 0.1 * x * y;
     let m = 2 * n + 1; // nodes per row on the half-step grid
@@ -372,27 +372,31 @@ fn curved_surface(kind: ElementType, n: usize, rng: &mut Rng) -> TargetSurface {
         for ci in 0..n {
             let (i, j) = (2 * ci, 2 * cj);
             let nodes = match kind {
-                ElementType::Triangle6 => {
-                    faces.push(SurfaceFace {
-                        kind,
-                        nodes: vec![
-                            id(i, j),
-                            id(i + 2, j),
-                            id(i + 2, j + 2),
-                            id(i + 1, j),
-                            id(i + 2, j + 1),
-                            id(i + 1, j + 1),
-                        ],
-                        tag: faces.len() as u64 + 1,
-                    });
-                    vec![
+                ElementType::Triangle6 | ElementType::Triangle3 => {
+                    let mut first = vec![
+                        id(i, j),
+                        id(i + 2, j),
+                        id(i + 2, j + 2),
+                        id(i + 1, j),
+                        id(i + 2, j + 1),
+                        id(i + 1, j + 1),
+                    ];
+                    let mut second = vec![
                         id(i, j),
                         id(i + 2, j + 2),
                         id(i, j + 2),
                         id(i + 1, j + 1),
                         id(i + 1, j + 2),
                         id(i, j + 1),
-                    ]
+                    ];
+                    first.truncate(kind.num_nodes());
+                    second.truncate(kind.num_nodes());
+                    faces.push(SurfaceFace {
+                        kind,
+                        nodes: first,
+                        tag: faces.len() as u64 + 1,
+                    });
+                    second
                 }
                 _ => {
                     let mut v = vec![
@@ -428,7 +432,7 @@ fn brute_force(s: &TargetSurface, x: [f64; 3]) -> (usize, f64) {
         let xs = s.face_points(f);
         for a in 0..3 {
             for b in 0..3 {
-                let uv0 = if face.kind == ElementType::Triangle6 {
+                let uv0 = if face.kind.first_order() == ElementType::Triangle3 {
                     [a as f64 / 3.0, b as f64 / 3.0 * (1.0 - a as f64 / 3.0)]
                 } else {
                     [a as f64 - 1.0, b as f64 - 1.0]
@@ -460,7 +464,7 @@ fn sampled_distance(s: &TargetSurface, x: [f64; 3]) -> f64 {
         let xs = s.face_points(f);
         for a in 0..=60 {
             for b in 0..=60 {
-                let (u, v) = if face.kind == ElementType::Triangle6 {
+                let (u, v) = if face.kind.first_order() == ElementType::Triangle3 {
                     if a + b > 60 {
                         continue;
                     }

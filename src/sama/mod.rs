@@ -42,8 +42,6 @@ pub mod weights;
 
 use std::collections::HashMap;
 
-use rayon::prelude::*;
-
 use crate::case::{Case, Contact, ContactElement, ContactModel};
 use crate::cyclic::{CyclicGeometry, MATCH_TOLERANCE};
 use crate::error::{Error, Result};
@@ -313,7 +311,7 @@ enum NodeProjection {
     Far,
 }
 
-/// Projects the contact nodes (in parallel).
+/// Projects the contact nodes (in parallel) and classifies the results.
 fn project_nodes(
     surface: &TargetSurface,
     mesh: &Mesh,
@@ -321,17 +319,17 @@ fn project_nodes(
     max_distance: f64,
     coincident: f64,
 ) -> Vec<NodeProjection> {
-    nodes
-        .par_iter()
-        .map(
-            |&n| match surface.project(mesh.coords[n as usize], max_distance) {
-                None => NodeProjection::Far,
-                Some(p) if p.tangential_offset <= coincident && p.distance <= max_distance => {
-                    NodeProjection::Inside(p)
-                }
-                Some(p) => NodeProjection::Outside(p),
-            },
-        )
+    let points: Vec<[f64; 3]> = nodes.iter().map(|&n| mesh.coords[n as usize]).collect();
+    surface
+        .project_many(&points, max_distance)
+        .into_iter()
+        .map(|p| match p {
+            None => NodeProjection::Far,
+            Some(p) if p.tangential_offset <= coincident && p.distance <= max_distance => {
+                NodeProjection::Inside(p)
+            }
+            Some(p) => NodeProjection::Outside(p),
+        })
         .collect()
 }
 

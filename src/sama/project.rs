@@ -9,6 +9,7 @@
 
 use parry3d_f64::math::Vector as PVec;
 use parry3d_f64::query::PointQueryWithLocation;
+use rayon::prelude::*;
 
 use crate::mesh::faces::surface_shape;
 use crate::mesh::ElementType;
@@ -100,11 +101,37 @@ pub fn closest_on_face(kind: ElementType, xs: &[[f64; 3]], x: [f64; 3], uv0: [f6
 /// The local frame (rows t1, t2, n) of a face at reference point `uv` (`conventions.md` §3).
 pub fn local_frame(kind: ElementType, xs: &[[f64; 3]], uv: [f64; 2]) -> [[f64; 3]; 3] {
     let [_, xu, xv] = evaluate(kind, xs, uv);
+    frame_from_tangents(xu, xv, sub(xs[1], xs[0]))
+}
+
+/// The frame with n = unit(x_u × x_v) and t1 = `edge` projected on the tangent plane.
+fn frame_from_tangents(xu: [f64; 3], xv: [f64; 3], edge: [f64; 3]) -> [[f64; 3]; 3] {
     let n = unit(cross(xu, xv));
-    let edge = sub(xs[1], xs[0]);
     let t1 = unit(sub(edge, scale(dot(edge, n), n)));
     let t2 = cross(n, t1);
     [t1, t2, n]
+}
+
+/// The projection record of `x` at the point `point` of face `f` with reference coordinates `uv`
+/// and frame `frame`.
+fn projection_at(
+    f: usize,
+    x: [f64; 3],
+    uv: [f64; 2],
+    point: [f64; 3],
+    frame: [[f64; 3]; 3],
+) -> Projection {
+    let d = sub(x, point);
+    let gap = dot(d, frame[2]);
+    Projection {
+        face: f,
+        uv,
+        point,
+        frame,
+        gap,
+        distance: norm(d),
+        tangential_offset: norm(sub(d, scale(gap, frame[2]))),
+    }
 }
 
 impl TargetSurface {
@@ -114,18 +141,24 @@ impl TargetSurface {
         let xs = self.face_points(f);
         let uv = closest_on_face(kind, &xs, x, uv0);
         let [point, _, _] = evaluate(kind, &xs, uv);
-        let frame = local_frame(kind, &xs, uv);
-        let d = sub(x, point);
-        let gap = dot(d, frame[2]);
-        Projection {
-            face: f,
-            uv,
+        projection_at(f, x, uv, point, local_frame(kind, &xs, uv))
+    }
+
+    /// A flat triangle3 face: the search already found the exact nearest point, with barycentric
+    /// coordinates `bary` (of corners 0, 1, 2), so (u, v) = (b1, b2) and the frame is constant.
+    fn project_on_flat_triangle(&self, f: usize, x: [f64; 3], bary: [f64; 3]) -> Projection {
+        let nodes = &self.faces[f].nodes;
+        let [x0, x1, x2] = [0, 1, 2].map(|k| self.points[nodes[k] as usize]);
+        let point: [f64; 3] =
+            std::array::from_fn(|c| bary[0] * x0[c] + bary[1] * x1[c] + bary[2] * x2[c]);
+        let (e1, e2) = (sub(x1, x0), sub(x2, x0));
+        projection_at(
+            f,
+            x,
+            [bary[1], bary[2]],
             point,
-            frame,
-            gap,
-            distance: norm(d),
-            tangential_offset: norm(sub(d, scale(gap, frame[2]))),
-        }
+            frame_from_tangents(e1, e2, e1),
+        )
     }
 
     /// The projection of `x` onto the surface, or `None` when no face comes closer than
@@ -142,6 +175,13 @@ impl TargetSurface {
         let (f, s) = self.sub_triangle(tri);
         let bary = location.barycentric_coordinates()?;
         let kind = self.faces[f].kind;
+        if kind == ElementType::Triangle3 {
+            let best = self.project_on_flat_triangle(f, x, bary);
+            if best.tangential_offset <= 1e-9 * self.mean_edge {
+                return Some(best);
+            }
+            return Some(self.best_among_neighbours(f, x, best));
+        }
         let corners = subdivision(kind)[s];
         let mut uv0 = [0.0; 2];
         for (b, &local) in bary.iter().zip(&corners) {
@@ -154,6 +194,14 @@ impl TargetSurface {
             return Some(best);
         }
         Some(self.best_among_neighbours(f, x, best))
+    }
+
+    /// [`TargetSurface::project`] for many points, in parallel (rayon), in the order given.
+    pub fn project_many(&self, points: &[[f64; 3]], search_radius: f64) -> Vec<Option<Projection>> {
+        points
+            .par_iter()
+            .map(|&x| self.project(x, search_radius))
+            .collect()
     }
 
     /// The nearest of `first` and the projections onto the faces sharing a node with face `f`

@@ -16,7 +16,7 @@ use crate::error::{Error, Result};
 use crate::mesh::faces::{area_vector, surface_quadrature};
 use crate::mesh::ElementType;
 
-use super::geom::{dot, norm, sub};
+use super::geom::{cross, dot, norm, sub};
 
 /// One face of a surface: its type, its nodes (indices into the surface's `points`, in Gmsh order
 /// and outward orientation) and the tag of the mesh element it comes from (for messages and output).
@@ -125,10 +125,17 @@ pub fn degeneracy(kind: ElementType, xs: &[[f64; 3]]) -> Option<String> {
     } else {
         [0.0, 0.0]
     };
-    let a0 = area_vector(kind, xs, centre[0], centre[1]);
+    let a0 = if kind == ElementType::Triangle3 {
+        cross(sub(xs[1], xs[0]), sub(xs[2], xs[0]))
+    } else {
+        area_vector(kind, xs, centre[0], centre[1])
+    };
     let floor = 1e-10 * longest * longest;
     if norm(a0) <= floor {
         return Some("its area is zero (collinear or coincident nodes)".into());
+    }
+    if kind == ElementType::Triangle3 {
+        return None; // constant area vector
     }
     let mut samples: Vec<[f64; 2]> = surface_quadrature(kind)
         .iter()
