@@ -16,6 +16,8 @@
 //! | 3 contact | [`sama`] | contact pairs: target placement, projection, SAMA weights (eqs 28–32), node-to-node |
 //! | 3–4 | [`harmonics`] | real harmonic layout (conventions §4) and the `HarmonicForce` interface |
 //! | 5 output | [`output`] | HDF5 files: the ROM file and the results file (atomic writes, h5py-readable) |
+//! | 4 | [`hbm`] | harmonic balance: per-harmonic dynamic stiffness, condensation on the nonlinear DOFs, residual, Newton |
+//! | 4 | [`continuation`] | pseudo-arc-length continuation in ω (or the excitation level) through folds |
 //! | — | [`case`] | the TOML case file of `interface.md` |
 //! | — | [`cli`] | the command line |
 //!
@@ -26,11 +28,13 @@
 pub mod case;
 pub mod cli;
 pub mod contact;
+pub mod continuation;
 pub mod cyclic;
 pub mod eigen;
 pub mod error;
 pub mod fe;
 pub mod harmonics;
+pub mod hbm;
 pub mod march;
 pub mod matrix_io;
 pub mod mesh;

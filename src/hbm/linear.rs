@@ -1,0 +1,450 @@
+//! The linear part of the harmonic balance: per temporal harmonic n the dynamic stiffness
+//! D⁽ⁿ⁾(ω) = K − (nω)² M + i nω C of the matrices of its harmonic index k_n (SAMA paper, eq. 12),
+//! condensed on the nonlinear DOFs (eqs. 15–18).
+//!
+//! A [`LinearModel`] holds one or more [`MatrixBlock`]s (complex K, M, C of one harmonic index, or
+//! the real matrices of a model without cyclic symmetry) and, per harmonic n = 0..H, which block
+//! it uses and its excitation F_e⁽ⁿ⁾. Every block lists the rows of the nonlinear (condensed) DOFs
+//! in one common order — the DOF order of the [`crate::harmonics::HarmonicForce`] — and the rows
+//! reported as the response. Condensation is dense and done per frequency.
+
+use faer::linalg::solvers::{PartialPivLu, Solve};
+use faer::{c64, Mat, MatRef};
+
+use crate::error::{Error, Result};
+
+/// The matrices of one harmonic index (or of a model without cyclic symmetry) and its
+/// partition into nonlinear (condensed) and linear DOFs.
+#[derive(Clone, Debug)]
+pub struct MatrixBlock {
+    /// K (N/m), square, n × n.
+    pub stiffness: Mat<c64>,
+    /// M (kg), n × n.
+    pub mass: Mat<c64>,
+    /// C (N·s/m), n × n; `None` is undamped.
+    pub damping: Option<Mat<c64>>,
+    /// Rows of the nonlinear DOFs, in the order of the nonlinear force's DOFs.
+    pub nonlinear: Vec<usize>,
+    /// Rows reported as the response, in output order.
+    pub outputs: Vec<usize>,
+}
+
+/// The blocks of a [`MatrixBlock`] split by the partition N (nonlinear) / L (linear) of eq. 15.
+#[derive(Clone, Debug)]
+struct Partitioned {
+    k: Split,
+    m: Split,
+    c: Option<Split>,
+    /// Rows of the linear DOFs (the complement of `nonlinear`), ascending.
+    linear: Vec<usize>,
+    nonlinear: Vec<usize>,
+    outputs: Vec<usize>,
+    n_rows: usize,
+}
+
+/// The four partitions of one matrix.
+#[derive(Clone, Debug)]
+struct Split {
+    nn: Mat<c64>,
+    nl: Mat<c64>,
+    ln: Mat<c64>,
+    ll: Mat<c64>,
+}
+
+impl Split {
+    fn part(&self, part: Part) -> MatRef<'_, c64> {
+        match part {
+            Part::NN => self.nn.as_ref(),
+            Part::NL => self.nl.as_ref(),
+            Part::LN => self.ln.as_ref(),
+            Part::LL => self.ll.as_ref(),
+        }
+    }
+
+    fn new(a: MatRef<'_, c64>, nonlinear: &[usize], linear: &[usize]) -> Split {
+        let sub = |r: &[usize], c: &[usize]| Mat::from_fn(r.len(), c.len(), |i, j| a[(r[i], c[j])]);
+        Split {
+            nn: sub(nonlinear, nonlinear),
+            nl: sub(nonlinear, linear),
+            ln: sub(linear, nonlinear),
+            ll: sub(linear, linear),
+        }
+    }
+}
+
+/// Which part of a matrix to form the dynamic stiffness of.
+#[derive(Clone, Copy, Debug)]
+enum Part {
+    NN,
+    NL,
+    LN,
+    LL,
+}
+
+impl Partitioned {
+    /// D⁽ⁿ⁾ = K − s² M + i s C on one partition, s = nω (rad/s).
+    fn dynamic(&self, part: Part, s: f64) -> Mat<c64> {
+        let (k, m) = (self.k.part(part), self.m.part(part));
+        let c = self.c.as_ref().map(|c| c.part(part));
+        Mat::from_fn(k.nrows(), k.ncols(), |i, j| {
+            let mut d = k[(i, j)] - m[(i, j)] * (s * s);
+            if let Some(c) = c {
+                d += c[(i, j)] * c64::new(0.0, s);
+            }
+            d
+        })
+    }
+
+    /// ∂D⁽ⁿ⁾/∂ω = −2 n² ω M + i n C on one partition.
+    fn dynamic_derivative(&self, part: Part, n: f64, omega: f64) -> Mat<c64> {
+        let m = self.m.part(part);
+        let c = self.c.as_ref().map(|c| c.part(part));
+        Mat::from_fn(m.nrows(), m.ncols(), |i, j| {
+            let mut d = m[(i, j)] * (-2.0 * n * n * omega);
+            if let Some(c) = c {
+                d += c[(i, j)] * c64::new(0.0, n);
+            }
+            d
+        })
+    }
+}
+
+/// One harmonic n condensed on the nonlinear DOFs at one frequency (eqs. 16–18).
+#[derive(Clone, Debug)]
+pub struct Condensed {
+    /// D̄⁽ⁿ⁾ = D_NN − D_NL D_LL⁻¹ D_LN (N/m), n_N × n_N.
+    pub stiffness: Mat<c64>,
+    /// F̄_e⁽ⁿ⁾ = F_eN − D_NL D_LL⁻¹ F_eL (N), length n_N.
+    pub force: Vec<c64>,
+    /// ∂D̄⁽ⁿ⁾/∂ω (N·s/m).
+    pub stiffness_derivative: Mat<c64>,
+    /// ∂F̄_e⁽ⁿ⁾/∂ω (N·s).
+    pub force_derivative: Vec<c64>,
+    /// Response recovery (eq. 18): Q_out = `recovery_offset` + `recovery` · Q_N, n_out × n_N.
+    pub recovery: Mat<c64>,
+    /// Response of the output DOFs with Q_N = 0 (m), length n_out.
+    pub recovery_offset: Vec<c64>,
+}
+
+impl Condensed {
+    /// The complex harmonic n of the output DOFs for the nonlinear-DOF harmonic `q_n` (eq. 18).
+    pub fn recover(&self, q_n: &[c64]) -> Vec<c64> {
+        (0..self.recovery.nrows())
+            .map(|i| {
+                let mut v = self.recovery_offset[i];
+                for (j, q) in q_n.iter().enumerate() {
+                    v += self.recovery[(i, j)] * q;
+                }
+                v
+            })
+            .collect()
+    }
+}
+
+/// The linear structure of a harmonic balance problem: per harmonic n = 0..H its matrix block
+/// and excitation.
+#[derive(Clone, Debug)]
+pub struct LinearModel {
+    blocks: Vec<Partitioned>,
+    /// Block used by harmonic n (length H+1).
+    harmonic_block: Vec<usize>,
+    /// F_e⁽ⁿ⁾ over the rows of the harmonic's block (N); empty = no excitation on harmonic n.
+    forcing: Vec<Vec<c64>>,
+    n_condensed: usize,
+    n_outputs: usize,
+}
+
+impl LinearModel {
+    /// A model from matrix blocks: harmonic n = 0..H uses `blocks[harmonic_block[n]]` and is
+    /// excited by `forcing[n]` (complex amplitude per row of that block, N; empty for none).
+    /// Every block must list the same number of nonlinear and output rows, and the block of
+    /// n = 0 must be real (the static coefficient is real).
+    pub fn new(
+        blocks: Vec<MatrixBlock>,
+        harmonic_block: Vec<usize>,
+        forcing: Vec<Vec<c64>>,
+    ) -> Result<LinearModel> {
+        let first = blocks
+            .first()
+            .ok_or_else(|| Error::input("the linear model has no matrix block"))?;
+        let n_condensed = first.nonlinear.len();
+        let n_outputs = first.outputs.len();
+        if harmonic_block.is_empty() || forcing.len() != harmonic_block.len() {
+            return Err(Error::input(format!(
+                "the linear model needs one block index and one forcing per harmonic 0..H ({} and {} given)",
+                harmonic_block.len(),
+                forcing.len()
+            )));
+        }
+        let mut parts = Vec::with_capacity(blocks.len());
+        for (b, block) in blocks.iter().enumerate() {
+            parts.push(partition(b, block, n_condensed, n_outputs)?);
+        }
+        for (n, (&b, f)) in harmonic_block.iter().zip(&forcing).enumerate() {
+            let part = parts.get(b).ok_or_else(|| {
+                Error::input(format!(
+                    "harmonic {n} uses matrix block {b}, but there are {} blocks",
+                    parts.len()
+                ))
+            })?;
+            if !f.is_empty() && f.len() != part.n_rows {
+                return Err(Error::input(format!(
+                    "the excitation of harmonic {n} has {} entries for a block of {} rows",
+                    f.len(),
+                    part.n_rows
+                )));
+            }
+        }
+        check_static_block_real(&blocks[harmonic_block[0]], &forcing[0])?;
+        Ok(LinearModel {
+            blocks: parts,
+            harmonic_block,
+            forcing,
+            n_condensed,
+            n_outputs,
+        })
+    }
+
+    /// A model without cyclic symmetry: real K, M, C used by every harmonic, excited by the real
+    /// amplitude `force` (N per row) on harmonic 1, f(t) = force·cos(ωt).
+    pub fn from_real(
+        stiffness: MatRef<'_, f64>,
+        mass: MatRef<'_, f64>,
+        damping: Option<MatRef<'_, f64>>,
+        force: &[f64],
+        nonlinear: Vec<usize>,
+        outputs: Vec<usize>,
+        harmonics: usize,
+    ) -> Result<LinearModel> {
+        let complex = |a: MatRef<'_, f64>| {
+            Mat::from_fn(a.nrows(), a.ncols(), |i, j| c64::new(a[(i, j)], 0.0))
+        };
+        let block = MatrixBlock {
+            stiffness: complex(stiffness),
+            mass: complex(mass),
+            damping: damping.map(complex),
+            nonlinear,
+            outputs,
+        };
+        let mut forcing = vec![Vec::new(); harmonics + 1];
+        if harmonics >= 1 {
+            forcing[1] = force.iter().map(|&f| c64::new(f, 0.0)).collect();
+        }
+        LinearModel::new(vec![block], vec![0; harmonics + 1], forcing)
+    }
+
+    /// Highest harmonic H.
+    pub fn harmonics(&self) -> usize {
+        self.harmonic_block.len() - 1
+    }
+
+    /// Number of nonlinear (condensed) DOFs n_N.
+    pub fn n_condensed(&self) -> usize {
+        self.n_condensed
+    }
+
+    /// Number of output DOFs.
+    pub fn n_outputs(&self) -> usize {
+        self.n_outputs
+    }
+
+    /// Euclidean norm of the (uncondensed) excitation over all harmonics in the real layout (N):
+    /// the force level the residual is scaled by.
+    pub fn force_norm(&self) -> f64 {
+        self.forcing
+            .iter()
+            .flat_map(|f| f.iter())
+            .map(|f| f.norm_sqr())
+            .sum::<f64>()
+            .sqrt()
+    }
+
+    /// Harmonic n condensed on the nonlinear DOFs at ω (rad/s), with its ω-derivatives and the
+    /// response recovery (eqs. 16–18). Fails when D_LL⁽ⁿ⁾ is singular (ω·n at a natural frequency
+    /// of the undamped linear partition with the nonlinear DOFs fixed).
+    pub fn condense(&self, n: usize, omega: f64) -> Result<Condensed> {
+        let part = &self.blocks[self.harmonic_block[n]];
+        let s = n as f64 * omega;
+        let nf = n as f64;
+        let force = &self.forcing[n];
+        let f_at = |rows: &[usize]| -> Vec<c64> {
+            if force.is_empty() {
+                vec![c64::new(0.0, 0.0); rows.len()]
+            } else {
+                rows.iter().map(|&r| force[r]).collect()
+            }
+        };
+        let (f_n, f_l) = (f_at(&part.nonlinear), f_at(&part.linear));
+        let n_n = part.nonlinear.len();
+        let n_l = part.linear.len();
+        let d_nn = part.dynamic(Part::NN, s);
+        let dd_nn = part.dynamic_derivative(Part::NN, nf, omega);
+        if n_l == 0 {
+            return Ok(Condensed {
+                stiffness: d_nn,
+                force: f_n,
+                stiffness_derivative: dd_nn,
+                force_derivative: vec![c64::new(0.0, 0.0); n_n],
+                recovery: output_recovery(part, None),
+                recovery_offset: vec![c64::new(0.0, 0.0); part.outputs.len()],
+            });
+        }
+        let d_ll = part.dynamic(Part::LL, s);
+        let lu = factor(&d_ll, n, omega)?;
+        // [X | w] = D_LL⁻¹ [D_LN | F_L]
+        let d_ln = part.dynamic(Part::LN, s);
+        let mut rhs = Mat::<c64>::zeros(n_l, n_n + 1);
+        rhs.as_mut().subcols_mut(0, n_n).copy_from(&d_ln);
+        for (i, f) in f_l.iter().enumerate() {
+            rhs[(i, n_n)] = *f;
+        }
+        lu.solve_in_place(rhs.as_mut());
+        let xw = rhs;
+        let d_nl = part.dynamic(Part::NL, s);
+        let dd_nl = part.dynamic_derivative(Part::NL, nf, omega);
+        let dd_ln = part.dynamic_derivative(Part::LN, nf, omega);
+        let dd_ll = part.dynamic_derivative(Part::LL, nf, omega);
+        // Z = D_LL⁻¹ [D'_LN − D'_LL X | −D'_LL w]
+        let ll_xw = &dd_ll * &xw;
+        let mut z = Mat::from_fn(n_l, n_n + 1, |i, j| {
+            let ln = if j < n_n {
+                dd_ln[(i, j)]
+            } else {
+                c64::new(0.0, 0.0)
+            };
+            ln - ll_xw[(i, j)]
+        });
+        lu.solve_in_place(z.as_mut());
+        let nl_xw = &d_nl * &xw;
+        let nl_z = &d_nl * &z;
+        let dnl_xw = &dd_nl * &xw;
+        let stiffness = Mat::from_fn(n_n, n_n, |i, j| d_nn[(i, j)] - nl_xw[(i, j)]);
+        let stiffness_derivative = Mat::from_fn(n_n, n_n, |i, j| {
+            dd_nn[(i, j)] - dnl_xw[(i, j)] - nl_z[(i, j)]
+        });
+        let force_c: Vec<c64> = (0..n_n).map(|i| f_n[i] - nl_xw[(i, n_n)]).collect();
+        let force_derivative: Vec<c64> = (0..n_n)
+            .map(|i| -dnl_xw[(i, n_n)] - nl_z[(i, n_n)])
+            .collect();
+        let recovery = output_recovery(part, Some(xw.as_ref()));
+        let recovery_offset = part
+            .outputs
+            .iter()
+            .map(|r| match part.linear.binary_search(r) {
+                Ok(l) => xw[(l, n_n)],
+                Err(_) => c64::new(0.0, 0.0),
+            })
+            .collect();
+        Ok(Condensed {
+            stiffness,
+            force: force_c,
+            stiffness_derivative,
+            force_derivative,
+            recovery,
+            recovery_offset,
+        })
+    }
+}
+
+/// Recovery matrix of the outputs: a unit row for an output that is a nonlinear DOF, −X of its
+/// linear row otherwise (eq. 18, X = D_LL⁻¹ D_LN stored in the first n_N columns of `xw`).
+fn output_recovery(part: &Partitioned, xw: Option<MatRef<'_, c64>>) -> Mat<c64> {
+    let n_n = part.nonlinear.len();
+    let mut r = Mat::<c64>::zeros(part.outputs.len(), n_n);
+    for (o, row) in part.outputs.iter().enumerate() {
+        if let Some(j) = part.nonlinear.iter().position(|x| x == row) {
+            r[(o, j)] = c64::new(1.0, 0.0);
+        } else if let (Some(xw), Ok(l)) = (xw, part.linear.binary_search(row)) {
+            for j in 0..n_n {
+                r[(o, j)] = -xw[(l, j)];
+            }
+        }
+    }
+    r
+}
+
+/// LU of D_LL⁽ⁿ⁾ with a check on the pivots (relative 1e-13) for singularity.
+fn factor(d: &Mat<c64>, n: usize, omega: f64) -> Result<PartialPivLu<c64>> {
+    let lu = d.partial_piv_lu();
+    let u = lu.U();
+    let diag: Vec<f64> = (0..u.nrows()).map(|i| u[(i, i)].norm()).collect();
+    let max = diag.iter().cloned().fold(0.0, f64::max);
+    let min = diag.iter().cloned().fold(f64::INFINITY, f64::min);
+    let regular = min > 1e-13 * max;
+    if !regular {
+        return Err(Error::Compute(format!(
+            "condensation: the linear partition's dynamic stiffness D_LL of harmonic {n} is singular at ω = {omega} rad/s (n·ω at a natural frequency of the structure with the nonlinear DOFs fixed, or a free-floating part); add damping or change the frequency range"
+        )));
+    }
+    Ok(lu)
+}
+
+/// Splits a block; checks sizes and rows.
+fn partition(
+    b: usize,
+    block: &MatrixBlock,
+    n_condensed: usize,
+    n_outputs: usize,
+) -> Result<Partitioned> {
+    let n = block.stiffness.nrows();
+    let square = |a: &Mat<c64>| a.nrows() == n && a.ncols() == n;
+    let sizes_ok = square(&block.stiffness)
+        && square(&block.mass)
+        && block.damping.as_ref().is_none_or(square);
+    if !sizes_ok {
+        return Err(Error::input(format!(
+            "matrix block {b}: K, M and C must be square and of the same size ({n})"
+        )));
+    }
+    if block.nonlinear.len() != n_condensed || block.outputs.len() != n_outputs {
+        return Err(Error::input(format!(
+            "matrix block {b} has {} nonlinear and {} output rows; block 0 has {n_condensed} and {n_outputs}",
+            block.nonlinear.len(),
+            block.outputs.len()
+        )));
+    }
+    let mut is_nonlinear = vec![false; n];
+    for &r in &block.nonlinear {
+        if r >= n || is_nonlinear[r] {
+            return Err(Error::input(format!(
+                "matrix block {b}: nonlinear row {r} is out of range (0..{n}) or listed twice"
+            )));
+        }
+        is_nonlinear[r] = true;
+    }
+    if let Some(&r) = block.outputs.iter().find(|&&r| r >= n) {
+        return Err(Error::input(format!(
+            "matrix block {b}: output row {r} is out of range (0..{n})"
+        )));
+    }
+    let linear: Vec<usize> = (0..n).filter(|&r| !is_nonlinear[r]).collect();
+    let nl = &block.nonlinear;
+    Ok(Partitioned {
+        k: Split::new(block.stiffness.as_ref(), nl, &linear),
+        m: Split::new(block.mass.as_ref(), nl, &linear),
+        c: block
+            .damping
+            .as_ref()
+            .map(|c| Split::new(c.as_ref(), nl, &linear)),
+        linear,
+        nonlinear: nl.clone(),
+        outputs: block.outputs.clone(),
+        n_rows: n,
+    })
+}
+
+/// The static harmonic (n = 0) has real coefficients: its K and forcing must be real.
+fn check_static_block_real(block: &MatrixBlock, force: &[c64]) -> Result<()> {
+    let k = &block.stiffness;
+    let scale = (0..k.nrows()).map(|i| k[(i, i)].norm()).fold(0.0, f64::max);
+    let imag = (0..k.nrows())
+        .flat_map(|i| (0..k.ncols()).map(move |j| (i, j)))
+        .map(|(i, j)| k[(i, j)].im.abs())
+        .fold(0.0, f64::max);
+    if imag > 1e-12 * scale || force.iter().any(|f| f.im != 0.0) {
+        return Err(Error::input(
+            "harmonic 0 (the static part) must use real matrices and a real force (harmonic index k = 0)",
+        ));
+    }
+    Ok(())
+}

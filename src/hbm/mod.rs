@@ -1,0 +1,26 @@
+//! Multi-harmonic balance (stage 4): the linear part per harmonic condensed on the nonlinear
+//! DOFs, the residual and its Jacobian in the real layout, Newton, and the recovery of the
+//! response at the output DOFs.
+//!
+//! Source: SAMA paper (seed 004) §2–3, eqs. 10–27; `methods.md` "Harmonic balance and
+//! continuation"; real layout `conventions.md` §4.
+//!
+//! - [`linear`]: [`LinearModel`] — per harmonic n the dynamic stiffness D⁽ⁿ⁾(ω) of its harmonic
+//!   index, condensed per frequency (eqs. 15–18), with its ω-derivative;
+//! - [`system`]: [`HbmSystem`] — r(Q, ω) = D̄(ω) Q − F̄_e(ω) + F_nl(Q) (eq. 19) and ∂r/∂Q (eq. 21),
+//!   and the [`ParameterSystem`] views [`FrequencyPath`] (λ = ω) and [`LevelPath`]
+//!   (λ = excitation level at fixed ω);
+//! - [`newton`]: Newton with step damping, convergence on residual and increment;
+//! - [`response`]: harmonics, amplitude and peak of the output DOFs at a solution.
+//!
+//! Path following is in [`crate::continuation`].
+
+pub mod linear;
+pub mod newton;
+pub mod response;
+pub mod system;
+
+pub use linear::{Condensed, LinearModel, MatrixBlock};
+pub use newton::{solve_fixed, NewtonFailure, NewtonOptions, NewtonSolution};
+pub use response::{OutputResponse, ResponseOptions};
+pub use system::{FrequencyPath, HbmSystem, LevelPath, Linearization, ParameterSystem};

@@ -1,0 +1,104 @@
+//! The response at the output DOFs recovered from a harmonic balance solution (SAMA paper
+//! eq. 18): complex harmonics Q⁽⁰⁾..Q⁽ᴴ⁾, first-harmonic amplitude |Q⁽¹⁾| and the peak
+//! max_τ |q(τ)| over the period.
+
+use faer::c64;
+
+use super::system::HbmSystem;
+use crate::error::Result;
+use crate::harmonics::HarmonicForce;
+
+/// How the peak over the period is sampled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ResponseOptions {
+    /// Samples per period for the peak (at least 8(H+1) are used).
+    pub peak_samples: usize,
+}
+
+impl Default for ResponseOptions {
+    fn default() -> Self {
+        ResponseOptions { peak_samples: 256 }
+    }
+}
+
+/// The response of the output DOFs at one solution point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputResponse {
+    /// Complex harmonics per output DOF, `harmonics[r][n]` = Q⁽ⁿ⁾ (m), n = 0..H
+    /// (q(τ) = Re Σ Q⁽ⁿ⁾ e^{inτ}).
+    pub harmonics: Vec<Vec<c64>>,
+    /// First-harmonic amplitude |Q⁽¹⁾| per output DOF (m).
+    pub amplitude: Vec<f64>,
+    /// max over the period of |q(τ)| per output DOF (m), sampled.
+    pub peak: Vec<f64>,
+}
+
+/// The complex harmonic n of condensed DOF `dof` from the real vector `q`.
+pub fn complex_harmonic<F: HarmonicForce>(
+    system: &HbmSystem<'_, F>,
+    q: &[f64],
+    n: usize,
+    dof: usize,
+) -> c64 {
+    let layout = system.layout();
+    let nd = system.linear().n_condensed();
+    if n == 0 {
+        c64::new(q[layout.static_index(dof)], 0.0)
+    } else {
+        let i = layout.cos_index(n, dof, nd);
+        c64::new(q[i], q[i + 1])
+    }
+}
+
+/// Recovers the output DOFs' response from the condensed solution `q` at ω (rad/s) with
+/// excitation factor `level` (eq. 18 per harmonic).
+pub fn output_response<F: HarmonicForce>(
+    system: &HbmSystem<'_, F>,
+    q: &[f64],
+    omega: f64,
+    level: f64,
+    opts: &ResponseOptions,
+) -> Result<OutputResponse> {
+    let h = system.layout().harmonics;
+    let nd = system.linear().n_condensed();
+    let n_out = system.linear().n_outputs();
+    let condensed = system.condense_all(omega)?;
+    let mut harmonics = vec![vec![c64::new(0.0, 0.0); h + 1]; n_out];
+    for (n, c) in condensed.iter().enumerate() {
+        let q_n: Vec<c64> = (0..nd).map(|d| complex_harmonic(system, q, n, d)).collect();
+        let mut out = c.recover(&q_n);
+        // the offset is the response to the excitation: scale it by the level
+        for (o, v) in out.iter_mut().enumerate() {
+            *v += c.recovery_offset[o] * (level - 1.0);
+        }
+        for (o, v) in out.into_iter().enumerate() {
+            harmonics[o][n] = if n == 0 { c64::new(v.re, 0.0) } else { v };
+        }
+    }
+    let amplitude = harmonics
+        .iter()
+        .map(|hs| hs.get(1).map_or(0.0, |q| q.norm()))
+        .collect();
+    let samples = opts.peak_samples.max(8 * (h + 1));
+    let peak = harmonics.iter().map(|hs| peak_of(hs, samples)).collect();
+    Ok(OutputResponse {
+        harmonics,
+        amplitude,
+        peak,
+    })
+}
+
+/// max_τ |Re Σ Q⁽ⁿ⁾ e^{inτ}| over `samples` equally spaced τ.
+pub fn peak_of(harmonics: &[c64], samples: usize) -> f64 {
+    (0..samples)
+        .map(|k| {
+            let tau = 2.0 * std::f64::consts::PI * k as f64 / samples as f64;
+            harmonics
+                .iter()
+                .enumerate()
+                .map(|(n, q)| q.re * (n as f64 * tau).cos() - q.im * (n as f64 * tau).sin())
+                .sum::<f64>()
+                .abs()
+        })
+        .fold(0.0, f64::max)
+}

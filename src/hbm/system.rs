@@ -1,0 +1,300 @@
+//! The harmonic balance residual r(Q, ω) = D̄(ω) Q − λ F̄_e(ω) + F_nl(Q) (SAMA paper eq. 19) in
+//! the real layout of `conventions.md` §4, with its Jacobian ∂r/∂Q = D̄ + ∂F_nl/∂Q (eq. 21 with the
+//! sign convention of [`HarmonicForce`]) and its derivative with respect to the continuation
+//! parameter (ω, or the excitation level λ).
+
+use faer::{c64, Mat};
+use rayon::prelude::*;
+
+use super::linear::{Condensed, LinearModel};
+use crate::error::{Error, Result};
+use crate::harmonics::{HarmonicForce, HarmonicLayout};
+
+/// The residual of a parameter-dependent system at one point, its Jacobian and its parameter
+/// derivative.
+#[derive(Clone, Debug)]
+pub struct Linearization {
+    /// r(x, λ), length `dim`.
+    pub residual: Vec<f64>,
+    /// ∂r/∂x, `dim` × `dim`.
+    pub jacobian: Mat<f64>,
+    /// ∂r/∂λ, length `dim`.
+    pub d_parameter: Vec<f64>,
+}
+
+impl Linearization {
+    /// Zeroed storage for a system of `dim` unknowns.
+    pub fn zeros(dim: usize) -> Linearization {
+        Linearization {
+            residual: vec![0.0; dim],
+            jacobian: Mat::zeros(dim, dim),
+            d_parameter: vec![0.0; dim],
+        }
+    }
+}
+
+/// A nonlinear system r(x, λ) = 0 in `dim` real unknowns x and one parameter λ, with memory
+/// (`State`) carried from one converged point to the next. This is what Newton
+/// ([`super::newton`]) and the continuation ([`crate::continuation`]) solve.
+pub trait ParameterSystem: Sync {
+    /// Memory of the nonlinear force (e.g. slider positions at the start of the period).
+    type State: Clone + Send + Sync + std::fmt::Debug;
+
+    /// Number of unknowns.
+    fn dim(&self) -> usize;
+
+    /// The force level the residual norm is compared with (N): Newton converges when
+    /// ‖r‖₂ ≤ tolerance · `residual_scale()`.
+    fn residual_scale(&self) -> f64;
+
+    /// The state before the first point.
+    fn initial_state(&self) -> Self::State;
+
+    /// Fills `out` at (x, λ) starting from the memory `state`; returns the end-of-period memory.
+    fn evaluate(
+        &self,
+        x: &[f64],
+        lambda: f64,
+        state: &Self::State,
+        out: &mut Linearization,
+    ) -> Result<Self::State>;
+}
+
+/// The harmonic balance of a linear model and a nonlinear force on its condensed DOFs.
+pub struct HbmSystem<'a, F: HarmonicForce> {
+    layout: HarmonicLayout,
+    linear: &'a LinearModel,
+    force: &'a F,
+}
+
+impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
+    /// Checks that the force acts on the condensed DOFs of `linear` and that the harmonics agree.
+    pub fn new(layout: HarmonicLayout, linear: &'a LinearModel, force: &'a F) -> Result<Self> {
+        if force.n_dofs() != linear.n_condensed() {
+            return Err(Error::input(format!(
+                "the nonlinear force acts on {} DOFs but the linear model condenses on {}",
+                force.n_dofs(),
+                linear.n_condensed()
+            )));
+        }
+        if layout.harmonics != linear.harmonics() {
+            return Err(Error::input(format!(
+                "the harmonic layout has H = {} but the linear model H = {}",
+                layout.harmonics,
+                linear.harmonics()
+            )));
+        }
+        Ok(HbmSystem {
+            layout,
+            linear,
+            force,
+        })
+    }
+
+    /// The harmonic layout.
+    pub fn layout(&self) -> HarmonicLayout {
+        self.layout
+    }
+
+    /// The linear model.
+    pub fn linear(&self) -> &LinearModel {
+        self.linear
+    }
+
+    /// The nonlinear force.
+    pub fn force(&self) -> &F {
+        self.force
+    }
+
+    /// Number of real unknowns n_N (2H + 1).
+    pub fn dim(&self) -> usize {
+        self.layout.len(self.linear.n_condensed())
+    }
+
+    /// Every harmonic condensed at ω (in parallel over the harmonics).
+    pub fn condense_all(&self, omega: f64) -> Result<Vec<Condensed>> {
+        (0..=self.layout.harmonics)
+            .into_par_iter()
+            .map(|n| self.linear.condense(n, omega))
+            .collect()
+    }
+
+    /// Evaluates at (Q, ω) with excitation factor `level`: `out.residual` = r,
+    /// `out.jacobian` = ∂r/∂Q, `out.d_parameter` = ∂r/∂ω; and `level_derivative` (if given) =
+    /// ∂r/∂level = −F̄_e. Returns the end-of-period force state.
+    pub fn evaluate(
+        &self,
+        q: &[f64],
+        omega: f64,
+        level: f64,
+        state: &F::State,
+        out: &mut Linearization,
+        level_derivative: Option<&mut [f64]>,
+    ) -> Result<F::State> {
+        let condensed = self.condense_all(omega)?;
+        out.residual.iter_mut().for_each(|v| *v = 0.0);
+        out.d_parameter.iter_mut().for_each(|v| *v = 0.0);
+        out.jacobian.fill(0.0);
+        let mut end_state = state.clone();
+        self.force.evaluate(
+            &self.layout,
+            q,
+            &mut end_state,
+            &mut out.residual,
+            Some(out.jacobian.as_mut()),
+        )?;
+        let mut level_derivative = level_derivative;
+        if let Some(d) = level_derivative.as_deref_mut() {
+            d.iter_mut().for_each(|v| *v = 0.0);
+        }
+        for (n, c) in condensed.iter().enumerate() {
+            self.add_harmonic(n, c, q, level, out, level_derivative.as_deref_mut());
+        }
+        Ok(end_state)
+    }
+
+    /// Adds harmonic n's linear terms: D̄ Q − level·F̄ to the residual, D̄ to the Jacobian,
+    /// D̄' Q − level·F̄' to ∂r/∂ω (real 2×2 blocks of eq. 24).
+    fn add_harmonic(
+        &self,
+        n: usize,
+        c: &Condensed,
+        q: &[f64],
+        level: f64,
+        out: &mut Linearization,
+        level_derivative: Option<&mut [f64]>,
+    ) {
+        let nd = self.linear.n_condensed();
+        if n == 0 {
+            for i in 0..nd {
+                let ri = self.layout.static_index(i);
+                for j in 0..nd {
+                    let cj = self.layout.static_index(j);
+                    out.jacobian[(ri, cj)] += c.stiffness[(i, j)].re;
+                    out.residual[ri] += c.stiffness[(i, j)].re * q[cj];
+                    out.d_parameter[ri] += c.stiffness_derivative[(i, j)].re * q[cj];
+                }
+                out.residual[ri] -= level * c.force[i].re;
+                out.d_parameter[ri] -= level * c.force_derivative[i].re;
+            }
+            if let Some(d) = level_derivative {
+                for i in 0..nd {
+                    d[self.layout.static_index(i)] -= c.force[i].re;
+                }
+            }
+            return;
+        }
+        for i in 0..nd {
+            let ri = self.layout.cos_index(n, i, nd);
+            let mut dq = c64::new(0.0, 0.0);
+            let mut ddq = c64::new(0.0, 0.0);
+            for j in 0..nd {
+                let cj = self.layout.cos_index(n, j, nd);
+                let d = c.stiffness[(i, j)];
+                out.jacobian[(ri, cj)] += d.re;
+                out.jacobian[(ri, cj + 1)] -= d.im;
+                out.jacobian[(ri + 1, cj)] += d.im;
+                out.jacobian[(ri + 1, cj + 1)] += d.re;
+                let qj = c64::new(q[cj], q[cj + 1]);
+                dq += d * qj;
+                ddq += c.stiffness_derivative[(i, j)] * qj;
+            }
+            let f = c.force[i] * level;
+            let df = c.force_derivative[i] * level;
+            out.residual[ri] += dq.re - f.re;
+            out.residual[ri + 1] += dq.im - f.im;
+            out.d_parameter[ri] += ddq.re - df.re;
+            out.d_parameter[ri + 1] += ddq.im - df.im;
+        }
+        if let Some(d) = level_derivative {
+            for i in 0..nd {
+                let ri = self.layout.cos_index(n, i, nd);
+                d[ri] -= c.force[i].re;
+                d[ri + 1] -= c.force[i].im;
+            }
+        }
+    }
+}
+
+/// Frequency response: the unknowns are Q, the parameter is ω (rad/s), the excitation level is
+/// fixed.
+pub struct FrequencyPath<'s, 'a, F: HarmonicForce> {
+    /// The harmonic balance system.
+    pub system: &'s HbmSystem<'a, F>,
+    /// Factor on the excitation (1 for the case's force).
+    pub level: f64,
+}
+
+impl<F: HarmonicForce> ParameterSystem for FrequencyPath<'_, '_, F> {
+    type State = F::State;
+
+    fn dim(&self) -> usize {
+        self.system.dim()
+    }
+
+    fn residual_scale(&self) -> f64 {
+        residual_scale(self.system.linear.force_norm() * self.level.abs())
+    }
+
+    fn initial_state(&self) -> F::State {
+        self.system.force.initial_state()
+    }
+
+    fn evaluate(
+        &self,
+        x: &[f64],
+        omega: f64,
+        state: &F::State,
+        out: &mut Linearization,
+    ) -> Result<F::State> {
+        self.system.evaluate(x, omega, self.level, state, out, None)
+    }
+}
+
+/// Response to a varying excitation level λ (factor on the case's force) at fixed ω (rad/s).
+pub struct LevelPath<'s, 'a, F: HarmonicForce> {
+    /// The harmonic balance system.
+    pub system: &'s HbmSystem<'a, F>,
+    /// The fixed excitation frequency (rad/s).
+    pub omega: f64,
+}
+
+impl<F: HarmonicForce> ParameterSystem for LevelPath<'_, '_, F> {
+    type State = F::State;
+
+    fn dim(&self) -> usize {
+        self.system.dim()
+    }
+
+    fn residual_scale(&self) -> f64 {
+        residual_scale(self.system.linear.force_norm())
+    }
+
+    fn initial_state(&self) -> F::State {
+        self.system.force.initial_state()
+    }
+
+    fn evaluate(
+        &self,
+        x: &[f64],
+        level: f64,
+        state: &F::State,
+        out: &mut Linearization,
+    ) -> Result<F::State> {
+        let mut d_level = vec![0.0; x.len()];
+        let end = self
+            .system
+            .evaluate(x, self.omega, level, state, out, Some(&mut d_level))?;
+        out.d_parameter = d_level;
+        Ok(end)
+    }
+}
+
+/// The force level used to scale residuals; 1 N when there is no excitation.
+fn residual_scale(force_norm: f64) -> f64 {
+    if force_norm > 0.0 && force_norm.is_finite() {
+        force_norm
+    } else {
+        1.0
+    }
+}

@@ -1,0 +1,194 @@
+//! Test nonlinearities and helpers shared by the harmonic balance and continuation tests: a
+//! grounded polynomial spring f = k1 q + k3 q³ per DOF evaluated by a direct DFT (AFT) with an
+//! analytic Jacobian, and dense matrix helpers.
+#![allow(dead_code)]
+
+use faer::{c64, Mat, MatMut};
+use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
+use nlrom::Result;
+
+/// Grounded springs f_d(q) = k1[d] q_d + k3[d] q_d³ on each of its DOFs (N, q in m).
+#[derive(Clone, Debug)]
+pub struct PolynomialSprings {
+    pub k1: Vec<f64>,
+    pub k3: Vec<f64>,
+}
+
+/// The value at τ of basis function `c` of the real layout for one DOF: coefficient 0 is the
+/// static part, 2n−1 the cosine (Re Q⁽ⁿ⁾) and 2n the −sine (Im Q⁽ⁿ⁾) of harmonic n.
+pub fn basis(c: usize, tau: f64) -> f64 {
+    if c == 0 {
+        return 1.0;
+    }
+    let n = c.div_ceil(2) as f64;
+    if c % 2 == 1 {
+        (n * tau).cos()
+    } else {
+        -(n * tau).sin()
+    }
+}
+
+/// The weight of sample value at τ in coefficient `c` of the forward DFT (inverse of `basis`).
+pub fn projection(c: usize, tau: f64, samples: usize) -> f64 {
+    let nt = samples as f64;
+    if c == 0 {
+        1.0 / nt
+    } else {
+        2.0 / nt * basis(c, tau)
+    }
+}
+
+/// Index in the real layout of coefficient `c` (0..2H+1) of DOF `d` among `nd`.
+pub fn layout_index(layout: &HarmonicLayout, c: usize, d: usize, nd: usize) -> usize {
+    if c == 0 {
+        layout.static_index(d)
+    } else {
+        let n = c.div_ceil(2);
+        layout.cos_index(n, d, nd) + usize::from(c.is_multiple_of(2))
+    }
+}
+
+impl HarmonicForce for PolynomialSprings {
+    type State = ();
+
+    fn n_dofs(&self) -> usize {
+        self.k1.len()
+    }
+
+    fn initial_state(&self) {}
+
+    fn evaluate(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        _state: &mut (),
+        force: &mut [f64],
+        jacobian: Option<MatMut<'_, f64>>,
+    ) -> Result<()> {
+        let nd = self.n_dofs();
+        let nc = layout.coefficients();
+        let nt = layout.time_samples;
+        let mut jac = jacobian;
+        for d in 0..nd {
+            for k in 0..nt {
+                let tau = 2.0 * std::f64::consts::PI * k as f64 / nt as f64;
+                let qt: f64 = (0..nc)
+                    .map(|c| q[layout_index(layout, c, d, nd)] * basis(c, tau))
+                    .sum();
+                let f = self.k1[d] * qt + self.k3[d] * qt * qt * qt;
+                let df = self.k1[d] + 3.0 * self.k3[d] * qt * qt;
+                for r in 0..nc {
+                    let w = projection(r, tau, nt);
+                    let ri = layout_index(layout, r, d, nd);
+                    force[ri] += w * f;
+                    if let Some(j) = jac.as_mut() {
+                        for c in 0..nc {
+                            let ci = layout_index(layout, c, d, nd);
+                            j[(ri, ci)] += w * df * basis(c, tau);
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A nonlinear force on a subset of the DOFs of another one, zero on the rest: the same physics
+/// seen from a larger condensed set (for condensed = uncondensed tests).
+#[derive(Clone, Debug)]
+pub struct Embedded<F> {
+    pub inner: F,
+    /// Position of each of the inner force's DOFs among the `n_total` DOFs.
+    pub positions: Vec<usize>,
+    pub n_total: usize,
+}
+
+impl<F: HarmonicForce> HarmonicForce for Embedded<F> {
+    type State = F::State;
+
+    fn n_dofs(&self) -> usize {
+        self.n_total
+    }
+
+    fn initial_state(&self) -> F::State {
+        self.inner.initial_state()
+    }
+
+    fn evaluate(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &mut F::State,
+        force: &mut [f64],
+        jacobian: Option<MatMut<'_, f64>>,
+    ) -> Result<()> {
+        let ni = self.inner.n_dofs();
+        let nc = layout.coefficients();
+        let map = |c: usize, d: usize| layout_index(layout, c, self.positions[d], self.n_total);
+        let mut qi = vec![0.0; layout.len(ni)];
+        for d in 0..ni {
+            for c in 0..nc {
+                qi[layout_index(layout, c, d, ni)] = q[map(c, d)];
+            }
+        }
+        let mut fi = vec![0.0; qi.len()];
+        let mut ji = Mat::<f64>::zeros(qi.len(), qi.len());
+        let want = jacobian.is_some();
+        self.inner
+            .evaluate(layout, &qi, state, &mut fi, want.then_some(ji.as_mut()))?;
+        let all: Vec<(usize, usize)> = (0..ni).flat_map(|d| (0..nc).map(move |c| (c, d))).collect();
+        for &(c, d) in &all {
+            force[map(c, d)] += fi[layout_index(layout, c, d, ni)];
+        }
+        if let Some(mut j) = jacobian {
+            for &(r, dr) in &all {
+                for &(c, dc) in &all {
+                    j[(map(r, dr), map(c, dc))] += ji[(
+                        layout_index(layout, r, dr, ni),
+                        layout_index(layout, c, dc, ni),
+                    )];
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A dense real matrix from rows.
+pub fn dense(rows: &[&[f64]]) -> Mat<f64> {
+    Mat::from_fn(rows.len(), rows[0].len(), |i, j| rows[i][j])
+}
+
+/// Solves the complex system A x = b densely.
+pub fn complex_solve(a: &Mat<c64>, b: &[c64]) -> Vec<c64> {
+    use faer::linalg::solvers::Solve;
+    let lu = a.partial_piv_lu();
+    let mut x = Mat::from_fn(b.len(), 1, |i, _| b[i]);
+    lu.solve_in_place(x.as_mut());
+    (0..b.len()).map(|i| x[(i, 0)]).collect()
+}
+
+/// A 4-DOF chain (masses 1, 2, 1.5, 1 kg; springs to ground and between neighbours) with
+/// non-proportional damping: K, M, C.
+pub fn chain4() -> (Mat<f64>, Mat<f64>, Mat<f64>) {
+    let k = dense(&[
+        &[3.0, -1.0, 0.0, 0.0],
+        &[-1.0, 2.5, -1.5, 0.0],
+        &[0.0, -1.5, 3.5, -2.0],
+        &[0.0, 0.0, -2.0, 2.6],
+    ]);
+    let m = dense(&[
+        &[1.0, 0.0, 0.0, 0.0],
+        &[0.0, 2.0, 0.0, 0.0],
+        &[0.0, 0.0, 1.5, 0.0],
+        &[0.0, 0.0, 0.0, 1.0],
+    ]);
+    let c = dense(&[
+        &[0.05, -0.01, 0.0, 0.0],
+        &[-0.01, 0.03, 0.0, 0.0],
+        &[0.0, 0.0, 0.08, -0.02],
+        &[0.0, 0.0, -0.02, 0.04],
+    ]);
+    (k, m, c)
+}
