@@ -56,6 +56,14 @@ fn analytic_folds() -> (f64, f64) {
     (max, min)
 }
 
+/// The peak of the HB-1 curve: the largest A with a real ω (to 1e-5).
+fn analytic_peak() -> f64 {
+    (1..400_000)
+        .map(|i| i as f64 * 1e-5)
+        .filter(|a| omega_plus(*a).is_some())
+        .fold(0.0, f64::max)
+}
+
 fn duffing_model(h: usize) -> LinearModel {
     let k = Mat::from_fn(1, 1, |_, _| K);
     let m = Mat::from_fn(1, 1, |_, _| M);
@@ -151,10 +159,7 @@ fn duffing_one_harmonic_matches_the_analytic_curve_through_both_folds() {
     assert!(amps[ip..].windows(2).all(|w| w[1] < w[0]));
     assert!(amps.windows(2).all(|w| (w[1] - w[0]).abs() <= 0.1 * peak));
     // the analytic peak: the largest A with a real ω
-    let a_max = (1..400_000)
-        .map(|i| i as f64 * 1e-5)
-        .filter(|a| omega_plus(*a).is_some())
-        .fold(0.0, f64::max);
+    let a_max = analytic_peak();
     assert!(
         (peak - a_max).abs() <= 5e-3 * a_max,
         "peak {peak} vs {a_max}"
@@ -193,10 +198,7 @@ fn duffing_five_harmonics_passes_the_folds() {
         })
         .collect();
     let peak = responses.iter().map(|r| r.amplitude[0]).fold(0.0, f64::max);
-    let a_max = (1..400_000)
-        .map(|i| i as f64 * 1e-5)
-        .filter(|a| omega_plus(*a).is_some())
-        .fold(0.0, f64::max);
+    let a_max = analytic_peak();
     assert!(
         (peak - a_max).abs() <= 0.02 * a_max,
         "peak {peak} vs HB-1 {a_max}"
