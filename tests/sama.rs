@@ -439,3 +439,55 @@ fn sector8_model_places_the_target_with_its_own_sector_angle() {
     let e = build_interfaces(&case, &mesh, Some(&wrong)).unwrap_err();
     assert!(e.to_string().contains("do not face each other"), "{e}");
 }
+
+#[test]
+fn pairs_become_friction_elements_of_the_harmonic_balance() {
+    use nlrom::contact::law::Variant;
+    use nlrom::contact::pairs::{PairSet, SectorCoupling};
+    let (case, mesh, geom) = setup("shroud_nonconforming");
+    let iface = interface(&case, &mesh, &geom);
+    // DOF vector: every contact and target node, in tag order.
+    let mut tags: Vec<u64> = iface
+        .pairs
+        .iter()
+        .flat_map(|p| std::iter::once(p.contact_node).chain(p.targets.iter().copied()))
+        .collect();
+    tags.sort_unstable();
+    tags.dedup();
+    let rows = |t: u64| {
+        tags.binary_search(&t)
+            .ok()
+            .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+    };
+    let elements = iface.elements(rows).unwrap();
+    let n_pairs: usize = iface.pairs.iter().map(|p| p.targets.len()).sum();
+    assert_eq!(elements.len(), n_pairs);
+    let kt: f64 = elements.iter().map(|e| e.params.kt).sum();
+    let n0: f64 = elements.iter().map(|e| e.params.n0).sum();
+    let rate: f64 = elements.iter().map(|e| e.preload_rate).sum();
+    assert!((kt - iface.sum_kt).abs() < 1e-12 * kt);
+    assert!((n0 - 113.0).abs() < 1e-12 * 113.0);
+    // ∂(Σ n0_j)/∂n0 = 1, and each rate is n0_j / n0.
+    assert!((rate - 1.0).abs() < 1e-12);
+    for e in &elements {
+        assert!((e.preload_rate * 113.0 - e.params.n0).abs() < 1e-12);
+        assert_eq!(e.sigma, 1);
+        assert!(e.params.mu == 0.5);
+    }
+    // The contact module accepts them (orthonormal right-handed frames, rows in range).
+    let coupling = SectorCoupling {
+        sectors: 24,
+        rotation: geom.rotation(1),
+        harmonic_indices: vec![0, 3, 6, 9],
+    };
+    PairSet::new(3 * tags.len(), Variant::OneD, elements, Some(coupling)).unwrap();
+    // A node missing from the DOF vector is an error naming it.
+    let first = iface.pairs[0].targets[0];
+    let e = iface
+        .elements(|t| if t == first { None } else { rows(t) })
+        .unwrap_err();
+    assert!(
+        e.to_string().contains(&format!("target node {first}")),
+        "{e}"
+    );
+}

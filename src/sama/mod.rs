@@ -31,8 +31,10 @@
 //! The harmonic balance turns each pair c–t_j into a node-to-node friction element acting on the
 //! relative displacement r = u_c − e^{iσφ_k} R_α^σ u_tj ([`ContactInterface::relative_displacement`];
 //! eq 33 of the paper), whose force goes back to the target node by the adjoint map
-//! ([`ContactInterface::pair_forces`]).
+//! ([`ContactInterface::pair_forces`]). [`ContactInterface::elements`] hands the pairs to
+//! [`crate::contact::pairs::PairSet`] as such elements (weighted parameters and preload rates).
 
+pub mod elements;
 pub mod geom;
 pub mod operator;
 pub mod project;
@@ -95,6 +97,9 @@ pub struct ContactPair {
     pub n0: Vec<f64>,
     /// The contact node's share n0_c of the interface preload (N).
     pub n0_node: f64,
+    /// n0_c / n0: the node's fraction of the interface preload (its tributary area over the
+    /// projected contact nodes' total area).
+    pub preload_share: f64,
 }
 
 /// A contact node that could not be projected onto the target surface.
@@ -473,7 +478,8 @@ fn fill_pairs(
             .iter()
             .map(|&l| geo.target_nodes[l as usize])
             .collect();
-        let n0_node = c.n0 * side.areas[i] / projected_area;
+        let preload_share = side.areas[i] / projected_area;
+        let n0_node = c.n0 * preload_share;
         iface.pairs.push(ContactPair {
             contact_node: mesh.node_tags[node as usize],
             contact_index: node,
@@ -494,6 +500,7 @@ fn fill_pairs(
             gap: p.gap,
             area: side.areas[i],
             n0_node,
+            preload_share,
         });
     }
     iface.sum_kt = iface.pairs.iter().flat_map(|p| &p.kt).sum();
