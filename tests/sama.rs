@@ -491,3 +491,38 @@ fn pairs_become_friction_elements_of_the_harmonic_balance() {
         "{e}"
     );
 }
+
+#[test]
+fn axial_misalignment_of_the_bundled_shroud_unprojects_the_uncovered_row() {
+    // Conforming shroud, target shifted 1 mm along the axis (a fifth of the 5 mm contact cells):
+    // it covers z ∈ [0.001, 0.031], so the 5 contact nodes on z = 0 fall outside it and every
+    // other node gets SAMA weights on the shifted target faces.
+    let (mut case, mesh, geom) = setup("shroud_conforming");
+    case.contact[0].model = ContactModel::Sama;
+    case.contact[0].misalignment = Some(nlrom::case::Misalignment {
+        translate: [0.0, 0.0, 0.001],
+        rotate: None,
+    });
+    let iface = interface(&case, &mesh, &geom);
+    assert_eq!(iface.sigma, 1);
+    let mut bottom: Vec<u64> = mesh
+        .nodes_of("shroud_contact")
+        .unwrap()
+        .into_iter()
+        .filter(|&n| mesh.coords[n as usize][2].abs() < 1e-12)
+        .map(|n| mesh.node_tags[n as usize])
+        .collect();
+    bottom.sort_unstable();
+    let unprojected: Vec<u64> = iface.unprojected.iter().map(|u| u.node).collect();
+    assert_eq!(unprojected, bottom);
+    assert_eq!(bottom.len(), 5);
+    assert_eq!(iface.pairs.len(), 60);
+    check_sums(&iface, 1e8, 1e8, 113.0);
+    for p in &iface.pairs {
+        let z = mesh.coords[p.contact_index as usize][2];
+        // Rows at z = 0.0025·k: the shifted target nodes sit at 0.001 + 0.0025·k, so no node
+        // coincides and every contact node is spread over a triangle6's 6 nodes.
+        assert_eq!(p.targets.len(), 6, "node {} at z = {z}", p.contact_node);
+        assert!(p.distance < 1e-12);
+    }
+}
