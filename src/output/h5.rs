@@ -735,6 +735,177 @@ impl H5Reader {
         })
     }
 
+    /// The attributes of the group or dataset at `path`.
+    pub fn attrs(&self, path: &str) -> Result<BTreeMap<String, Attr>> {
+        let raw = if let Ok(group) = self.h5_group(path) {
+            group.attrs()
+        } else {
+            let ds = self
+                .file
+                .dataset(path)
+                .map_err(|_| self.error(display_path(path), "no such group or dataset"))?;
+            ds.attrs()
+        }
+        .map_err(|e| self.error(display_path(path), e))?;
+        self.convert_attrs(raw, path)
+    }
+
+    /// The attribute `name` of the object at `path`.
+    pub fn attr(&self, path: &str, name: &str) -> Result<Attr> {
+        self.attrs(path)?
+            .remove(name)
+            .ok_or_else(|| self.error(display_path(path), format!("missing attribute {name:?}")))
+    }
+
+    /// The string attribute `name` of the object at `path`.
+    pub fn attr_str(&self, path: &str, name: &str) -> Result<String> {
+        match self.attr(path, name)? {
+            Attr::Str(s) => Ok(s),
+            other => Err(self.wrong_attr(path, name, "a string", &other)),
+        }
+    }
+
+    /// The float attribute `name` of the object at `path`.
+    pub fn attr_f64(&self, path: &str, name: &str) -> Result<f64> {
+        match self.attr(path, name)? {
+            Attr::F64(x) => Ok(x),
+            other => Err(self.wrong_attr(path, name, "a float", &other)),
+        }
+    }
+
+    /// The non-negative integer attribute `name` of the object at `path` (stored as u64, or as a
+    /// non-negative i64).
+    pub fn attr_u64(&self, path: &str, name: &str) -> Result<u64> {
+        match self.attr(path, name)? {
+            Attr::U64(x) => Ok(x),
+            Attr::I64(x) if x >= 0 => Ok(x as u64),
+            other => Err(self.wrong_attr(path, name, "a non-negative integer", &other)),
+        }
+    }
+
+    /// The signed integer attribute `name` of the object at `path`.
+    pub fn attr_i64(&self, path: &str, name: &str) -> Result<i64> {
+        match self.attr(path, name)? {
+            Attr::I64(x) => Ok(x),
+            other => Err(self.wrong_attr(path, name, "an integer", &other)),
+        }
+    }
+
+    /// The float-array attribute `name` of the object at `path`, of length `len`.
+    pub fn attr_f64s(&self, path: &str, name: &str, len: usize) -> Result<Vec<f64>> {
+        match self.attr(path, name)? {
+            Attr::F64s(v) if v.len() == len => Ok(v),
+            other => Err(self.wrong_attr(path, name, &format!("{len} floats"), &other)),
+        }
+    }
+
+    fn wrong_attr(&self, path: &str, name: &str, expected: &str, found: &Attr) -> Error {
+        self.error(
+            display_path(path),
+            format!("attribute {name:?} should be {expected}, found {found:?}"),
+        )
+    }
+
+    /// The dataset at `path`, which must have the shape `shape`.
+    pub fn dataset_shaped(&self, path: &str, shape: &[usize]) -> Result<Dataset> {
+        let ds = self.dataset(path)?;
+        if ds.shape != shape {
+            return Err(self.error(path, format!("shape {:?}, expected {shape:?}", ds.shape)));
+        }
+        Ok(ds)
+    }
+
+    /// The f64 values of the dataset at `path`, of shape `shape`.
+    pub fn f64s(&self, path: &str, shape: &[usize]) -> Result<Vec<f64>> {
+        match self.dataset_shaped(path, shape)?.data {
+            Data::F64(v) => Ok(v),
+            other => Err(self.wrong_type(path, "f64", &other)),
+        }
+    }
+
+    /// The 1-D f64 dataset at `path`, any length.
+    pub fn f64_vector(&self, path: &str) -> Result<Vec<f64>> {
+        let ds = self.dataset(path)?;
+        match (ds.shape.len(), ds.data) {
+            (1, Data::F64(v)) => Ok(v),
+            (_, Data::F64(_)) => {
+                Err(self.error(path, format!("shape {:?}, expected 1-D", ds.shape)))
+            }
+            (_, other) => Err(self.wrong_type(path, "f64", &other)),
+        }
+    }
+
+    /// The u64 values of the dataset at `path`, of shape `shape`.
+    pub fn u64s(&self, path: &str, shape: &[usize]) -> Result<Vec<u64>> {
+        match self.dataset_shaped(path, shape)?.data {
+            Data::U64(v) => Ok(v),
+            other => Err(self.wrong_type(path, "u64", &other)),
+        }
+    }
+
+    /// The 1-D u64 dataset at `path`, any length.
+    pub fn u64_vector(&self, path: &str) -> Result<Vec<u64>> {
+        let ds = self.dataset(path)?;
+        match (ds.shape.len(), ds.data) {
+            (1, Data::U64(v)) => Ok(v),
+            (_, Data::U64(_)) => {
+                Err(self.error(path, format!("shape {:?}, expected 1-D", ds.shape)))
+            }
+            (_, other) => Err(self.wrong_type(path, "u64", &other)),
+        }
+    }
+
+    /// The i64 values of the dataset at `path`, of shape `shape`.
+    pub fn i64s(&self, path: &str, shape: &[usize]) -> Result<Vec<i64>> {
+        match self.dataset_shaped(path, shape)?.data {
+            Data::I64(v) => Ok(v),
+            other => Err(self.wrong_type(path, "i64", &other)),
+        }
+    }
+
+    /// The values of the dataset at `path`, of shape `shape`, as complex numbers: a complex
+    /// `{r, i}` dataset as stored, an f64 dataset with zero imaginary parts.
+    pub fn complexes(&self, path: &str, shape: &[usize]) -> Result<Vec<c64>> {
+        match self.dataset_shaped(path, shape)?.data {
+            Data::Complex(v) => Ok(v),
+            Data::F64(v) => Ok(v.into_iter().map(|x| c64::new(x, 0.0)).collect()),
+            other => Err(self.wrong_type(path, "complex or f64", &other)),
+        }
+    }
+
+    /// The compound records at `path`, which must hold `len` records and the fields `fields`.
+    pub fn records(&self, path: &str, len: Option<usize>, fields: &[&str]) -> Result<Records> {
+        let ds = self.dataset(path)?;
+        let Data::Records(records) = ds.data else {
+            return Err(self.wrong_type(path, "compound records", &ds.data));
+        };
+        if let Some(len) = len {
+            if ds.shape != [len] {
+                return Err(self.error(path, format!("shape {:?}, expected [{len}]", ds.shape)));
+            }
+        }
+        for field in fields {
+            if records.get(field).is_none() {
+                return Err(self.error(path, format!("missing compound field {field:?}")));
+            }
+        }
+        Ok(records)
+    }
+
+    fn wrong_type(&self, path: &str, expected: &str, found: &Data) -> Error {
+        self.error(
+            path,
+            format!("element type {}, expected {expected}", found.type_name()),
+        )
+    }
+
+    /// Names of the sub-groups of the group at `path`.
+    pub fn group_names(&self, path: &str) -> Result<Vec<String>> {
+        self.h5_group(path)?
+            .groups()
+            .map_err(|e| self.error(display_path(path), e))
+    }
+
     fn read_data(&self, ds: &h5::Dataset, datatype: &h5::Datatype, path: &str) -> Result<Data> {
         let fail = |e: h5::Error| self.error(path, e);
         match Kind::of(datatype) {

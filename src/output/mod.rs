@@ -15,10 +15,12 @@
 //! "Results file" and "ROM file".
 
 pub mod h5;
+pub mod rom_file;
 
 use std::time::{SystemTime, UNIX_EPOCH};
 
 pub use h5::{Attr, Column, Data, Dataset, Group, H5File, H5Reader, Records};
+pub use rom_file::{read_rom, write_rom};
 
 use crate::error::Result;
 
