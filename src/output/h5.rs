@@ -103,6 +103,30 @@ impl Column {
         self.len() == 0
     }
 
+    /// The values, if this is a [`Column::F64`].
+    pub fn as_f64(&self) -> Option<&[f64]> {
+        match self {
+            Column::F64(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// The values, if this is a [`Column::U64`].
+    pub fn as_u64(&self) -> Option<&[u64]> {
+        match self {
+            Column::U64(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// The values, if this is a [`Column::I64`].
+    pub fn as_i64(&self) -> Option<&[i64]> {
+        match self {
+            Column::I64(v) => Some(v),
+            _ => None,
+        }
+    }
+
     /// Bytes per record of this column.
     fn width(&self) -> usize {
         match self {
@@ -823,15 +847,20 @@ impl H5Reader {
         }
     }
 
+    /// The 1-D dataset at `path`, any length.
+    fn vector(&self, path: &str) -> Result<Data> {
+        let ds = self.dataset(path)?;
+        if ds.shape.len() != 1 {
+            return Err(self.error(path, format!("shape {:?}, expected 1-D", ds.shape)));
+        }
+        Ok(ds.data)
+    }
+
     /// The 1-D f64 dataset at `path`, any length.
     pub fn f64_vector(&self, path: &str) -> Result<Vec<f64>> {
-        let ds = self.dataset(path)?;
-        match (ds.shape.len(), ds.data) {
-            (1, Data::F64(v)) => Ok(v),
-            (_, Data::F64(_)) => {
-                Err(self.error(path, format!("shape {:?}, expected 1-D", ds.shape)))
-            }
-            (_, other) => Err(self.wrong_type(path, "f64", &other)),
+        match self.vector(path)? {
+            Data::F64(v) => Ok(v),
+            other => Err(self.wrong_type(path, "f64", &other)),
         }
     }
 
@@ -845,13 +874,9 @@ impl H5Reader {
 
     /// The 1-D u64 dataset at `path`, any length.
     pub fn u64_vector(&self, path: &str) -> Result<Vec<u64>> {
-        let ds = self.dataset(path)?;
-        match (ds.shape.len(), ds.data) {
-            (1, Data::U64(v)) => Ok(v),
-            (_, Data::U64(_)) => {
-                Err(self.error(path, format!("shape {:?}, expected 1-D", ds.shape)))
-            }
-            (_, other) => Err(self.wrong_type(path, "u64", &other)),
+        match self.vector(path)? {
+            Data::U64(v) => Ok(v),
+            other => Err(self.wrong_type(path, "u64", &other)),
         }
     }
 
@@ -890,6 +915,22 @@ impl H5Reader {
             }
         }
         Ok(records)
+    }
+
+    /// The column `name` of `records` (read from `path`), as the type `pick` selects (`what`
+    /// names it in the error).
+    pub fn column<'a, T>(
+        &self,
+        path: &str,
+        records: &'a Records,
+        name: &str,
+        pick: fn(&Column) -> Option<&[T]>,
+        what: &str,
+    ) -> Result<&'a [T]> {
+        records
+            .get(name)
+            .and_then(pick)
+            .ok_or_else(|| self.error(path, format!("field {name:?} should be {what}")))
     }
 
     fn wrong_type(&self, path: &str, expected: &str, found: &Data) -> Error {

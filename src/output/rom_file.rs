@@ -300,11 +300,8 @@ fn read_nodes(reader: &H5Reader) -> Result<Vec<MasterNode>> {
     let path = "/rom/nodes";
     let records = reader.records(path, None, &NODE_FIELDS)?;
     let tags = u64_column(reader, path, &records, "tag")?;
-    let xyz = [
-        f64_column(reader, path, &records, "x")?,
-        f64_column(reader, path, &records, "y")?,
-        f64_column(reader, path, &records, "z")?,
-    ];
+    let coordinate = |name| reader.column(path, &records, name, Column::as_f64, "f64");
+    let xyz = [coordinate("x")?, coordinate("y")?, coordinate("z")?];
     Ok(tags
         .iter()
         .enumerate()
@@ -450,22 +447,7 @@ fn u64_column<'a>(
     records: &'a Records,
     name: &str,
 ) -> Result<&'a [u64]> {
-    match records.get(name) {
-        Some(Column::U64(v)) => Ok(v),
-        _ => Err(reader.error(path, format!("field {name:?} should be u64"))),
-    }
-}
-
-fn f64_column<'a>(
-    reader: &H5Reader,
-    path: &str,
-    records: &'a Records,
-    name: &str,
-) -> Result<&'a [f64]> {
-    match records.get(name) {
-        Some(Column::F64(v)) => Ok(v),
-        _ => Err(reader.error(path, format!("field {name:?} should be f64"))),
-    }
+    reader.column(path, records, name, Column::as_u64, "u64")
 }
 
 /// The codes of the enum field `name`, whose labels must be `labels`.
