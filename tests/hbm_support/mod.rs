@@ -192,3 +192,101 @@ pub fn chain4() -> (Mat<f64>, Mat<f64>, Mat<f64>) {
     ]);
     (k, m, c)
 }
+
+/// A friction element on DOF combinations for the tests, built on `nlrom::contact::element`:
+/// u_t = Σ w_i q[dofs_i] (and optionally v = Σ wn_i q[ndofs_i]), the element's internal forces act
+/// back along the same weights. DOF indices are positions among the force's `n_total` DOFs.
+#[derive(Clone, Debug)]
+pub struct WeightedFriction {
+    pub params: nlrom::contact::law::ContactParams,
+    pub tangential: Vec<(usize, f64)>,
+    pub normal: Vec<(usize, f64)>,
+    pub n_total: usize,
+}
+
+impl HarmonicForce for WeightedFriction {
+    type State = [f64; 2];
+
+    fn n_dofs(&self) -> usize {
+        self.n_total
+    }
+
+    fn initial_state(&self) -> [f64; 2] {
+        [0.0; 2]
+    }
+
+    fn evaluate(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &mut [f64; 2],
+        force: &mut [f64],
+        jacobian: Option<MatMut<'_, f64>>,
+    ) -> Result<()> {
+        use nlrom::contact::aft::{global_index, Aft};
+        use nlrom::contact::element::{evaluate, LocalElement, Workspace};
+        use nlrom::contact::law::Variant;
+        let aft = Aft::new(*layout)?;
+        let mut ws = Workspace::new(&aft);
+        let m = layout.coefficients();
+        let normal = !self.normal.is_empty();
+        let element = LocalElement {
+            params: self.params,
+            variant: Variant::OneD,
+            tangential: 1,
+            normal,
+        };
+        let signals: Vec<&Vec<(usize, f64)>> = if normal {
+            vec![&self.tangential, &self.normal]
+        } else {
+            vec![&self.tangential]
+        };
+        let nd = self.n_total;
+        let mut x = vec![0.0; signals.len() * m];
+        for (s, weights) in signals.iter().enumerate() {
+            for &(d, w) in weights.iter() {
+                for l in 0..m {
+                    x[s * m + l] += w * q[global_index(layout, l, d, nd)];
+                }
+            }
+        }
+        let mut f = vec![0.0; x.len()];
+        evaluate(
+            &element,
+            &aft,
+            &x,
+            state,
+            &mut f,
+            jacobian.is_some(),
+            &mut ws,
+        )?;
+        for (s, weights) in signals.iter().enumerate() {
+            for &(d, w) in weights.iter() {
+                for l in 0..m {
+                    force[global_index(layout, l, d, nd)] += w * f[s * m + l];
+                }
+            }
+        }
+        if let Some(mut jac) = jacobian {
+            let (entries, cols) = ws.jacobian();
+            for (s, wr) in signals.iter().enumerate() {
+                for (t, wc) in signals.iter().enumerate() {
+                    for l in 0..m {
+                        for lc in 0..m {
+                            let v = entries[(s * m + l) * cols + t * m + lc];
+                            for &(dr, a) in wr.iter() {
+                                for &(dc, b) in wc.iter() {
+                                    jac[(
+                                        global_index(layout, l, dr, nd),
+                                        global_index(layout, lc, dc, nd),
+                                    )] += a * v * b;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
