@@ -11,13 +11,17 @@
 //!   and the [`ParameterSystem`] views [`FrequencyPath`] (λ = ω) and [`LevelPath`]
 //!   (λ = excitation level at fixed ω);
 //! - [`newton`]: Newton with step damping, convergence on residual and increment;
-//! - [`response`]: harmonics, amplitude and peak of the output DOFs at a solution.
+//! - [`response`]: harmonics, amplitude and peak of the output DOFs at a solution;
+//! - [`frf`]: a frequency response (continuation + recovery) and a case's continuation settings;
+//! - [`setup`]: the linear part of a matrix-defined case (dense K, M, C, excitation, rows).
 //!
 //! Path following is in [`crate::continuation`].
 
+pub mod frf;
 pub mod linear;
 pub mod newton;
 pub mod response;
+pub mod setup;
 pub mod system;
 
 pub use linear::{Condensed, LinearModel, MatrixBlock};
