@@ -14,11 +14,14 @@
 //!   `u_high = e^{iφ_k} R_α u_low`. An engine-order m excitation puts temporal harmonic n on
 //!   k_n = (n·m) mod N ([`harmonic_indices`]).
 //!
-//! The complex cyclic transform of the matrices (q = T_k q_k, M_k = T_kᴴ M T_k) builds on the
-//! [`FrontierPairs`] found here; it lands in this module later.
+//! * The cyclic transform ([`CyclicTransform`]) eliminates the high-frontier DOF:
+//!   q = T_k q_k with q_k = {u_low, u_other}, M_k = T_kᴴ M T_k (Hermitian), likewise K_k, C_k.
 
 use std::collections::HashMap;
 use std::f64::consts::PI;
+
+use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
+use faer::{c64, Mat, MatRef};
 
 use crate::case::Cyclic;
 use crate::error::{Error, Result};
@@ -468,6 +471,199 @@ pub fn check_harmonic_index(k: usize, sectors: usize) -> Result<()> {
             "harmonic index k = {k} is out of range for N = {sectors} sectors: k must be in 0..={} (conventions §2; k and N − k are the two travelling-wave directions of the same nodal diameter)",
             sectors.saturating_sub(1)
         )))
+    }
+}
+
+/// e^{iφ_k}, φ_k = 2πk/N: exactly 1 for k = 0 and exactly −1 for k = N/2 (so that those
+/// transforms are real to the bit).
+pub fn phase_factor(k: usize, sectors: usize) -> c64 {
+    if k == 0 {
+        c64::new(1.0, 0.0)
+    } else if 2 * k == sectors {
+        c64::new(-1.0, 0.0)
+    } else {
+        let (s, c) = phase(k, sectors).sin_cos();
+        c64::new(c, s)
+    }
+}
+
+/// Whether harmonic index k gives real matrices (k = 0, or k = N/2 for even N).
+pub fn is_real_harmonic(k: usize, sectors: usize) -> bool {
+    k == 0 || 2 * k == sectors
+}
+
+/// A cyclic frontier pair expressed in rows of the matrices the transform acts on: the x, y, z
+/// rows of a low-frontier node and of its image on the high frontier.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DofPair {
+    /// Rows of u_low (components x, y, z).
+    pub low: [usize; 3],
+    /// Rows of u_high (components x, y, z).
+    pub high: [usize; 3],
+}
+
+/// The cyclic transform of harmonic index k (`conventions.md` §2): q = T_k q_k, where q holds
+/// all `n_full` rows of a sector model and q_k all rows except the high-frontier ones (same order),
+/// and every high row is `u_high = e^{iφ_k} R_α u_low`:
+/// `T_k[high_c, low_d] = e^{iφ_k} R_α[c][d]`, identity on the kept rows.
+///
+/// Nodes on the symmetry axis must not appear in the pairs (see [`FrontierPairs`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CyclicTransform {
+    /// Harmonic index k.
+    pub harmonic_index: usize,
+    /// Number of sectors N.
+    pub sectors: usize,
+    /// Whether T_k is real (k = 0 or N/2): the imaginary parts are then exactly zero.
+    pub real: bool,
+    /// Full row of each reduced coordinate (every row that is not a high-frontier row), ascending.
+    pub kept: Vec<usize>,
+    /// Per full row, the nonzero entries (reduced column, value) of T_k.
+    rows: Vec<Vec<(usize, c64)>>,
+}
+
+impl CyclicTransform {
+    /// Builds T_k for a model of `n_full` rows with the frontier `pairs`.
+    ///
+    /// Errors ([`Error::Input`]): k ≥ N, a row out of range, or a row used twice (a high row that
+    /// is also a low row or listed in two pairs).
+    pub fn new(geom: &CyclicGeometry, k: usize, n_full: usize, pairs: &[DofPair]) -> Result<Self> {
+        check_harmonic_index(k, geom.sectors)?;
+        let mut is_high = vec![false; n_full];
+        let mut is_low = vec![false; n_full];
+        for p in pairs {
+            for &r in p.low.iter().chain(&p.high) {
+                if r >= n_full {
+                    return Err(Error::input(format!(
+                        "cyclic transform: row {r} of a frontier pair is out of range (the model has {n_full} rows)"
+                    )));
+                }
+            }
+            for &r in &p.high {
+                if is_high[r] || is_low[r] {
+                    return Err(Error::input(format!(
+                        "cyclic transform: row {r} appears in two frontier pairs; every high-frontier DOF must be the image of exactly one low-frontier DOF"
+                    )));
+                }
+                is_high[r] = true;
+            }
+            for &r in &p.low {
+                if is_high[r] {
+                    return Err(Error::input(format!(
+                        "cyclic transform: row {r} is both a low- and a high-frontier DOF"
+                    )));
+                }
+                is_low[r] = true;
+            }
+        }
+        let kept: Vec<usize> = (0..n_full).filter(|&r| !is_high[r]).collect();
+        let mut column = vec![usize::MAX; n_full];
+        for (j, &r) in kept.iter().enumerate() {
+            column[r] = j;
+        }
+        let mut rows: Vec<Vec<(usize, c64)>> = vec![Vec::new(); n_full];
+        for &r in &kept {
+            rows[r].push((column[r], c64::new(1.0, 0.0)));
+        }
+        let e = phase_factor(k, geom.sectors);
+        let rot = geom.rotation(1);
+        for p in pairs {
+            for c in 0..3 {
+                rows[p.high[c]] = (0..3)
+                    .filter(|&d| rot[c][d] != 0.0)
+                    .map(|d| (column[p.low[d]], e * rot[c][d]))
+                    .collect();
+            }
+        }
+        Ok(CyclicTransform {
+            harmonic_index: k,
+            sectors: geom.sectors,
+            real: is_real_harmonic(k, geom.sectors),
+            kept,
+            rows,
+        })
+    }
+
+    /// Number of rows of the full sector model.
+    pub fn n_full(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Number of reduced coordinates (rows of q_k).
+    pub fn n_reduced(&self) -> usize {
+        self.kept.len()
+    }
+
+    /// T_kᴴ A T_k for a dense real symmetric `a` (n_full²): Hermitian, n_reduced².
+    pub fn project(&self, a: MatRef<'_, f64>) -> Mat<c64> {
+        let (n, m) = (self.n_full(), self.n_reduced());
+        // B = A T (n × m)
+        let mut b = Mat::<c64>::zeros(n, m);
+        for (r, entries) in self.rows.iter().enumerate() {
+            for &(j, t) in entries {
+                let mut bj = b.col_mut(j);
+                let ar = a.col(r);
+                for i in 0..n {
+                    bj[i] += t * ar[i];
+                }
+            }
+        }
+        // C = Tᴴ B (m × m)
+        let mut out = Mat::<c64>::zeros(m, m);
+        for col in 0..m {
+            let bc = b.col(col);
+            let mut oc = out.col_mut(col);
+            for (r, entries) in self.rows.iter().enumerate() {
+                for &(j, t) in entries {
+                    oc[j] += t.conj() * bc[r];
+                }
+            }
+        }
+        out
+    }
+
+    /// q = T_k q_k: the full sector field from the reduced coordinates.
+    pub fn expand(&self, q_k: &[c64]) -> Vec<c64> {
+        self.rows
+            .iter()
+            .map(|entries| entries.iter().map(|&(j, t)| t * q_k[j]).sum())
+            .collect()
+    }
+
+    /// T_kᴴ A T_k for a sparse real symmetric `a` (n_full², e.g. the whole sector's K or M) in
+    /// the real embedding used by the real sparse eigensolver: for a real transform (k = 0, N/2)
+    /// T_kᵀ A T_k itself (n_reduced²); otherwise, with T_kᴴ A T_k = X + iY,
+    /// `[[X, −Y], [Y, X]]` (2 n_reduced², symmetric; the complex vector a + ib maps to [a; b],
+    /// so every eigenvalue of the Hermitian pencil appears twice). Rows sorted.
+    pub fn project_sparse_embedded(
+        &self,
+        a: SparseColMatRef<'_, usize, f64>,
+    ) -> Result<SparseColMat<usize, f64>> {
+        let m = self.n_reduced();
+        let mut trip: Vec<Triplet<usize, usize, f64>> = Vec::new();
+        for c in 0..a.ncols() {
+            for (r, &v) in a.row_idx_of_col(c).zip(a.val_of_col(c)) {
+                for &(jr, tr) in &self.rows[r] {
+                    for &(jc, tc) in &self.rows[c] {
+                        let h = tr.conj() * tc * v;
+                        trip.push(Triplet::new(jr, jc, h.re));
+                        if !self.real {
+                            trip.push(Triplet::new(m + jr, m + jc, h.re));
+                            if h.im != 0.0 {
+                                trip.push(Triplet::new(jr, m + jc, -h.im));
+                                trip.push(Triplet::new(m + jr, jc, h.im));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let size = if self.real { m } else { 2 * m };
+        SparseColMat::try_new_from_triplets(size, size, &trip).map_err(|e| {
+            Error::Compute(format!(
+                "cyclic transform: assembling the projected sparse matrix failed ({e:?})"
+            ))
+        })
     }
 }
 

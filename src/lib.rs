@@ -10,6 +10,7 @@
 //! | 1 model | [`model`] | the structural model of a case: assembled or imported K, M after clamping |
 //! | 1–2 modal | [`eigen`] | sparse shift-invert eigensolver K φ = λ M φ (lowest modes), reusable factorisation |
 //! | 2 cyclic | [`cyclic`] | cyclic-symmetry geometry: sector rotation R_α, frontier node pairing, harmonic indices k_n |
+//! | 2 reduction | [`reduction`] | Craig–Bampton (streamed static modes), cyclic transform per k, GSI, the ROM of a case |
 //! | 2 ROM | [`rom`] | the reduced-order model per harmonic index: matrices and reduced-DOF description |
 //! | 3 contact | [`contact`] | friction contact law, AFT evaluation, analytic Jacobians, contact pairs |
 //! | — | [`march`] | time marching: Newmark, adaptive step, piecewise-linear Newmark, quasi-static (Gastaldi & Berruti 2018) |
@@ -40,6 +41,7 @@ pub mod matrix_io;
 pub mod mesh;
 pub mod model;
 pub mod output;
+pub mod reduction;
 pub mod rom;
 pub mod sama;
 
