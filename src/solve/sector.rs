@@ -1,0 +1,300 @@
+//! The harmonic balance problem of a reduced sector with friction contacts (SAMA paper, seed 004,
+//! §2 eqs 10–12; cyclic relative displacement §5 eqs 33–34; `conventions.md` §2–4).
+//!
+//! Temporal harmonic n = 0..H of the response of the reference sector lives on the harmonic index
+//! k_n = n·m mod N (m the engine order); its linear part is the ROM of k_n,
+//! D⁽ⁿ⁾(ω) = K_{k_n} − (nω)² M_{k_n} + i nω C_{k_n} (eq 12). The nonlinear DOFs are the physical ROM
+//! rows (x, y, z) of every contact and target node used by a pair, in ascending node-tag order —
+//! the DOF order of the [`PairSet`], whose pairs see the target displacement as
+//! e^{iσφ_{k_n}} R_α^σ u_t (eq 33). The excitation of engine order m acts on harmonic n = 1: the
+//! case's force on every node of the excitation group of the reference sector. In the ROM
+//! coordinates of k_1 it is f_k = T_kᴴ f (`conventions.md` §2), which on a physical master row
+//! that is not on the (eliminated) high frontier is f itself.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use faer::c64;
+
+use crate::case::{Case, ContactElement, ExcitationLoad};
+use crate::contact::law::Variant;
+use crate::contact::pairs::{PairSet, SectorCoupling};
+use crate::cyclic::harmonic_indices;
+use crate::error::{Error, Result};
+use crate::harmonics::HarmonicLayout;
+use crate::hbm::{HbmSystem, LinearModel, MatrixBlock};
+use crate::mesh::Mesh;
+use crate::rom::{HarmonicRom, Rom};
+use crate::sama::ContactInterface;
+
+/// A physical DOF of the reference sector: Gmsh node tag and component 0/1/2 = x/y/z (global).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct DofLabel {
+    /// Gmsh node tag.
+    pub node_tag: u64,
+    /// Component 0/1/2 = x/y/z in the global axes.
+    pub component: u8,
+}
+
+/// The harmonic balance problem of one reduced sector (see the module documentation).
+pub struct SectorProblem {
+    /// Per harmonic n the dynamic stiffness of k_n, condensed on [`SectorProblem::nonlinear`],
+    /// excited on n = 1.
+    pub linear: LinearModel,
+    /// The contact pairs of every interface on the nonlinear DOFs (same order).
+    pub contact: PairSet,
+    /// Real harmonic layout (H, AFT samples) of the case.
+    pub layout: HarmonicLayout,
+    /// Harmonic index k_n of each temporal harmonic n = 0..=H.
+    pub harmonic_indices: Vec<usize>,
+    /// Engine order m of the excitation (0 without cyclic symmetry).
+    pub engine_order: usize,
+    /// The nonlinear DOFs: the PairSet's DOF vector (contact and target nodes × x, y, z).
+    pub nonlinear: Vec<DofLabel>,
+    /// The output DOFs: `[response]` groups (else the excitation group) × x, y, z.
+    pub outputs: Vec<DofLabel>,
+}
+
+impl SectorProblem {
+    /// Builds the problem of `case` on its ROM `rom` (which must hold every k_n), the sector
+    /// `mesh` (for the excitation and response groups) and the contact `interfaces` of
+    /// [`crate::sama::build_interfaces`].
+    ///
+    /// Errors ([`Error::Input`]): no `[excitation]`, an excitation given on matrix rows, a cyclic
+    /// case without engine order, a harmonic index missing from the ROM, a contact, target,
+    /// excitation or response node that is not a physical master coordinate of the ROM (e.g. on
+    /// the high frontier, or on the low frontier replaced by GSI), interfaces mixing 1-D and 2-D
+    /// friction elements.
+    pub fn build(
+        case: &Case,
+        rom: &Rom,
+        mesh: &Mesh,
+        interfaces: &[ContactInterface],
+    ) -> Result<SectorProblem> {
+        let excitation = case.excitation.as_ref().ok_or_else(|| {
+            Error::input(format!(
+                "{}: the case has no [excitation]; add `[excitation] engine_order = .., group = .., force = [..]`",
+                case.path.display()
+            ))
+        })?;
+        let (group, force) = match &excitation.load {
+            ExcitationLoad::Group { group, force } => (group.clone(), *force),
+            ExcitationLoad::Dofs { .. } => {
+                return Err(Error::input(format!(
+                    "{}: [excitation] gives matrix rows (`dofs`), but a mesh case needs `group` and `force` (N per node, x y z)",
+                    case.path.display()
+                )))
+            }
+        };
+        let harmonics = case.harmonic_balance.harmonics;
+        let layout = HarmonicLayout::new(harmonics, case.harmonic_balance.samples())?;
+        let (engine_order, k_n) = match &rom.cyclic {
+            Some(g) => {
+                let m = excitation.engine_order.ok_or_else(|| {
+                    Error::input(format!(
+                        "{}: [excitation] needs `engine_order` for a cyclic model",
+                        case.path.display()
+                    ))
+                })?;
+                (m, harmonic_indices(g.sectors, m, harmonics))
+            }
+            None => (0, vec![0; harmonics + 1]),
+        };
+        let nonlinear = contact_dofs(interfaces);
+        let node_rows = node_row_map(&nonlinear);
+        let contact = pair_set(rom, interfaces, &node_rows, nonlinear.len(), &k_n)?;
+        let excitation_nodes = tags_of(mesh, &group)?;
+        let outputs = output_dofs(case, mesh, &excitation_nodes)?;
+        let distinct: Vec<usize> = k_n
+            .iter()
+            .copied()
+            .collect::<BTreeSet<_>>()
+            .into_iter()
+            .collect();
+        let mut blocks = Vec::with_capacity(distinct.len());
+        for &k in &distinct {
+            let h = rom.harmonic(k).ok_or_else(|| {
+                Error::input(format!(
+                    "{}: the ROM has no harmonic index k = {k} (needed by engine order {engine_order} with H = {harmonics}); rebuild it with `nlrom reduce`",
+                    case.path.display()
+                ))
+            })?;
+            blocks.push(block(h, &nonlinear, &outputs)?);
+        }
+        let harmonic_block: Vec<usize> = k_n
+            .iter()
+            .map(|k| distinct.binary_search(k).unwrap_or(0))
+            .collect();
+        let mut forcing = vec![Vec::new(); harmonics + 1];
+        if harmonics >= 1 {
+            let h = rom.harmonic(k_n[1]).ok_or_else(|| {
+                Error::input(format!("the ROM has no harmonic index k = {}", k_n[1]))
+            })?;
+            let scaled = force.map(|f| f * excitation.force_scale);
+            forcing[1] = excitation_vector(h, &excitation_nodes, scaled, &group)?;
+        }
+        let linear = LinearModel::new(blocks, harmonic_block, forcing)?;
+        Ok(SectorProblem {
+            linear,
+            contact,
+            layout,
+            harmonic_indices: k_n,
+            engine_order,
+            nonlinear,
+            outputs,
+        })
+    }
+
+    /// The harmonic balance system r(Q, ω) of the problem (SAMA eq 19).
+    pub fn system(&self) -> Result<HbmSystem<'_, PairSet>> {
+        HbmSystem::new(self.layout, &self.linear, &self.contact)
+    }
+}
+
+/// Every contact and target node of the pairs, ascending tag, × x, y, z.
+fn contact_dofs(interfaces: &[ContactInterface]) -> Vec<DofLabel> {
+    let mut tags = BTreeSet::new();
+    for iface in interfaces {
+        for p in &iface.pairs {
+            tags.insert(p.contact_node);
+            tags.extend(p.targets.iter().copied());
+        }
+    }
+    tags.into_iter().flat_map(node_dofs).collect()
+}
+
+/// The x, y, z DOFs of a node.
+fn node_dofs(tag: u64) -> [DofLabel; 3] {
+    [0u8, 1, 2].map(|component| DofLabel {
+        node_tag: tag,
+        component,
+    })
+}
+
+/// Node tag → its three rows in `dofs` (which lists nodes × x, y, z).
+fn node_row_map(dofs: &[DofLabel]) -> BTreeMap<u64, [usize; 3]> {
+    dofs.chunks(3)
+        .enumerate()
+        .map(|(i, d)| (d[0].node_tag, [3 * i, 3 * i + 1, 3 * i + 2]))
+        .collect()
+}
+
+/// The [`PairSet`] of all interfaces on the contact DOF vector, with the cyclic coupling
+/// (R_α, k_n) when the ROM is cyclic.
+fn pair_set(
+    rom: &Rom,
+    interfaces: &[ContactInterface],
+    node_rows: &BTreeMap<u64, [usize; 3]>,
+    n_dofs: usize,
+    k_n: &[usize],
+) -> Result<PairSet> {
+    let mut pairs = Vec::new();
+    for iface in interfaces {
+        pairs.extend(iface.elements(|tag| node_rows.get(&tag).copied())?);
+    }
+    let variant = friction_variant(interfaces)?;
+    let coupling = rom.cyclic.as_ref().map(|g| SectorCoupling {
+        sectors: g.sectors,
+        rotation: g.rotation(1),
+        harmonic_indices: k_n.to_vec(),
+    });
+    PairSet::new(n_dofs, variant, pairs, coupling)
+}
+
+/// The one friction element variant of all interfaces (the PairSet has one).
+fn friction_variant(interfaces: &[ContactInterface]) -> Result<Variant> {
+    let variant_of = |e: ContactElement| match e {
+        ContactElement::OneD => Variant::OneD,
+        ContactElement::TwoD => Variant::TwoD,
+    };
+    let first = interfaces
+        .first()
+        .map(|i| variant_of(i.element))
+        .unwrap_or(Variant::OneD);
+    if let Some(other) = interfaces.iter().find(|i| variant_of(i.element) != first) {
+        return Err(Error::input(format!(
+            "contact '{}' uses a different friction element (`element`) than contact '{}'; use the same `element` (\"1d\" or \"2d\") for every [[contact]]",
+            other.name, interfaces[0].name
+        )));
+    }
+    Ok(first)
+}
+
+/// Gmsh tags of the nodes of a group.
+fn tags_of(mesh: &Mesh, group: &str) -> Result<Vec<u64>> {
+    Ok(mesh
+        .nodes_of(group)?
+        .into_iter()
+        .map(|n| mesh.node_tags[n as usize])
+        .collect())
+}
+
+/// Output DOFs: the nodes of the `[response]` groups (else the excitation nodes) × x, y, z, in
+/// group order, each node once.
+fn output_dofs(case: &Case, mesh: &Mesh, excitation_nodes: &[u64]) -> Result<Vec<DofLabel>> {
+    let groups: &[String] = case
+        .response
+        .as_ref()
+        .map(|r| r.groups.as_slice())
+        .unwrap_or(&[]);
+    let mut tags: Vec<u64> = Vec::new();
+    if groups.is_empty() {
+        tags.extend_from_slice(excitation_nodes);
+    }
+    for g in groups {
+        tags.extend(tags_of(mesh, g)?);
+    }
+    let mut seen = BTreeSet::new();
+    tags.retain(|t| seen.insert(*t));
+    Ok(tags.into_iter().flat_map(node_dofs).collect())
+}
+
+/// The ROM row of every DOF, or an error naming the first one that is not a physical master.
+fn rows_of(h: &HarmonicRom, dofs: &[DofLabel], what: &str) -> Result<Vec<usize>> {
+    dofs.iter()
+        .map(|d| {
+            h.row_of(d.node_tag, d.component)
+                .ok_or_else(|| missing_node(h, d.node_tag, what))
+        })
+        .collect()
+}
+
+/// The error for a node without a physical ROM coordinate.
+fn missing_node(h: &HarmonicRom, tag: u64, what: &str) -> Error {
+    Error::input(format!(
+        "{what} node {tag} is not a physical coordinate of the ROM of harmonic index k = {}; \
+         list its group in `[reduction] keep` (a node on the high cyclic frontier, or on the low \
+         frontier when `gsi_modes` reduces it, has no physical coordinate: choose nodes off the frontiers)",
+        h.harmonic_index
+    ))
+}
+
+/// The matrix block of one harmonic index with the rows of the nonlinear and output DOFs.
+fn block(h: &HarmonicRom, nonlinear: &[DofLabel], outputs: &[DofLabel]) -> Result<MatrixBlock> {
+    Ok(MatrixBlock {
+        stiffness: h.stiffness.clone(),
+        mass: h.mass.clone(),
+        damping: h.damping.clone(),
+        nonlinear: rows_of(h, nonlinear, "contact/target")?,
+        outputs: rows_of(h, outputs, "response")?,
+    })
+}
+
+/// F_e⁽¹⁾ in the ROM coordinates of k_1: `force` (N, x y z) at the physical rows of every
+/// excitation node of the reference sector (f_k = T_kᴴ f = f there, `conventions.md` §2).
+fn excitation_vector(
+    h: &HarmonicRom,
+    nodes: &[u64],
+    force: [f64; 3],
+    group: &str,
+) -> Result<Vec<c64>> {
+    let mut f = vec![c64::new(0.0, 0.0); h.len()];
+    for &tag in nodes {
+        for (c, &value) in force.iter().enumerate() {
+            let row = h
+                .row_of(tag, c as u8)
+                .ok_or_else(|| missing_node(h, tag, &format!("excitation ('{group}')")))?;
+            f[row] += c64::new(value, 0.0);
+        }
+    }
+    Ok(f)
+}
