@@ -305,9 +305,9 @@ fn contact_springs(s: &Setup, k: usize, closed: &[bool]) -> Mat<c64> {
         for &(ri, li) in &l {
             for &(rj, lj) in &l {
                 let mut v = c64::new(0.0, 0.0);
-                for a in 0..3 {
-                    for b in 0..3 {
-                        v += li[a].conj() * g(a, b) * lj[b];
+                for (a, la) in li.iter().enumerate() {
+                    for (b, lb) in lj.iter().enumerate() {
+                        v += la.conj() * g(a, b) * lb;
                     }
                 }
                 kc[(ri, rj)] += v;
