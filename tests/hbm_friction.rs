@@ -33,12 +33,11 @@ fn sdof(c: f64, f: f64, h: usize) -> LinearModel {
 
 /// A Jenkins element from the DOF to the ground: stiffness k_t, slip force F_s = μ n0.
 fn grounded_jenkins(kt: f64, slip_force: f64) -> WeightedFriction {
-    WeightedFriction {
-        params: ContactParams::new(kt, 0.0, 1.0, slip_force, "test").unwrap(),
-        tangential: vec![(0, 1.0)],
-        normal: vec![],
-        n_total: 1,
-    }
+    WeightedFriction::new(
+        ContactParams::new(kt, 0.0, 1.0, slip_force, "test").unwrap(),
+        vec![(0, 1.0)],
+        1,
+    )
 }
 
 /// The closed-form HB-1 relation of methods.md, relative: ((k + a1/A − mω²)² + (cω + |b1|/A)²) A²
@@ -179,12 +178,11 @@ fn stuck_limit_equals_the_linear_frf() {
         3,
     )
     .unwrap();
-    let element = WeightedFriction {
-        params: ContactParams::new(kt, 0.0, 1.0, 1e9, "test").unwrap(),
-        tangential: vec![(0, -1.0), (1, 1.0)],
-        normal: vec![],
-        n_total: 2,
-    };
+    let element = WeightedFriction::new(
+        ContactParams::new(kt, 0.0, 1.0, 1e9, "test").unwrap(),
+        vec![(0, -1.0), (1, 1.0)],
+        2,
+    );
     let system = HbmSystem::new(HarmonicLayout::new(3, 64).unwrap(), &model, &element).unwrap();
     let fp = FrequencyPath {
         system: &system,

@@ -363,8 +363,15 @@ fn correct<S: ParameterSystem>(
             extra: (lin, end),
         })
     };
+    // a corrector that needs far more iterations than the target is better retried with a
+    // smaller step than pushed on
+    let newton = NewtonOptions {
+        max_iterations: opts.newton.max_iterations.min(3 * opts.target_iterations),
+        max_halvings: opts.newton.max_halvings.min(2),
+        ..opts.newton
+    };
     let (it, iterations) =
-        newton_core(predicted.to_vec(), &mut eval, 1.0, &opts.newton).map_err(|f| f.message)?;
+        newton_core(predicted.to_vec(), &mut eval, 1.0, &newton).map_err(|f| f.message)?;
     let residual = norm(&it.g[..n]);
     let z = it.z;
     let (lin, end) = it.extra;

@@ -86,7 +86,7 @@ pub fn newton_core<E>(
     for it in 1..=opts.max_iterations {
         let step = solve_dense(&current.matrix, &current.g)
             .ok_or_else(|| fail(format!("singular Jacobian at iteration {it}"), it))?;
-        let (next, taken) = damped_step(&current, &step, eval, opts.max_halvings)
+        let (next, taken) = damped_step(&current, &step, eval, opts)
             .map_err(|e| fail(format!("iteration {it}: {e}"), it))?;
         let z_norm = norm(&next.z).max(floor);
         let converged = next.norm() <= opts.tolerance && taken <= opts.increment_tolerance * z_norm;
@@ -115,14 +115,15 @@ pub fn newton_core<E>(
     ))
 }
 
-/// z − α Δ with α = 1, ½, ¼, … (at most `max_halvings` halvings) until the residual decreases;
-/// the best trial when none does. Returns the iterate and ‖α Δ‖.
+/// z − α Δ with α = 1, ½, ¼, … (at most `max_halvings` halvings) until the residual decreases
+/// or is within the tolerance; the best trial when none does. Returns the iterate and ‖α Δ‖.
 fn damped_step<E>(
     current: &Iterate<E>,
     step: &[f64],
     eval: &mut dyn FnMut(&[f64]) -> Result<Iterate<E>>,
-    max_halvings: usize,
+    opts: &NewtonOptions,
 ) -> Result<(Iterate<E>, f64)> {
+    let max_halvings = opts.max_halvings;
     let r0 = current.norm();
     let mut alpha = 1.0;
     let mut best: Option<(Iterate<E>, f64)> = None;
@@ -135,7 +136,7 @@ fn damped_step<E>(
             .collect();
         let trial = eval(&z)?;
         let taken = alpha * norm(step);
-        let better = trial.norm() < r0;
+        let better = trial.norm() < r0 || trial.norm() <= opts.tolerance;
         let best_so_far = best.as_ref().is_none_or(|(b, _)| trial.norm() < b.norm());
         if better {
             return Ok((trial, taken));

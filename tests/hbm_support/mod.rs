@@ -202,6 +202,73 @@ pub struct WeightedFriction {
     pub tangential: Vec<(usize, f64)>,
     pub normal: Vec<(usize, f64)>,
     pub n_total: usize,
+    /// The AFT plan of the last layout evaluated (planning costs more than one evaluation).
+    aft: std::sync::Arc<std::sync::Mutex<Option<std::sync::Arc<nlrom::contact::aft::Aft>>>>,
+}
+
+impl WeightedFriction {
+    /// An element with tangential weights only (slip limit μ n0).
+    pub fn new(
+        params: nlrom::contact::law::ContactParams,
+        tangential: Vec<(usize, f64)>,
+        n_total: usize,
+    ) -> Self {
+        WeightedFriction {
+            params,
+            tangential,
+            normal: vec![],
+            n_total,
+            aft: Default::default(),
+        }
+    }
+
+    /// The AFT plan for `layout` (cached).
+    fn plan(&self, layout: &HarmonicLayout) -> Result<std::sync::Arc<nlrom::contact::aft::Aft>> {
+        let mut cache = self.aft.lock().unwrap();
+        if let Some(a) = cache.as_ref().filter(|a| a.layout() == *layout) {
+            return Ok(a.clone());
+        }
+        let a = std::sync::Arc::new(nlrom::contact::aft::Aft::new(*layout)?);
+        *cache = Some(a.clone());
+        Ok(a)
+    }
+}
+
+/// Two forces on the same DOFs acting together (states side by side).
+#[derive(Clone, Debug)]
+pub struct Sum<A, B>(pub A, pub B);
+
+impl<A: HarmonicForce, B: HarmonicForce> HarmonicForce for Sum<A, B> {
+    type State = (A::State, B::State);
+
+    fn n_dofs(&self) -> usize {
+        self.0.n_dofs()
+    }
+
+    fn initial_state(&self) -> Self::State {
+        (self.0.initial_state(), self.1.initial_state())
+    }
+
+    fn evaluate(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &mut Self::State,
+        force: &mut [f64],
+        jacobian: Option<MatMut<'_, f64>>,
+    ) -> Result<()> {
+        match jacobian {
+            Some(mut j) => {
+                self.0
+                    .evaluate(layout, q, &mut state.0, force, Some(j.as_mut()))?;
+                self.1.evaluate(layout, q, &mut state.1, force, Some(j))
+            }
+            None => {
+                self.0.evaluate(layout, q, &mut state.0, force, None)?;
+                self.1.evaluate(layout, q, &mut state.1, force, None)
+            }
+        }
+    }
 }
 
 impl HarmonicForce for WeightedFriction {
@@ -223,10 +290,10 @@ impl HarmonicForce for WeightedFriction {
         force: &mut [f64],
         jacobian: Option<MatMut<'_, f64>>,
     ) -> Result<()> {
-        use nlrom::contact::aft::{global_index, Aft};
+        use nlrom::contact::aft::global_index;
         use nlrom::contact::element::{evaluate, LocalElement, Workspace};
         use nlrom::contact::law::Variant;
-        let aft = Aft::new(*layout)?;
+        let aft = self.plan(layout)?;
         let mut ws = Workspace::new(&aft);
         let m = layout.coefficients();
         let normal = !self.normal.is_empty();
