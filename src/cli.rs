@@ -17,6 +17,7 @@ use crate::matrix_io::{write_dof_map, write_matrix_market_symmetric};
 use crate::mesh::msh::read_msh;
 use crate::mesh::Mesh;
 use crate::model::{self, StructuralModel};
+use crate::reduction::{hermitian_modes, Sector};
 use crate::sama;
 
 /// nlrom: vibration of structures with friction contacts (bladed disks with shroud,
@@ -327,11 +328,7 @@ fn modes(a: &ModesArgs) -> Result<()> {
     let start = Instant::now();
     let stage = match a.stage {
         Stage::Full => "full",
-        Stage::Cb | Stage::Cs | Stage::Gsi => {
-            return Err(Error::NotImplemented(
-                format!("nlrom modes --stage {:?}", a.stage).to_lowercase(),
-            ))
-        }
+        Stage::Cb | Stage::Cs | Stage::Gsi => return reduced_modes(a, start),
     };
     let shift = match a.shift_hz {
         Some(f) if f.is_finite() && f > 0.0 => -(2.0 * std::f64::consts::PI * f).powi(2),
@@ -370,29 +367,153 @@ fn modes(a: &ModesArgs) -> Result<()> {
         modes.len(),
         t.elapsed().as_secs_f64()
     ));
-    let freqs = modes.frequencies_hz();
-    if a.json {
-        let report = json!({
-            "stage": stage,
-            "harmonic": a.harmonic,
-            "frequencies_hz": freqs,
-            "residuals": modes.residuals,
-            "dofs": n,
-            "wall_seconds": start.elapsed().as_secs_f64(),
-        });
-        println!("{report}");
-    } else {
+    let report = ModesReport {
+        stage,
+        harmonic: a.harmonic,
+        frequencies_hz: modes.frequencies_hz(),
+        residuals: modes.residuals.clone(),
+        dofs: n,
+        extra: json!({}),
+    };
+    report.print(&a.case, a.json, start);
+    Ok(())
+}
+
+/// What `nlrom modes` reports (interface.md JSON keys).
+struct ModesReport {
+    stage: &'static str,
+    harmonic: Option<usize>,
+    frequencies_hz: Vec<f64>,
+    residuals: Vec<f64>,
+    dofs: usize,
+    /// More keys for the JSON object (e.g. the GSI report).
+    extra: Value,
+}
+
+impl ModesReport {
+    /// Prints the report as one JSON object or as a table.
+    fn print(&self, case: &Path, as_json: bool, start: Instant) {
+        if as_json {
+            let mut report = json!({
+                "stage": self.stage,
+                "harmonic": self.harmonic,
+                "frequencies_hz": self.frequencies_hz,
+                "residuals": self.residuals,
+                "dofs": self.dofs,
+            });
+            if let (Some(obj), Some(extra)) = (report.as_object_mut(), self.extra.as_object()) {
+                obj.extend(extra.clone());
+            }
+            report["wall_seconds"] = json!(start.elapsed().as_secs_f64());
+            println!("{report}");
+            return;
+        }
+        let harmonic = self
+            .harmonic
+            .map(|k| format!(", harmonic index {k}"))
+            .unwrap_or_default();
+        let what = if self.stage == "full" {
+            "free DOF"
+        } else {
+            "reduced coordinates"
+        };
         println!(
-            "{} modes of {} (stage {stage}, {n} free DOF)",
-            freqs.len(),
-            a.case.display()
+            "{} modes of {} (stage {}{harmonic}, {} {what})",
+            self.frequencies_hz.len(),
+            case.display(),
+            self.stage,
+            self.dofs
         );
         println!("{:>5} {:>16} {:>12}", "mode", "frequency (Hz)", "residual");
-        for (i, (f, r)) in freqs.iter().zip(&modes.residuals).enumerate() {
+        for (i, (f, r)) in self.frequencies_hz.iter().zip(&self.residuals).enumerate() {
             println!("{:>5} {:>16.6} {:>12.2e}", i + 1, f, r);
         }
     }
+}
+
+/// `nlrom modes --stage cb|cs|gsi`: the Craig–Bampton model, CB + cyclic constraint for harmonic
+/// index K, or CB + CS + GSI (`nlrom::reduction`). Residual: ‖Kx − λMx‖/‖Kx‖ of the dense
+/// reduced problem.
+fn reduced_modes(a: &ModesArgs, start: Instant) -> Result<()> {
+    let case = Case::load(&a.case)?;
+    let (stage, harmonic) = match a.stage {
+        Stage::Cb => {
+            if let Some(k) = a.harmonic {
+                return Err(Error::input(format!(
+                    "--harmonic {k}: the cb stage has no cyclic constraint; use --stage cs --harmonic {k}"
+                )));
+            }
+            ("cb", None)
+        }
+        Stage::Cs => ("cs", Some(required_harmonic(a, &case, "cs")?)),
+        _ => ("gsi", Some(required_harmonic(a, &case, "gsi")?)),
+    };
+    let gsi_modes = if stage == "gsi" {
+        Some(
+            case.reduction
+                .as_ref()
+                .and_then(|r| r.gsi_modes)
+                .ok_or_else(|| {
+                    Error::input(format!(
+                        "{}: --stage gsi needs `[reduction] gsi_modes = N` in the case",
+                        a.case.display()
+                    ))
+                })?,
+        )
+    } else {
+        None
+    };
+    let model = model::build(&case, &mut log_stderr)?;
+    let sector = Sector::build(&case, &model, &mut log_stderr)?;
+    let h = match harmonic {
+        None => sector.cb_model(),
+        Some(k) => sector.harmonic(k, gsi_modes)?,
+    };
+    let n = h.dofs.len();
+    if a.num == 0 || a.num > n {
+        return Err(Error::input(format!(
+            "--num {}: ask for 1 to {n} modes (the {stage} model has {n} coordinates)",
+            a.num
+        )));
+    }
+    let modes = hermitian_modes(h.stiffness.as_ref(), h.mass.as_ref(), h.real)?;
+    let extra = match &h.gsi {
+        Some(g) => {
+            json!({"gsi": {"modes_used": g.modes_used, "retained": g.retained, "dropped": g.dropped}})
+        }
+        None => json!({}),
+    };
+    if let Some(g) = &h.gsi {
+        log_stderr(&format!(
+            "GSI: {} of {} frontier vectors retained, dropped {:?}",
+            g.retained, g.modes_used, g.dropped
+        ));
+    }
+    let report = ModesReport {
+        stage,
+        harmonic,
+        frequencies_hz: modes.frequencies_hz(a.num),
+        residuals: modes.residuals(h.stiffness.as_ref(), h.mass.as_ref(), a.num),
+        dofs: n,
+        extra,
+    };
+    report.print(&a.case, a.json, start);
     Ok(())
+}
+
+/// `--harmonic K` for the cs and gsi stages, which need a `[cyclic]` table.
+fn required_harmonic(a: &ModesArgs, case: &Case, stage: &str) -> Result<usize> {
+    if case.cyclic.is_none() {
+        return Err(Error::input(format!(
+            "{}: --stage {stage} needs a cyclic model (a [cyclic] table in the case)",
+            a.case.display()
+        )));
+    }
+    a.harmonic.ok_or_else(|| {
+        Error::input(format!(
+            "--stage {stage} needs --harmonic K (the harmonic index, 0 ≤ K < N)"
+        ))
+    })
 }
 
 /// `nlrom export`: K and M of the free (clamped) model as symmetric Matrix Market files and the
