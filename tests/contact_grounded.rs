@@ -13,7 +13,7 @@ use nlrom::contact::grounded::DofElements;
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 
 mod contact_common;
-use contact_common::Rng;
+use contact_common::{check_derivative, check_jacobian, forces, Rng};
 
 fn case_elements(elements: &str) -> Vec<FrictionElement> {
     let text = format!(
@@ -163,33 +163,8 @@ fn jacobian_and_preload_derivative_match_finite_differences() {
             reports[0].0.separation > 0.0 && reports[0].0.slip > 0.0,
             "{reports:?}"
         );
-        let mut scale: f64 = 0.0;
-        for r in 0..n {
-            for c in 0..n {
-                scale = scale.max(jac[(r, c)].abs());
-            }
-        }
+        check_jacobian(&set, &layout, &q, &state, &jac, &format!("H={h}"));
         let step = 1e-6;
-        let eval = |qq: &[f64], set: &DofElements| {
-            let mut s = state.clone();
-            let mut out = vec![0.0; n];
-            set.evaluate(&layout, qq, &mut s, &mut out, None).unwrap();
-            out
-        };
-        for c in 0..n {
-            let (mut qp, mut qm) = (q.clone(), q.clone());
-            qp[c] += step;
-            qm[c] -= step;
-            let (fp, fm) = (eval(&qp, &set), eval(&qm, &set));
-            for r in 0..n {
-                let fd = (fp[r] - fm[r]) / (2.0 * step);
-                assert!(
-                    (fd - jac[(r, c)]).abs() <= 1e-6 * scale,
-                    "H={h} J[{r},{c}] {} vs {fd}",
-                    jac[(r, c)]
-                );
-            }
-        }
         let mut dp = vec![0.0; n];
         set.parameter_derivative(&layout, &q, &state, &mut dp)
             .unwrap();
@@ -198,19 +173,14 @@ fn jacobian_and_preload_derivative_match_finite_differences() {
             for x in e.iter_mut() {
                 x.n0 += d;
             }
-            eval(&q, &DofElements::from_case(&e, 3).unwrap())
+            forces(&DofElements::from_case(&e, 3).unwrap(), &layout, &q, &state)
         };
-        let (fp, fm) = (shifted(step), shifted(-step));
-        let dscale = dp.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-        assert!(dscale > 0.1);
-        for r in 0..n {
-            let fd = (fp[r] - fm[r]) / (2.0 * step);
-            assert!(
-                (fd - dp[r]).abs() <= 1e-6 * dscale,
-                "H={h} ∂F[{r}]/∂n0 {} vs {fd}",
-                dp[r]
-            );
-        }
+        check_derivative(
+            &dp,
+            &shifted(step),
+            &shifted(-step),
+            &format!("H={h} ∂/∂n0"),
+        );
     }
 }
 

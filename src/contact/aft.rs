@@ -195,3 +195,23 @@ pub fn check_finite(q: &[f64], what: &str) -> Result<()> {
         ))),
     }
 }
+
+/// The [`Aft`] of the last layout used, shared by the threads of a nonlinear force (plans are
+/// made once per layout).
+#[derive(Default)]
+pub struct AftCache(std::sync::Mutex<Option<Arc<Aft>>>);
+
+impl AftCache {
+    /// The transforms for `layout` (planned on first use or when the layout changes).
+    pub fn get(&self, layout: &HarmonicLayout) -> Result<Arc<Aft>> {
+        let mut cache = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        match cache.as_ref() {
+            Some(a) if a.layout() == *layout => Ok(a.clone()),
+            _ => {
+                let a = Arc::new(Aft::new(*layout)?);
+                *cache = Some(a.clone());
+                Ok(a)
+            }
+        }
+    }
+}

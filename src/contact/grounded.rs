@@ -9,12 +9,12 @@
 //! combination with a single DOF is an element to the ground; two DOFs with weights −1, 1 join
 //! them.
 
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use faer::MatMut;
 
 use crate::case::{FrictionElement, WeightedDofs};
-use crate::contact::aft::{check_finite, global_index, Aft};
+use crate::contact::aft::{check_finite, global_index, Aft, AftCache};
 use crate::contact::element::{
     evaluate as evaluate_element, ElementReport, HysteresisLoop, LocalElement, Workspace,
 };
@@ -54,7 +54,7 @@ impl DofElement {
 pub struct DofElements {
     n_dofs: usize,
     elements: Vec<DofElement>,
-    aft: Mutex<Option<Arc<Aft>>>,
+    aft: AftCache,
 }
 
 impl std::fmt::Debug for DofElements {
@@ -100,7 +100,7 @@ impl DofElements {
         Ok(DofElements {
             n_dofs,
             elements,
-            aft: Mutex::new(None),
+            aft: AftCache::default(),
         })
     }
 
@@ -153,15 +153,7 @@ impl DofElements {
             )));
         }
         check_finite(q, "friction elements")?;
-        let mut cache = self.aft.lock().unwrap_or_else(|e| e.into_inner());
-        match cache.as_ref() {
-            Some(a) if a.layout() == *layout => Ok(a.clone()),
-            _ => {
-                let a = Arc::new(Aft::new(*layout)?);
-                *cache = Some(a.clone());
-                Ok(a)
-            }
-        }
+        self.aft.get(layout)
     }
 
     /// Local coefficients x = [U; V] of element `e`, then the element evaluation (forces in `g`).
