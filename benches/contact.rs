@@ -5,7 +5,7 @@
 //! iterations after the first call do: one period marched plus the check), forces only and
 //! forces + Jacobian, for H = 3 and H = 7 at the default N_t and for H = 3 at N_t = 32.
 //! `pairs/...`: a [`PairSet`] of 512 inter-sector pairs (σ = 1) evaluated with 1 and 2 rayon
-//! threads. Run: `cargo bench --bench contact` (about 1 minute).
+//! threads (throughput in pairs). Run: `cargo bench --bench contact` (about 1 minute).
 //!
 //! [`PairSet`]: nlrom::contact::pairs::PairSet
 
@@ -16,7 +16,9 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use nlrom::contact::aft::Aft;
 use nlrom::contact::element::{evaluate, LocalElement, Workspace};
 use nlrom::contact::law::{ContactParams, Variant};
-use nlrom::harmonics::HarmonicLayout;
+use nlrom::contact::pairs::{ContactPair, PairSet, SectorCoupling};
+use nlrom::cyclic::{harmonic_indices, CyclicGeometry};
+use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 
 /// Local input of a 3-D element: u1, u2 of amplitude ~0.1 (stick limit 0.05), v of 0.01.
 fn input(h: usize) -> Vec<f64> {
@@ -66,5 +68,64 @@ fn element(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, element);
+/// 512 inter-sector pairs (σ = 1, N = 24, engine order 3) among 64 nodes (192 DOFs; a dense
+/// Jacobian of 1344²); the whole
+/// `HarmonicForce::evaluate` (gather, kinematics, elements, transpose, scatter) from the
+/// converged state, forces only and with the dense Jacobian, with 1 and 2 rayon threads.
+fn pairs(c: &mut Criterion) {
+    const PAIRS: usize = 512;
+    let mut g = c.benchmark_group("pairs");
+    g.sample_size(10)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(2))
+        .throughput(Throughput::Elements(PAIRS as u64));
+    let geo = CyclicGeometry::new(24, [0.0; 3], [0.0, 0.0, 1.0]).unwrap();
+    let h = 3;
+    let layout = HarmonicLayout::with_default_samples(h);
+    let list: Vec<ContactPair> = (0..PAIRS)
+        .map(|i| ContactPair {
+            contact: [0, 1, 2].map(|c| 3 * (i % 32) + c),
+            target: Some([0, 1, 2].map(|c| 3 * (32 + (7 * i) % 32) + c)),
+            frame: [[0.0, 0.0, 1.0], [0.6, -0.8, 0.0], [0.8, 0.6, 0.0]],
+            sigma: 1,
+            params: ContactParams::new(10.0, 20.0, 0.5, 1.0, "bench").unwrap(),
+            preload_rate: 1.0,
+        })
+        .collect();
+    let coupling = SectorCoupling {
+        sectors: 24,
+        rotation: geo.rotation(1),
+        harmonic_indices: harmonic_indices(24, 3, h),
+    };
+    let set = PairSet::new(192, Variant::OneD, list, Some(coupling)).unwrap();
+    let n = layout.len(192);
+    let q: Vec<f64> = (0..n)
+        .map(|i| 0.05 * ((i * 7919 % 1000) as f64 / 500.0 - 1.0))
+        .collect();
+    let mut state = set.initial_state();
+    let mut f = vec![0.0; n];
+    set.evaluate(&layout, &q, &mut state, &mut f, None).unwrap();
+    let mut jac = faer::Mat::<f64>::zeros(n, n);
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        for (with_jac, jname) in [(false, "forces"), (true, "jacobian")] {
+            g.bench_function(format!("H3_Nt16_{jname}_{threads}threads"), |b| {
+                b.iter(|| {
+                    pool.install(|| {
+                        let mut s = state.clone();
+                        let j = with_jac.then(|| jac.as_mut());
+                        set.evaluate(&layout, black_box(&q), &mut s, &mut f, j)
+                            .unwrap();
+                    })
+                })
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, element, pairs);
 criterion_main!(benches);

@@ -12,7 +12,7 @@ use nlrom::cyclic::{harmonic_indices, CyclicGeometry};
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 
 mod contact_common;
-use contact_common::Rng;
+use contact_common::{check_derivative, check_jacobian, forces, Rng};
 
 /// A rotation matrix from a random axis and angle (Rodrigues).
 fn random_rotation(rng: &mut Rng) -> Mat3 {
@@ -222,30 +222,15 @@ fn assembled_jacobian_and_preload_derivative_match_finite_differences() {
                 .unwrap();
             let reports = set.reports(&layout, &q, &state, false).unwrap();
             assert!(reports.iter().any(|(r, _)| r.slip > 0.0), "{reports:?}");
-            let scale = (0..n)
-                .flat_map(|i| (0..n).map(move |j| (i, j)))
-                .fold(0.0f64, |a, (i, j)| a.max(jac[(i, j)].abs()));
+            check_jacobian(
+                &set,
+                &layout,
+                &q,
+                &state,
+                &jac,
+                &format!("{variant:?} H={h}"),
+            );
             let step = 1e-6;
-            let eval = |qq: &[f64]| {
-                let mut s = state.clone();
-                let mut out = vec![0.0; n];
-                set.evaluate(&layout, qq, &mut s, &mut out, None).unwrap();
-                out
-            };
-            for c in 0..n {
-                let (mut qp, mut qm) = (q.clone(), q.clone());
-                qp[c] += step;
-                qm[c] -= step;
-                let (fp, fm) = (eval(&qp), eval(&qm));
-                for r in 0..n {
-                    let fd = (fp[r] - fm[r]) / (2.0 * step);
-                    assert!(
-                        (fd - jac[(r, c)]).abs() <= 1e-6 * scale,
-                        "{variant:?} H={h}: J[{r},{c}] = {} vs FD {fd}",
-                        jac[(r, c)]
-                    );
-                }
-            }
             // ∂F/∂p with n0_j = n0_j + rate_j p.
             let mut dp = vec![0.0; n];
             set.parameter_derivative(&layout, &q, &state, &mut dp)
@@ -262,22 +247,9 @@ fn assembled_jacobian_and_preload_derivative_match_finite_differences() {
                     harmonic_indices: harmonic_indices(12, 1, h),
                 };
                 let s2 = PairSet::new(15, variant, pairs, Some(coupling)).unwrap();
-                let mut s = state.clone();
-                let mut out = vec![0.0; n];
-                s2.evaluate(&layout, &q, &mut s, &mut out, None).unwrap();
-                out
+                forces(&s2, &layout, &q, &state)
             };
-            let (fp, fm) = (shifted(step), shifted(-step));
-            let dscale = dp.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-            assert!(dscale > 0.1);
-            for r in 0..n {
-                let fd = (fp[r] - fm[r]) / (2.0 * step);
-                assert!(
-                    (fd - dp[r]).abs() <= 1e-6 * dscale,
-                    "∂F[{r}]/∂p {} vs FD {fd}",
-                    dp[r]
-                );
-            }
+            check_derivative(&dp, &shifted(step), &shifted(-step), "∂F/∂p");
         }
     }
 }

@@ -27,6 +27,8 @@ pub struct Aft {
     synthesis: Vec<f64>,
     /// Row k (length N_t): Q_k = Σ_j analysis[k][j] q(τ_j) for a band-limited q.
     analysis: Vec<f64>,
+    /// cos(2πq/N_t), sin(2πq/N_t) for q = 0..N_t−1.
+    unit_circle: (Vec<f64>, Vec<f64>),
 }
 
 impl std::fmt::Debug for Aft {
@@ -65,12 +67,19 @@ impl Aft {
                 analysis[2 * h * n + j] = -2.0 * s / n as f64;
             }
         }
+        let unit_circle = (0..n)
+            .map(|q| {
+                let (s, c) = (2.0 * std::f64::consts::PI * q as f64 / n as f64).sin_cos();
+                (c, s)
+            })
+            .unzip();
         Ok(Aft {
             layout,
             forward,
             inverse,
             synthesis,
             analysis,
+            unit_circle,
         })
     }
 
@@ -143,6 +152,11 @@ impl Aft {
         &self.analysis[k * n..(k + 1) * n]
     }
 
+    /// cos(2πq/N_t) and sin(2πq/N_t) for q = 0..N_t−1.
+    pub fn unit_circle(&self) -> (&[f64], &[f64]) {
+        (&self.unit_circle.0, &self.unit_circle.1)
+    }
+
     /// The whole analysis table, row-major m × N_t.
     pub fn analysis_table(&self) -> &[f64] {
         &self.analysis
@@ -193,5 +207,25 @@ pub fn check_finite(q: &[f64], what: &str) -> Result<()> {
             "{what}: harmonic coefficient {i} is {} (not finite); the iteration diverged or the input holds NaN/inf",
             q[i]
         ))),
+    }
+}
+
+/// The [`Aft`] of the last layout used, shared by the threads of a nonlinear force (plans are
+/// made once per layout).
+#[derive(Default)]
+pub struct AftCache(std::sync::Mutex<Option<Arc<Aft>>>);
+
+impl AftCache {
+    /// The transforms for `layout` (planned on first use or when the layout changes).
+    pub fn get(&self, layout: &HarmonicLayout) -> Result<Arc<Aft>> {
+        let mut cache = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        match cache.as_ref() {
+            Some(a) if a.layout() == *layout => Ok(a.clone()),
+            _ => {
+                let a = Arc::new(Aft::new(*layout)?);
+                *cache = Some(a.clone());
+                Ok(a)
+            }
+        }
     }
 }

@@ -7,9 +7,15 @@
 //! * [`aft`]: realfft transforms between the real harmonic layout and time samples.
 //! * [`element`]: one element over a period — periodic marching, forces, the analytic Jacobian,
 //!   stick/slip/separation fractions, dissipated energy, hysteresis loop.
+//! * [`kinematics`]: relative harmonics of a pair with the inter-sector rotation and phase.
+//! * [`pairs`]: [`pairs::PairSet`], node-to-node pairs on physical DOFs as a
+//!   [`HarmonicForce`](crate::harmonics::HarmonicForce) (parallel over pairs).
+//! * [`grounded`]: [`grounded::DofElements`], the `[[element]]` friction elements on DOF
+//!   combinations of a matrix model as a `HarmonicForce`.
 
 pub mod aft;
 pub mod element;
+pub mod grounded;
 pub mod kinematics;
 pub mod law;
 pub mod pairs;

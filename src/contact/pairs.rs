@@ -13,12 +13,12 @@
 //! Pairs are evaluated in parallel (rayon, per-pair results then summed in pair order, so the
 //! result does not depend on the number of threads).
 
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use faer::MatMut;
 use rayon::prelude::*;
 
-use crate::contact::aft::{check_finite, gather, global_index, Aft};
+use crate::contact::aft::{check_finite, gather, global_index, Aft, AftCache};
 use crate::contact::element::{
     evaluate as evaluate_element, ElementReport, HysteresisLoop, LocalElement, Workspace,
 };
@@ -79,7 +79,7 @@ pub struct PairSet {
     pairs: Vec<ContactPair>,
     prepared: Vec<Prepared>,
     coupling: Option<SectorCoupling>,
-    aft: Mutex<Option<Arc<Aft>>>,
+    aft: AftCache,
 }
 
 impl std::fmt::Debug for PairSet {
@@ -175,7 +175,7 @@ impl PairSet {
             pairs,
             prepared,
             coupling,
-            aft: Mutex::new(None),
+            aft: AftCache::default(),
         })
     }
 
@@ -229,17 +229,7 @@ impl PairSet {
             )));
         }
         check_finite(q, "contact pairs")?;
-        let aft = {
-            let mut cache = self.aft.lock().unwrap_or_else(|e| e.into_inner());
-            match cache.as_ref() {
-                Some(a) if a.layout() == *layout => a.clone(),
-                _ => {
-                    let a = Arc::new(Aft::new(*layout)?);
-                    *cache = Some(a.clone());
-                    a
-                }
-            }
-        };
+        let aft = self.aft.get(layout)?;
         let h = layout.harmonics;
         let phases = match &self.coupling {
             None => [Phases::zero(h), Phases::zero(h), Phases::zero(h)],

@@ -1,0 +1,329 @@
+//! Friction elements on DOF combinations of a matrix-defined system (`interface.md`,
+//! `[[element]] kind = "friction"`), as one [`HarmonicForce`].
+//!
+//! An element reads a tangential relative displacement u_t = Σ_i w_i q_{d_i} (m) and, optionally,
+//! a normal approach v = Σ_i w'_i q_{d'_i} (m) (normal load variation, SAMA paper eq. 13); it
+//! applies the 1-D law of [`super::law`] (Jenkins element with f_n = max(n0 + k_n v, 0); without
+//! a normal direction the slip limit is μ n0) and its forces act back along the same weights:
+//! F_{d_i} += w_i f_t, F_{d'_i} += w'_i f_n (internal-force sign of [`HarmonicForce`]). A DOF
+//! combination with a single DOF is an element to the ground; two DOFs with weights −1, 1 join
+//! them.
+
+use std::sync::Arc;
+
+use faer::MatMut;
+
+use crate::case::{FrictionElement, WeightedDofs};
+use crate::contact::aft::{check_finite, global_index, Aft, AftCache};
+use crate::contact::element::{
+    evaluate as evaluate_element, ElementReport, HysteresisLoop, LocalElement, Workspace,
+};
+use crate::contact::law::{ContactParams, Variant};
+use crate::error::{Error, Result};
+use crate::harmonics::{HarmonicForce, HarmonicLayout};
+
+/// One element: tangential and optional normal DOF combinations and the law's parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DofElement {
+    /// u_t = Σ weights·q\[dofs\].
+    pub tangential: WeightedDofs,
+    /// v = Σ weights·q\[dofs\], if the element has normal load variation.
+    pub normal: Option<WeightedDofs>,
+    /// Contact parameters.
+    pub params: ContactParams,
+}
+
+impl DofElement {
+    fn local(&self) -> LocalElement {
+        LocalElement {
+            params: self.params,
+            variant: Variant::OneD,
+            tangential: 1,
+            normal: self.normal.is_some(),
+        }
+    }
+
+    /// The signals' DOF combinations: tangential, then normal if present.
+    fn combinations(&self) -> impl Iterator<Item = &WeightedDofs> {
+        std::iter::once(&self.tangential).chain(self.normal.iter())
+    }
+}
+
+/// The `[[element]]` list of a case as one nonlinear force on the `n_dofs` matrix rows.
+/// State: the slider position w (m) of every element.
+pub struct DofElements {
+    n_dofs: usize,
+    elements: Vec<DofElement>,
+    aft: AftCache,
+}
+
+impl std::fmt::Debug for DofElements {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("DofElements")
+            .field("n_dofs", &self.n_dofs)
+            .field("elements", &self.elements)
+            .finish()
+    }
+}
+
+impl DofElements {
+    /// Builds the elements of a case's `[[element]]` entries for a system of `n_dofs` rows.
+    pub fn from_case(elements: &[FrictionElement], n_dofs: usize) -> Result<Self> {
+        let list = elements
+            .iter()
+            .enumerate()
+            .map(|(i, e)| {
+                Ok(DofElement {
+                    tangential: e.tangential.clone(),
+                    normal: e.normal.clone(),
+                    params: ContactParams::new(e.kt, e.kn, e.mu, e.n0, &format!("element[{i}]"))?,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Self::new(list, n_dofs)
+    }
+
+    /// Checks every element (non-empty DOF lists of the weights' length, rows < `n_dofs`, finite
+    /// weights, valid parameters; `element[i]` in messages is the i-th `[[element]]`, from 0).
+    pub fn new(elements: Vec<DofElement>, n_dofs: usize) -> Result<Self> {
+        for (i, e) in elements.iter().enumerate() {
+            let key = format!("element[{i}]");
+            e.params.validate(&key)?;
+            for (name, c) in [
+                ("tangential", Some(&e.tangential)),
+                ("normal", e.normal.as_ref()),
+            ] {
+                let Some(c) = c else { continue };
+                check_combination(&format!("{key}.{name}"), c, n_dofs)?;
+            }
+        }
+        Ok(DofElements {
+            n_dofs,
+            elements,
+            aft: AftCache::default(),
+        })
+    }
+
+    /// The elements.
+    pub fn elements(&self) -> &[DofElement] {
+        &self.elements
+    }
+
+    /// Per-element state over the period and, if `loops`, the hysteresis samples, for the
+    /// harmonics `q` from the starting state `state` (not changed).
+    pub fn reports(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &[f64],
+        loops: bool,
+    ) -> Result<Vec<(ElementReport, Option<HysteresisLoop>)>> {
+        let aft = self.prepare(layout, q, state)?;
+        let mut ws = Workspace::new(&aft);
+        let mut out = Vec::with_capacity(self.elements.len());
+        let m = layout.coefficients();
+        let (mut x, mut g) = (vec![0.0; 2 * m], vec![0.0; 2 * m]);
+        for (e, &w) in self.elements.iter().zip(state) {
+            let mut slider = [w, 0.0];
+            self.local_eval(
+                e,
+                &aft,
+                layout,
+                q,
+                &mut slider,
+                false,
+                &mut x,
+                &mut g,
+                &mut ws,
+            )?;
+            out.push((ws.report(), loops.then(|| ws.hysteresis())));
+        }
+        Ok(out)
+    }
+
+    fn prepare(&self, layout: &HarmonicLayout, q: &[f64], state: &[f64]) -> Result<Arc<Aft>> {
+        if q.len() != layout.len(self.n_dofs) || state.len() != self.elements.len() {
+            return Err(Error::Compute(format!(
+                "friction elements: harmonic vector of length {} and {} slider states for {} DOFs × {} coefficients and {} elements",
+                q.len(),
+                state.len(),
+                self.n_dofs,
+                layout.coefficients(),
+                self.elements.len()
+            )));
+        }
+        check_finite(q, "friction elements")?;
+        self.aft.get(layout)
+    }
+
+    /// Local coefficients x = [U; V] of element `e`, then the element evaluation (forces in `g`).
+    #[allow(clippy::too_many_arguments)]
+    fn local_eval(
+        &self,
+        e: &DofElement,
+        aft: &Aft,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        slider: &mut [f64; 2],
+        jacobian: bool,
+        x: &mut [f64],
+        g: &mut [f64],
+        ws: &mut Workspace,
+    ) -> Result<()> {
+        let m = layout.coefficients();
+        let local = e.local();
+        let ns = local.signals();
+        x[..ns * m].fill(0.0);
+        for (s, c) in e.combinations().enumerate() {
+            for (&d, &w) in c.dofs.iter().zip(&c.weights) {
+                for l in 0..m {
+                    x[s * m + l] += w * q[global_index(layout, l, d, self.n_dofs)];
+                }
+            }
+        }
+        evaluate_element(
+            &local,
+            aft,
+            &x[..ns * m],
+            slider,
+            &mut g[..ns * m],
+            jacobian,
+            ws,
+        )?;
+        Ok(())
+    }
+
+    /// Evaluates every element and adds forces, Jacobian and ∂F/∂n0 (each if given).
+    fn run(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &mut [f64],
+        mut force: Option<&mut [f64]>,
+        mut jacobian: Option<MatMut<'_, f64>>,
+        mut dn0: Option<&mut [f64]>,
+    ) -> Result<()> {
+        let aft = self.prepare(layout, q, state)?;
+        let mut ws = Workspace::new(&aft);
+        let m = layout.coefficients();
+        let (mut x, mut g) = (vec![0.0; 2 * m], vec![0.0; 2 * m]);
+        let want_jac = jacobian.is_some() || dn0.is_some();
+        for (e, w) in self.elements.iter().zip(state.iter_mut()) {
+            let mut slider = [*w, 0.0];
+            self.local_eval(
+                e,
+                &aft,
+                layout,
+                q,
+                &mut slider,
+                want_jac,
+                &mut x,
+                &mut g,
+                &mut ws,
+            )?;
+            *w = slider[0];
+            let combos: Vec<&WeightedDofs> = e.combinations().collect();
+            let index = |l: usize, d: usize| global_index(layout, l, d, self.n_dofs);
+            if let Some(f) = force.as_deref_mut() {
+                for (s, c) in combos.iter().enumerate() {
+                    for (&d, &wt) in c.dofs.iter().zip(&c.weights) {
+                        for l in 0..m {
+                            f[index(l, d)] += wt * g[s * m + l];
+                        }
+                    }
+                }
+            }
+            if !want_jac {
+                continue;
+            }
+            let (jac, cols) = ws.jacobian();
+            let n0_col = cols - 1;
+            if let Some(dv) = dn0.as_deref_mut() {
+                for (s, c) in combos.iter().enumerate() {
+                    for (&d, &wt) in c.dofs.iter().zip(&c.weights) {
+                        for l in 0..m {
+                            dv[index(l, d)] += wt * jac[(s * m + l) * cols + n0_col];
+                        }
+                    }
+                }
+            }
+            let Some(jm) = jacobian.as_mut() else {
+                continue;
+            };
+            // J_phys[(d_i, l), (d_j, l')] += w_i w_j J_local[(s, l), (s', l')].
+            for (s, cs) in combos.iter().enumerate() {
+                for (t, ct) in combos.iter().enumerate() {
+                    for (&di, &wi) in cs.dofs.iter().zip(&cs.weights) {
+                        for (&dj, &wj) in ct.dofs.iter().zip(&ct.weights) {
+                            for l in 0..m {
+                                let row = &jac[(s * m + l) * cols..(s * m + l + 1) * cols];
+                                let gi = index(l, di);
+                                for lp in 0..m {
+                                    jm[(gi, index(lp, dj))] += wi * wj * row[t * m + lp];
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn check_combination(key: &str, c: &WeightedDofs, n_dofs: usize) -> Result<()> {
+    if c.dofs.is_empty() || c.dofs.len() != c.weights.len() {
+        return Err(Error::input(format!(
+            "{key}: `dofs` ({} entries) and `weights` ({} entries) must be non-empty lists of equal length",
+            c.dofs.len(),
+            c.weights.len()
+        )));
+    }
+    if let Some(w) = c.weights.iter().find(|w| !w.is_finite()) {
+        return Err(Error::input(format!(
+            "{key}.weights: {w} is not a finite number"
+        )));
+    }
+    if let Some(d) = c.dofs.iter().find(|&&d| d >= n_dofs) {
+        return Err(Error::input(format!(
+            "{key}.dofs: row {d} is out of range (the matrices have {n_dofs} rows, numbered from 0)"
+        )));
+    }
+    Ok(())
+}
+
+impl HarmonicForce for DofElements {
+    type State = Vec<f64>;
+
+    fn n_dofs(&self) -> usize {
+        self.n_dofs
+    }
+
+    /// Sliders at rest at u_t = 0.
+    fn initial_state(&self) -> Vec<f64> {
+        vec![0.0; self.elements.len()]
+    }
+
+    fn evaluate(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &mut Vec<f64>,
+        force: &mut [f64],
+        jacobian: Option<MatMut<'_, f64>>,
+    ) -> Result<()> {
+        self.run(layout, q, state, Some(force), jacobian, None)
+    }
+
+    /// ∂F/∂n0 with the static normal load n0 of every element moving together (∂n0_e/∂p = 1).
+    fn parameter_derivative(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &Vec<f64>,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let mut s = state.clone();
+        self.run(layout, q, &mut s, None, None, Some(out))
+    }
+}
