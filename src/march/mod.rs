@@ -16,8 +16,10 @@
 //! | [`schemes`] | one step of each scheme |
 //! | [`integrate`] | the time loop, adaptive step, records, counts |
 //! | [`periodic`] | steady-state detection and harmonics of the last period |
+//! | [`damper`] | the underplatform-damper demonstrator (§2, §6) |
 //! | [`dense`] | small dense linear algebra |
 
+pub mod damper;
 pub mod dense;
 pub mod element;
 pub mod integrate;
