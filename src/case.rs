@@ -1514,9 +1514,11 @@ impl Case {
             })?;
             self.finite(&format!("{key}.point"), &c.point)?;
             self.finite(&format!("{key}.normal"), &c.normal)?;
-            self.require(c.normal[0].hypot(c.normal[1]) > 0.0, &format!("{key}.normal"), || {
-                "the contact normal must not be zero"
-            })?;
+            self.require(
+                c.normal[0].hypot(c.normal[1]) > 0.0,
+                &format!("{key}.normal"),
+                || "the contact normal must not be zero",
+            )?;
             self.check_friction(&key, c.mu, c.kt, c.kn, c.n0, true)?;
         }
         Ok(())

@@ -465,7 +465,11 @@ const STATIC_LOAD_STEPS: usize = 20;
 /// prescribed motions brought to their t = 0 values in [`STATIC_LOAD_STEPS`] quasi-static
 /// increments, the sliders carried along (friction makes the static state path-dependent).
 /// Returns q at t = 0 with the sliders of the path's end in `sliders`.
-fn static_start(sys: &MarchSystem, s: &MarchSettings, cache: &mut Cache) -> Result<(Vec<f64>, Vec<f64>)> {
+fn static_start(
+    sys: &MarchSystem,
+    s: &MarchSettings,
+    cache: &mut Cache,
+) -> Result<(Vec<f64>, Vec<f64>)> {
     let n = sys.n;
     let mut kin = Kinematics {
         q: vec![0.0; n],

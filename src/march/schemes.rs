@@ -384,7 +384,13 @@ pub fn quasi_static_step(
 }
 
 /// ‖f_e + f_c(q) − K q‖_∞ with the law's forces from the sliders `w` (quasi-static residual).
-fn static_residual(ctx: &StepContext, q: &[f64], w: &[f64], r: &mut [f64], samples: &mut Vec<LawSample>) -> f64 {
+fn static_residual(
+    ctx: &StepContext,
+    q: &[f64],
+    w: &[f64],
+    r: &mut [f64],
+    samples: &mut Vec<LawSample>,
+) -> f64 {
     let sys = ctx.sys;
     evaluate_law(sys, ctx.omega, ctx.t1, q, w, samples);
     sys.external_force(ctx.omega, ctx.t1, r);
