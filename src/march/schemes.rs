@@ -344,43 +344,29 @@ pub fn quasi_static_step(
     sliders: &[f64],
     cache: &mut Cache,
 ) -> Result<StepOutcome> {
-    let sys = ctx.sys;
-    let extra = vec![0.0; sys.n];
-    match state_iteration(ctx, false, states, sliders, &extra, cache)? {
-        Ok((q1, samples, iterations)) => {
-            let v1 = q1
-                .iter()
-                .zip(&start.q)
-                .map(|(a, b)| (a - b) / ctx.dt)
-                .collect();
-            Ok(StepOutcome {
-                kin: Kinematics {
-                    q: q1,
-                    v: v1,
-                    a: vec![0.0; sys.n],
-                },
-                samples,
-                iterations,
-            })
-        }
-        Err(tried) => {
-            let (q1, samples, its) = damped_newton(ctx, start, sliders, cache)?;
-            let v1 = q1
-                .iter()
-                .zip(&start.q)
-                .map(|(a, b)| (a - b) / ctx.dt)
-                .collect();
-            Ok(StepOutcome {
-                kin: Kinematics {
-                    q: q1,
-                    v: v1,
-                    a: vec![0.0; sys.n],
-                },
-                samples,
-                iterations: tried + its,
-            })
-        }
-    }
+    let extra = vec![0.0; ctx.sys.n];
+    let (q1, samples, iterations) =
+        match state_iteration(ctx, false, states, sliders, &extra, cache)? {
+            Ok(found) => found,
+            Err(tried) => {
+                let (q, s, its) = damped_newton(ctx, start, sliders, cache)?;
+                (q, s, tried + its)
+            }
+        };
+    let v1 = q1
+        .iter()
+        .zip(&start.q)
+        .map(|(a, b)| (a - b) / ctx.dt)
+        .collect();
+    Ok(StepOutcome {
+        kin: Kinematics {
+            q: q1,
+            v: v1,
+            a: vec![0.0; ctx.sys.n],
+        },
+        samples,
+        iterations,
+    })
 }
 
 /// ‖f_e + f_c(q) − K q‖_∞ with the law's forces from the sliders `w` (quasi-static residual).
