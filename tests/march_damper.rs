@@ -174,3 +174,71 @@ fn march_command_writes_the_results_file() {
     assert!(err.contains("damper") && err.contains("contact"), "{err}");
     assert!(!dir.path().join("x.h5").exists());
 }
+
+/// A matrix-defined case (methods.md's Jenkins oscillator: m = k = 1, Rayleigh c = 0.1 M, k_t = 1,
+/// F_s = 0.3, F = 0.5 at ω = 0.952957) through `nlrom march`: marched to steady state, its
+/// first-harmonic amplitude equals the independent H = 7 harmonic balance of
+/// tests/march_schemes.rs (0.991347) within 1e-3.
+#[test]
+fn matrix_case_marches_to_the_harmonic_balance_amplitude() {
+    let dir = tempfile::tempdir().unwrap();
+    let one = "%%MatrixMarket matrix coordinate real symmetric\n1 1 1\n1 1 1.0\n";
+    std::fs::write(dir.path().join("K.mtx"), one).unwrap();
+    std::fs::write(dir.path().join("M.mtx"), one).unwrap();
+    let case = dir.path().join("sdof.toml");
+    std::fs::write(
+        &case,
+        r#"
+[model]
+stiffness = "K.mtx"
+mass = "M.mtx"
+damping = { rayleigh = [0.1, 0.0] }
+
+[excitation]
+dofs = [0]
+force = [0.5]
+
+[[element]]
+kind = "friction"
+tangential = { dofs = [0], weights = [1.0] }
+kt = 1.0
+mu = 1.0
+n0 = 0.3
+
+[harmonic_balance]
+harmonics = 3
+
+[march]
+frequency_rad_s = 0.952957
+periods = 200
+steps_per_period = 800
+scheme = "piecewise-linear"
+stop_at_steady = true
+steady_tolerance = 1e-7
+"#,
+    )
+    .unwrap();
+    let out = dir.path().join("sdof.h5");
+    let res = Command::new(env!("CARGO_BIN_EXE_nlrom"))
+        .arg("march")
+        .arg(&case)
+        .arg("-o")
+        .arg(&out)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(
+        res.status.success(),
+        "{}",
+        String::from_utf8_lossy(&res.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&res.stdout).unwrap();
+    let amp = report["first_harmonic_last_period"][0].as_f64().unwrap();
+    assert!((amp - 0.991347).abs() < 1e-3, "{amp}");
+    assert!(report["steady_period"].as_u64().unwrap() < 200);
+    let file = H5Reader::open(&out).unwrap();
+    assert_eq!(
+        file.dataset("/march/harmonics_last_period").unwrap().shape,
+        vec![1, 4]
+    );
+}

@@ -14,6 +14,7 @@ use super::signal::Harmonic;
 use super::system::{InitialCondition, MarchSystem};
 use crate::case::{Case, Damping, ExcitationLoad, MarchScheme, WeightedDofs};
 use crate::error::{Error, Result};
+use crate::hbm::setup::modal_damping;
 use crate::matrix_io::read_real_matrix;
 use crate::model::{self, StructuralModel};
 
@@ -222,35 +223,11 @@ fn damping_matrix(case: &Case, sm: &StructuralModel, k: &[f64], m: &[f64]) -> Re
                 .map(|ij| full[f[ij / n] * sm.n_dofs + f[ij % n]])
                 .collect())
         }
-        Some(Damping::Modal(zeta)) => modal_damping(*zeta, k, m, n).ok_or_else(|| {
-            Error::input(format!(
-                "{}: modal damping needs a positive definite mass matrix",
-                case.path.display()
-            ))
-        }),
+        Some(Damping::Modal(zeta)) => {
+            let km = Mat::from_fn(n, n, |i, j| k[i * n + j]);
+            let mm = Mat::from_fn(n, n, |i, j| m[i * n + j]);
+            let c = modal_damping(km.as_ref(), mm.as_ref(), *zeta)?;
+            Ok((0..n * n).map(|ij| c[(ij / n, ij % n)]).collect())
+        }
     }
-}
-
-/// C = M Φ diag(2ζω_i) Φᵀ M for the modes of K φ = ω² M φ (Φᵀ M Φ = I).
-fn modal_damping(zeta: f64, k: &[f64], m: &[f64], n: usize) -> Option<Vec<f64>> {
-    let mm = Mat::from_fn(n, n, |i, j| m[i * n + j]);
-    let llt = mm.llt(faer::Side::Lower).ok()?;
-    let l = llt.L().to_owned();
-    let linv = {
-        use faer::linalg::solvers::DenseSolveCore;
-        l.partial_piv_lu().inverse()
-    };
-    let kk = Mat::from_fn(n, n, |i, j| k[i * n + j]);
-    let a = &linv * &kk * linv.transpose();
-    let a = Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
-    let eig = a.self_adjoint_eigen(faer::Side::Lower).ok()?;
-    let d = eig.S().column_vector();
-    // C = L V diag(2ζω) Vᵀ Lᵀ
-    let lv = &l * eig.U();
-    let c = Mat::from_fn(n, n, |i, j| {
-        (0..n)
-            .map(|r| lv[(i, r)] * 2.0 * zeta * d[r].max(0.0).sqrt() * lv[(j, r)])
-            .sum::<f64>()
-    });
-    Some((0..n * n).map(|ij| c[(ij / n, ij % n)]).collect())
 }
