@@ -11,6 +11,25 @@ use nlrom::march::from_case::case_march;
 use nlrom::march::{march, MarchOutcome};
 use nlrom::output::H5Reader;
 
+/// Runs `nlrom march CASE -o OUT --json EXTRA...`, asserts success and returns the JSON report.
+fn march_json(case: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+    let res = Command::new(env!("CARGO_BIN_EXE_nlrom"))
+        .arg("march")
+        .arg(case)
+        .arg("-o")
+        .arg(out)
+        .arg("--json")
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(
+        res.status.success(),
+        "{}",
+        String::from_utf8_lossy(&res.stderr)
+    );
+    serde_json::from_slice(&res.stdout).unwrap()
+}
+
 fn damper_case() -> Case {
     Case::load(Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -134,18 +153,7 @@ fn march_command_writes_the_results_file() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("damper.h5");
     let case = concat!(env!("CARGO_MANIFEST_DIR"), "/cases/damper.toml");
-    let res = Command::new(env!("CARGO_BIN_EXE_nlrom"))
-        .args(["march", case, "-o"])
-        .arg(&out)
-        .args(["--scheme", "quasi-static", "--json"])
-        .output()
-        .unwrap();
-    assert!(
-        res.status.success(),
-        "{}",
-        String::from_utf8_lossy(&res.stderr)
-    );
-    let report: serde_json::Value = serde_json::from_slice(&res.stdout).unwrap();
+    let report = march_json(Path::new(case), &out, &["--scheme", "quasi-static"]);
     assert_eq!(report["scheme"], "quasi-static");
     assert_eq!(report["steps"], 900);
     assert!(report["wall_seconds"].as_f64().unwrap() > 0.0);
@@ -219,20 +227,7 @@ steady_tolerance = 1e-7
     )
     .unwrap();
     let out = dir.path().join("sdof.h5");
-    let res = Command::new(env!("CARGO_BIN_EXE_nlrom"))
-        .arg("march")
-        .arg(&case)
-        .arg("-o")
-        .arg(&out)
-        .arg("--json")
-        .output()
-        .unwrap();
-    assert!(
-        res.status.success(),
-        "{}",
-        String::from_utf8_lossy(&res.stderr)
-    );
-    let report: serde_json::Value = serde_json::from_slice(&res.stdout).unwrap();
+    let report = march_json(&case, &out, &[]);
     let amp = report["first_harmonic_last_period"][0].as_f64().unwrap();
     assert!((amp - 0.991347).abs() < 1e-3, "{amp}");
     assert!(report["steady_period"].as_u64().unwrap() < 200);
