@@ -32,7 +32,9 @@ pub struct Case {
     /// Free text naming the case; defaults to the case file's stem.
     #[serde(default)]
     pub title: String,
-    /// `[model]`: the structure (mesh or matrices), material, clamps and damping.
+    /// `[model]`: the structure (mesh or matrices), material, clamps and damping. A case with a
+    /// `[damper]` table defines its model there and omits `[model]`.
+    #[serde(default)]
     pub model: Model,
     /// `[cyclic]`: cyclic symmetry of a sector model; `None` for a model without it.
     #[serde(default)]
@@ -61,6 +63,10 @@ pub struct Case {
     /// `[march]`: time marching settings.
     #[serde(default)]
     pub march: Option<March>,
+    /// `[damper]`: the rigid underplatform damper of Gastaldi & Berruti 2018 (§2, §6) driven by
+    /// prescribed platform motion, marched by `nlrom march` instead of a `[model]`.
+    #[serde(default)]
+    pub damper: Option<Damper>,
     /// `[sweep]`: parameter path → values, one FRF per value (lists of equal length, zipped).
     /// Keys are in sorted order. Empty for a case without a sweep and for a sweep point.
     #[serde(default)]
@@ -672,6 +678,17 @@ pub struct March {
     pub steps_per_period: usize,
     /// The integration scheme; default `newmark`.
     pub scheme: MarchScheme,
+    /// Δτ/𝕋 of the Newmark schemes (0 < r < 1/π; `None`: the march default 0.15): the fixed step
+    /// is min(r·𝕋_stick, period/steps_per_period), the adaptive one uses 𝕋 of the current state.
+    pub step_ratio: Option<f64>,
+    /// An explicit fixed time step (s) instead (`time_step_s`).
+    pub time_step: Option<f64>,
+    /// Relative displacement tolerance of the standard Newmark corrector (`None`: 1e-8).
+    pub tolerance: Option<f64>,
+    /// Relative tolerance of the periodicity check (`None`: 1e-6).
+    pub steady_tolerance: Option<f64>,
+    /// Stop at the first period whose end state repeats the previous one (default false).
+    pub stop_at_steady: bool,
 }
 
 impl March {
@@ -691,6 +708,12 @@ struct MarchSpec {
     steps_per_period: usize,
     #[serde(default)]
     scheme: MarchScheme,
+    step_ratio: Option<f64>,
+    time_step_s: Option<f64>,
+    tolerance: Option<f64>,
+    steady_tolerance: Option<f64>,
+    #[serde(default)]
+    stop_at_steady: bool,
 }
 
 impl TryFrom<MarchSpec> for March {
@@ -708,6 +731,11 @@ impl TryFrom<MarchSpec> for March {
             periods: s.periods,
             steps_per_period: s.steps_per_period,
             scheme: s.scheme,
+            step_ratio: s.step_ratio,
+            time_step: s.time_step_s,
+            tolerance: s.tolerance,
+            steady_tolerance: s.steady_tolerance,
+            stop_at_steady: s.stop_at_steady,
         })
     }
 }
@@ -769,6 +797,60 @@ impl fmt::Display for MarchScheme {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.as_str())
     }
+}
+
+/// `[damper]`: a rigid 2-D underplatform damper (DOF u, w along x, y at the centre of mass and
+/// the rotation φ about z) between blade platforms whose motion is prescribed (Gastaldi & Berruti
+/// 2018 eqs 2–4). The centrifugal load acts along −y.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Damper {
+    /// Damper mass m_D (kg), > 0.
+    pub mass: f64,
+    /// Moment of inertia I_z about the centre of mass (kg·m²), > 0.
+    pub inertia: f64,
+    /// |CF| (N), ≥ 0: f_ED = (0, −|CF|, 0).
+    pub centrifugal_force: f64,
+    /// `[[damper.platform]]`: the platforms and their prescribed motion.
+    pub platform: Vec<DamperPlatform>,
+    /// `[[damper.contact]]`: the contact points.
+    pub contact: Vec<DamperContact>,
+}
+
+/// `[[damper.platform]]`: a rigidly translating platform, u_P(t) = amplitude·cos(ωt + phase).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DamperPlatform {
+    /// Name the contacts refer to.
+    pub name: String,
+    /// Displacement amplitudes (x, y) (m).
+    pub amplitude: [f64; 2],
+    /// Phase (degrees), default 0.
+    #[serde(default)]
+    pub phase_deg: f64,
+}
+
+/// `[[damper.contact]]`: a contact point between the damper and a platform.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DamperContact {
+    /// Name (results).
+    pub name: String,
+    /// The platform's name.
+    pub platform: String,
+    /// Position of the contact point relative to the damper's centre of mass (x, y) (m).
+    pub point: [f64; 2],
+    /// Contact normal (x, y) pointing from the platform into the damper (any non-zero length).
+    pub normal: [f64; 2],
+    /// Tangential contact stiffness (N/m), ≥ 0.
+    pub kt: f64,
+    /// Normal contact stiffness (N/m), ≥ 0.
+    pub kn: f64,
+    /// Friction coefficient μ ≥ 0.
+    pub mu: f64,
+    /// Normal preload (N), default 0 (the centrifugal load closes the contacts).
+    #[serde(default)]
+    pub n0: f64,
 }
 
 /// `[output]`.
@@ -1063,11 +1145,18 @@ impl Case {
         self.validate_elements()?;
         self.validate_harmonic_balance()?;
         self.validate_continuation()?;
-        self.validate_march()
+        self.validate_march()?;
+        self.validate_damper()
     }
 
     fn validate_model(&self) -> Result<()> {
         let m = &self.model;
+        if self.damper.is_some() {
+            let empty = m.mesh.is_none() && m.stiffness.is_none() && m.mass.is_none();
+            return self.require(empty, "model", || {
+                "a case with [damper] defines its model there; remove `mesh`/`stiffness`/`mass` from [model]"
+            });
+        }
         match (&m.stiffness, &m.mass) {
             (Some(_), None) => {
                 return Err(self.key_error(
@@ -1379,7 +1468,60 @@ impl Case {
         self.require(m.periods >= 1, "march.periods", || "must be ≥ 1")?;
         self.require(m.steps_per_period >= 1, "march.steps_per_period", || {
             "must be ≥ 1"
-        })
+        })?;
+        if let Some(r) = m.step_ratio {
+            self.require(
+                r > 0.0 && r < std::f64::consts::FRAC_1_PI,
+                "march.step_ratio",
+                || format!("Δτ/𝕋 must satisfy 0 < r < 1/π ≈ 0.318, the convergence limit of Newmark's corrector (found {r})"),
+            )?;
+        }
+        if let Some(dt) = m.time_step {
+            self.positive("march.time_step_s", dt)?;
+        }
+        if let Some(t) = m.tolerance {
+            self.positive("march.tolerance", t)?;
+        }
+        if let Some(t) = m.steady_tolerance {
+            self.positive("march.steady_tolerance", t)?;
+        }
+        Ok(())
+    }
+
+    fn validate_damper(&self) -> Result<()> {
+        let Some(d) = &self.damper else { return Ok(()) };
+        self.positive("damper.mass", d.mass)?;
+        self.positive("damper.inertia", d.inertia)?;
+        self.non_negative("damper.centrifugal_force", d.centrifugal_force)?;
+        self.require(!d.contact.is_empty(), "damper", || {
+            "needs at least one [[damper.contact]]"
+        })?;
+        for (i, p) in d.platform.iter().enumerate() {
+            let key = format!("damper.platform[{i}]");
+            self.finite(&format!("{key}.amplitude"), &p.amplitude)?;
+            self.finite(&format!("{key}.phase_deg"), &[p.phase_deg])?;
+        }
+        for (i, c) in d.contact.iter().enumerate() {
+            let key = format!("damper.contact[{i}]");
+            let known = d.platform.iter().any(|p| p.name == c.platform);
+            self.require(known, &format!("{key}.platform"), || {
+                let names: Vec<&str> = d.platform.iter().map(|p| p.name.as_str()).collect();
+                format!(
+                    "no [[damper.platform]] is named '{}'; the platforms are: {}",
+                    c.platform,
+                    names.join(", ")
+                )
+            })?;
+            self.finite(&format!("{key}.point"), &c.point)?;
+            self.finite(&format!("{key}.normal"), &c.normal)?;
+            self.require(
+                c.normal[0].hypot(c.normal[1]) > 0.0,
+                &format!("{key}.normal"),
+                || "the contact normal must not be zero",
+            )?;
+            self.check_friction(&key, c.mu, c.kt, c.kn, c.n0, true)?;
+        }
+        Ok(())
     }
 }
 

@@ -10,7 +10,7 @@ use std::time::Instant;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use serde_json::{json, Value};
 
-use crate::case::Case;
+use crate::case::{Case, MarchScheme};
 use crate::eigen::{lowest_modes, EigenOptions};
 use crate::error::{Error, Result};
 use crate::matrix_io::{write_dof_map, write_matrix_market_symmetric};
@@ -150,8 +150,23 @@ enum Scheme {
     Adaptive,
     /// Piecewise-linear Newmark predictor–corrector.
     PiecewiseLinear,
+    /// Piecewise-linear Newmark with the adaptive time step.
+    AdaptivePiecewiseLinear,
     /// Quasi-static method for negligible inertia.
     QuasiStatic,
+}
+
+impl Scheme {
+    /// The case schema's scheme.
+    fn to_case(self) -> MarchScheme {
+        match self {
+            Scheme::Newmark => MarchScheme::Newmark,
+            Scheme::Adaptive => MarchScheme::Adaptive,
+            Scheme::PiecewiseLinear => MarchScheme::PiecewiseLinear,
+            Scheme::AdaptivePiecewiseLinear => MarchScheme::AdaptivePiecewiseLinear,
+            Scheme::QuasiStatic => MarchScheme::QuasiStatic,
+        }
+    }
 }
 
 #[derive(Debug, Args)]
@@ -164,6 +179,9 @@ struct MarchArgs {
     /// The scheme (default: the case's [march] scheme).
     #[arg(long, value_enum)]
     scheme: Option<Scheme>,
+    /// Print one JSON object on stdout (counts, histogram, wall time).
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Debug, Args)]
@@ -215,7 +233,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Reduce(_) => Err(Error::NotImplemented("nlrom reduce".into())),
         Command::Contact(a) => contact(&a.case, a.json),
         Command::Solve(_) => Err(Error::NotImplemented("nlrom solve".into())),
-        Command::March(_) => Err(Error::NotImplemented("nlrom march".into())),
+        Command::March(a) => march(&a),
         Command::Run(_) => Err(Error::NotImplemented("nlrom run".into())),
         Command::Batch(_) => Err(Error::NotImplemented("nlrom batch".into())),
         Command::Demo(_) => Err(Error::NotImplemented("nlrom demo".into())),
@@ -589,6 +607,58 @@ fn contact(case_path: &Path, as_json: bool) -> Result<()> {
         println!("{report}");
     } else {
         print!("{}", sama::report::interfaces_text(&interfaces));
+    }
+    Ok(())
+}
+
+/// `nlrom march`: time marching of a `[damper]` or matrix-defined case; writes `/march/` and
+/// reports the counts (steps, iterations per step, state changes, wall time).
+fn march(a: &MarchArgs) -> Result<()> {
+    use crate::march::{
+        from_case::case_march, integrate::march as run_march, output::results_file,
+    };
+    let start = Instant::now();
+    let case = Case::load(&a.case)?;
+    let cm = case_march(&case, a.scheme.map(Scheme::to_case), &mut log_stderr)?;
+    let out = run_march(&cm.system, &cm.settings)?;
+    let info = crate::output::FileInfo {
+        title: case.title.clone(),
+        case_text: case.source_text.clone(),
+    };
+    results_file(&info, &cm.system, &cm.settings, &out, &cm.response).write(&a.output)?;
+    let last = out.periods.last();
+    let report = json!({
+        "scheme": out.scheme.as_str(),
+        "steps": out.steps,
+        "rejected_steps": out.rejected_steps,
+        "total_iterations": out.total_iterations,
+        "iteration_histogram": out.iteration_histogram(),
+        "single_iteration_fraction": out.single_iteration_fraction(),
+        "state_changes_last_period": last.map(|p| p.state_changes),
+        "periodicity_error_last_period": last.and_then(|p| p.periodicity_error),
+        "steady_period": out.steady_period,
+        "time_step_range_s": [out.step_range.0, out.step_range.1],
+        "first_harmonic_last_period": cm.response.iter().map(|&d| out.first_harmonic_amplitude()[d]).collect::<Vec<_>>(),
+        "response_dofs": cm.response.iter().map(|&d| cm.system.dof_names[d].clone()).collect::<Vec<_>>(),
+        "march_wall_seconds": out.wall_seconds,
+        "output": a.output.display().to_string(),
+        "wall_seconds": start.elapsed().as_secs_f64(),
+    });
+    if a.json {
+        println!("{report}");
+    } else {
+        println!(
+            "{} march of {}: {} steps ({} iterations, {:.1} % single-iteration steps), {} state changes in the last period, steady {}, {:.3} s; wrote {}",
+            out.scheme,
+            a.case.display(),
+            out.steps,
+            out.total_iterations,
+            100.0 * out.single_iteration_fraction(),
+            last.map_or(0, |p| p.state_changes),
+            out.steady_period.map_or("not reached".to_string(), |p| format!("after {p} periods")),
+            out.wall_seconds,
+            a.output.display()
+        );
     }
     Ok(())
 }

@@ -457,36 +457,65 @@ fn step(
     }
 }
 
+/// Increments of the prescribed motion from its mean to its value at t = 0 in [`static_start`].
+const STATIC_LOAD_STEPS: usize = 20;
+
+/// Static equilibrium at t = 0 along a loading path: first the external force f_e(0) with the
+/// prescribed motions at their mean (every contact predicted in stick, sliders at zero), then the
+/// prescribed motions brought to their t = 0 values in [`STATIC_LOAD_STEPS`] quasi-static
+/// increments, the sliders carried along (friction makes the static state path-dependent).
+/// Returns q at t = 0 with the sliders of the path's end in `sliders`.
+fn static_start(
+    sys: &MarchSystem,
+    s: &MarchSettings,
+    cache: &mut Cache,
+) -> Result<(Vec<f64>, Vec<f64>)> {
+    let n = sys.n;
+    let mut kin = Kinematics {
+        q: vec![0.0; n],
+        v: vec![0.0; n],
+        a: vec![0.0; n],
+    };
+    let mut states = sys.stick_states();
+    let mut sliders = vec![0.0; sys.elements.len()];
+    for j in 0..=STATIC_LOAD_STEPS {
+        let scale = j as f64 / STATIC_LOAD_STEPS as f64;
+        let mut scaled = sys.clone();
+        for e in &mut scaled.elements {
+            for d in std::iter::once(&mut e.tangential).chain(e.normal.as_mut()) {
+                d.prescribed.cos *= scale;
+                d.prescribed.sin *= scale;
+            }
+        }
+        let ctx = StepContext {
+            sys: &scaled,
+            omega: s.omega,
+            t1: 0.0,
+            dt: 1.0,
+            tolerance: 0.0,
+            max_iterations: s.max_iterations,
+        };
+        let mut fresh = Cache::default();
+        let out = schemes::quasi_static_step(&ctx, &kin, &states, &sliders, &mut fresh)
+            .map_err(|e| Error::Compute(format!("initial static equilibrium: {e}")))?;
+        cache.factorisations += fresh.factorisations;
+        states = out.samples.iter().map(|x| x.state).collect();
+        sliders = out.samples.iter().map(|x| x.slider).collect();
+        kin.q = out.kin.q;
+    }
+    Ok((kin.q, sliders))
+}
+
 /// The state at t = 0: at rest (q = 0) or in static equilibrium; the acceleration from the
 /// equation of motion, M q̈ = f_e + f_c − K q − C q̇.
 fn initial_state(sys: &MarchSystem, s: &MarchSettings, cache: &mut Cache) -> Result<Current> {
     let n = sys.n;
-    let zero = vec![0.0; sys.elements.len()];
     let mut samples = Vec::new();
-    let q = match sys.initial {
-        InitialCondition::Rest => vec![0.0; n],
-        InitialCondition::Static => {
-            let rest = Kinematics {
-                q: vec![0.0; n],
-                v: vec![0.0; n],
-                a: vec![0.0; n],
-            };
-            schemes::evaluate_law(sys, s.omega, 0.0, &rest.q, &zero, &mut samples);
-            let states: Vec<ContactState> = samples.iter().map(|x| x.state).collect();
-            let ctx = StepContext {
-                sys,
-                omega: s.omega,
-                t1: 0.0,
-                dt: 1.0,
-                tolerance: 0.0,
-                max_iterations: s.max_iterations,
-            };
-            let out = schemes::quasi_static_step(&ctx, &rest, &states, &zero, cache)
-                .map_err(|e| Error::Compute(format!("initial static equilibrium: {e}")))?;
-            out.kin.q
-        }
+    let (q, sliders) = match sys.initial {
+        InitialCondition::Rest => (vec![0.0; n], vec![0.0; sys.elements.len()]),
+        InitialCondition::Static => static_start(sys, s, cache)?,
     };
-    schemes::evaluate_law(sys, s.omega, 0.0, &q, &zero, &mut samples);
+    schemes::evaluate_law(sys, s.omega, 0.0, &q, &sliders, &mut samples);
     let v = vec![0.0; n];
     let mut a = vec![0.0; n];
     if s.dynamic() {

@@ -16,12 +16,18 @@
 //! | [`schemes`] | one step of each scheme |
 //! | [`integrate`] | the time loop, adaptive step, records, counts |
 //! | [`periodic`] | steady-state detection and harmonics of the last period |
+//! | [`damper`] | the underplatform-damper demonstrator (§2, §6) |
+//! | [`from_case`] | a case file (`[damper]` or a matrix model with `[[element]]`) as a march |
+//! | [`output`] | the `/march/` group of the results file |
 //! | [`dense`] | small dense linear algebra |
 
+pub mod damper;
 pub mod dense;
 pub mod element;
+pub mod from_case;
 pub mod integrate;
 pub mod law;
+pub mod output;
 pub mod periodic;
 pub mod schemes;
 pub mod signal;

@@ -344,28 +344,103 @@ pub fn quasi_static_step(
     sliders: &[f64],
     cache: &mut Cache,
 ) -> Result<StepOutcome> {
+    let extra = vec![0.0; ctx.sys.n];
+    let (q1, samples, iterations) =
+        match state_iteration(ctx, false, states, sliders, &extra, cache)? {
+            Ok(found) => found,
+            Err(tried) => {
+                let (q, s, its) = damped_newton(ctx, start, sliders, cache)?;
+                (q, s, tried + its)
+            }
+        };
+    let v1 = q1
+        .iter()
+        .zip(&start.q)
+        .map(|(a, b)| (a - b) / ctx.dt)
+        .collect();
+    Ok(StepOutcome {
+        kin: Kinematics {
+            q: q1,
+            v: v1,
+            a: vec![0.0; ctx.sys.n],
+        },
+        samples,
+        iterations,
+    })
+}
+
+/// ‖f_e + f_c(q) − K q‖_∞ with the law's forces from the sliders `w` (quasi-static residual).
+fn static_residual(
+    ctx: &StepContext,
+    q: &[f64],
+    w: &[f64],
+    r: &mut [f64],
+    samples: &mut Vec<LawSample>,
+) -> f64 {
     let sys = ctx.sys;
-    let extra = vec![0.0; sys.n];
-    match state_iteration(ctx, false, states, sliders, &extra, cache)? {
-        Ok((q1, samples, iterations)) => {
-            let v1 = q1
-                .iter()
-                .zip(&start.q)
-                .map(|(a, b)| (a - b) / ctx.dt)
-                .collect();
-            Ok(StepOutcome {
-                kin: Kinematics {
-                    q: q1,
-                    v: v1,
-                    a: vec![0.0; sys.n],
-                },
-                samples,
-                iterations,
-            })
+    evaluate_law(sys, ctx.omega, ctx.t1, q, w, samples);
+    sys.external_force(ctx.omega, ctx.t1, r);
+    add_contact_force(sys, samples, r);
+    let mut kq = vec![0.0; sys.n];
+    dense::matvec(&sys.stiffness, q, &mut kq);
+    r.iter_mut().zip(&kq).for_each(|(ri, k)| *ri -= k);
+    dense::norm_inf(r)
+}
+
+/// Fallback of the quasi-static step when the state iteration cycles (the solution sits on a
+/// stick/slip or slip-sign boundary): Newton on the continuous piecewise-linear residual
+/// r(q) = f_e + f_c(q) − K q with the state's tangent K + K_c and a backtracking line search on
+/// ‖r‖_∞, from q_n, until the update is below the tolerance (or 1e-9 of the displacement scale).
+fn damped_newton(
+    ctx: &StepContext,
+    start: &Kinematics,
+    sliders: &[f64],
+    cache: &mut Cache,
+) -> Result<(Vec<f64>, Vec<LawSample>, u32)> {
+    let sys = ctx.sys;
+    let n = sys.n;
+    let tol = ctx.tolerance.max(1e-9 * sys.displacement_scale);
+    let mut q = start.q.clone();
+    let mut samples = Vec::new();
+    let mut trial_samples = Vec::new();
+    let mut r = vec![0.0; n];
+    let mut r_trial = vec![0.0; n];
+    let mut k = vec![0.0; n * n];
+    let mut rc = vec![0.0; n];
+    let mut codes = Vec::new();
+    let mut norm = static_residual(ctx, &q, sliders, &mut r, &mut samples);
+    for it in 1..=ctx.max_iterations {
+        let states: Vec<ContactState> = samples.iter().map(|s| s.state).collect();
+        state_codes(&samples, &mut codes);
+        sys.linear_piece(&states, sliders, ctx.omega, ctx.t1, &mut k, &mut rc);
+        let per_state = cache.piecewise.entry(0).or_default();
+        if !per_state.contains_key(&codes) {
+            let inv = dense::inverse(&k, n)
+                .ok_or_else(|| singular(sys, "quasi-static (K + K_c)", ctx.t1, &codes))?;
+            per_state.insert(codes.clone(), inv);
+            cache.factorisations += 1;
         }
-        Err(_) => Err(Error::Compute(format!(
-            "quasi-static method: the contact-state iteration did not settle at t = {:.6e} s (it cycles between states); try another number of steps per period",
-            ctx.t1
-        ))),
+        let mut dq = vec![0.0; n];
+        dense::matvec(&per_state[&codes], &r, &mut dq);
+        let mut lambda = 1.0;
+        loop {
+            let qt: Vec<f64> = q.iter().zip(&dq).map(|(a, d)| a + lambda * d).collect();
+            let nt = static_residual(ctx, &qt, sliders, &mut r_trial, &mut trial_samples);
+            if nt < (1.0 - 1e-4 * lambda) * norm || lambda < 1e-6 {
+                q = qt;
+                norm = nt;
+                std::mem::swap(&mut r, &mut r_trial);
+                std::mem::swap(&mut samples, &mut trial_samples);
+                break;
+            }
+            lambda *= 0.5;
+        }
+        if lambda * dense::norm_inf(&dq) < tol {
+            return Ok((q, samples, it));
+        }
     }
+    Err(Error::Compute(format!(
+        "quasi-static method: no equilibrium found at t = {:.6e} s in {} Newton iterations (the contact states cycle); try another number of steps per period",
+        ctx.t1, ctx.max_iterations
+    )))
 }

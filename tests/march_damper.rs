@@ -1,0 +1,239 @@
+//! The underplatform-damper demonstrator of Gastaldi & Berruti 2018 (§6), shipped as
+//! cases/damper.toml: bilateral gross slip, the state changes per period, all methods giving the
+//! same contact forces (paper: "perfectly superposed"), the iteration counts of Fig. 5, and the
+//! `nlrom march` command with its results file.
+
+use std::path::Path;
+use std::process::Command;
+
+use nlrom::case::{Case, MarchScheme};
+use nlrom::march::from_case::case_march;
+use nlrom::march::{march, MarchOutcome};
+use nlrom::output::H5Reader;
+
+/// Runs `nlrom march CASE -o OUT --json EXTRA...`, asserts success and returns the JSON report.
+fn march_json(case: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+    let res = Command::new(env!("CARGO_BIN_EXE_nlrom"))
+        .arg("march")
+        .arg(case)
+        .arg("-o")
+        .arg(out)
+        .arg("--json")
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(
+        res.status.success(),
+        "{}",
+        String::from_utf8_lossy(&res.stderr)
+    );
+    serde_json::from_slice(&res.stdout).unwrap()
+}
+
+fn damper_case() -> Case {
+    Case::load(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cases/damper.toml"
+    )))
+    .unwrap()
+}
+
+fn run(scheme: MarchScheme) -> MarchOutcome {
+    let case = damper_case();
+    let cm = case_march(&case, Some(scheme), &mut |_| {}).unwrap();
+    march(&cm.system, &cm.settings).unwrap()
+}
+
+/// Largest |f(t) − f_ref(t)| over the last period on `out`'s instants (reference interpolated
+/// linearly), relative to the largest reference force of that period.
+fn force_difference(out: &MarchOutcome, reference: &MarchOutcome) -> f64 {
+    let (h, r) = (&out.history, &reference.history);
+    let ne = 3;
+    let t0 = r.time[reference.periods[reference.periods.len() - 2].end_index];
+    let interp = |t: f64, e: usize, c: usize| -> f64 {
+        let k = r.time.partition_point(|&x| x <= t).clamp(1, r.len() - 1);
+        let (ta, tb) = (r.time[k - 1], r.time[k]);
+        let (fa, fb) = (
+            r.force[((k - 1) * ne + e) * 2 + c],
+            r.force[(k * ne + e) * 2 + c],
+        );
+        fa + (fb - fa) * (t - ta) / (tb - ta)
+    };
+    let scale = (0..r.len())
+        .filter(|&k| r.time[k] >= t0)
+        .flat_map(|k| (0..2 * ne).map(move |j| r.force[k * 2 * ne + j].abs()))
+        .fold(0.0, f64::max);
+    let mut worst: f64 = 0.0;
+    for k in (0..h.len()).filter(|&k| h.time[k] >= t0) {
+        for e in 0..ne {
+            for c in 0..2 {
+                let d = (h.force[(k * ne + e) * 2 + c] - interp(h.time[k], e, c)).abs();
+                worst = worst.max(d);
+            }
+        }
+    }
+    worst / scale
+}
+
+/// Instants of the last period at which every contact slips (bilateral gross slip).
+fn bilateral_slip_instants(out: &MarchOutcome) -> usize {
+    let h = &out.history;
+    let first = out.periods[out.periods.len() - 2].end_index;
+    (first..h.len())
+        .filter(|&k| h.state[3 * k..3 * k + 3].iter().all(|&s| s >= 2))
+        .count()
+}
+
+#[test]
+fn all_methods_agree_on_the_damper_with_bilateral_gross_slip() {
+    let standard = run(MarchScheme::Newmark);
+    let others: Vec<(MarchScheme, MarchOutcome)> = [
+        MarchScheme::Adaptive,
+        MarchScheme::PiecewiseLinear,
+        MarchScheme::AdaptivePiecewiseLinear,
+        MarchScheme::QuasiStatic,
+    ]
+    .into_iter()
+    .map(|s| (s, run(s)))
+    .collect();
+    // bilateral gross slip: both platforms' contacts slide at once, in every method
+    assert!(bilateral_slip_instants(&standard) > 10);
+    for (s, o) in &others {
+        assert!(
+            bilateral_slip_instants(o) > 5,
+            "{s}: no bilateral gross slip"
+        );
+    }
+    // the same forces as standard Newmark (measured: adaptive 1.9e-3, piecewise-linear 1e-9,
+    // both 1.9e-3, quasi-static 1.2e-2 of the largest contact force)
+    let limits = [5e-3, 1e-7, 5e-3, 3e-2];
+    for ((s, o), lim) in others.iter().zip(limits) {
+        let d = force_difference(o, &standard);
+        eprintln!(
+            "{s}: max contact-force difference to standard Newmark {d:.2e} of the largest force"
+        );
+        assert!(d < lim, "{s}: {d}");
+    }
+    // quasi-static: no damper-internal oscillation, the clean sequence of 8 element-state changes
+    // per period (left flat: L1 and L2 change at different instants; the paper counts about 6)
+    let qs = &others[3].1;
+    let changes = qs.periods.last().unwrap().state_changes;
+    assert!(
+        (6..=8).contains(&changes),
+        "quasi-static state changes {changes}"
+    );
+    assert_eq!(
+        qs.steady_period,
+        Some(2),
+        "quasi-static steady after one period"
+    );
+    // Fig. 5: standard Newmark ≈ 11 iterations per step at 200 Hz, piecewise-linear mostly one
+    let mean = |o: &MarchOutcome| o.total_iterations as f64 / o.steps as f64;
+    eprintln!(
+        "iterations per step: standard {:.2}, piecewise-linear {:.3}",
+        mean(&standard),
+        mean(&others[1].1)
+    );
+    assert!((8.0..14.0).contains(&mean(&standard)));
+    let pl = &others[1].1;
+    assert!(
+        pl.single_iteration_fraction() > 0.9,
+        "{}",
+        pl.single_iteration_fraction()
+    );
+    assert!(pl.iteration_histogram().len() <= 4);
+    // the adaptive step takes longer steps outside stick and never exceeds the stability ratio
+    let adaptive = &others[0].1;
+    assert!(adaptive.steps < standard.steps);
+    assert!(adaptive.step_range.1 > 1.2 * standard.step_range.1);
+}
+
+#[test]
+fn march_command_writes_the_results_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("damper.h5");
+    let case = concat!(env!("CARGO_MANIFEST_DIR"), "/cases/damper.toml");
+    let report = march_json(Path::new(case), &out, &["--scheme", "quasi-static"]);
+    assert_eq!(report["scheme"], "quasi-static");
+    assert_eq!(report["steps"], 900);
+    assert!(report["wall_seconds"].as_f64().unwrap() > 0.0);
+    let file = H5Reader::open(&out).unwrap();
+    let time = file.dataset("/march/time").unwrap();
+    assert_eq!(time.shape, vec![901]);
+    let force = file.dataset("/march/contact_force").unwrap();
+    assert_eq!(force.shape, vec![901, 3, 2]);
+    assert_eq!(force.unit(), Some("N"));
+    let g = file.group("/march").unwrap();
+    assert_eq!(g.attrs["scheme"].as_str(), Some("quasi-static"));
+
+    // bad input: a march case whose scheme needs mass it does not have is refused by the library;
+    // a case without [march] and a mesh model are clear errors with exit status 2 / 1
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, "[damper]\nmass = 0.01\ninertia = 1e-7\ncentrifugal_force = 10.0\nplatform = []\ncontact = []\n").unwrap();
+    let res = Command::new(env!("CARGO_BIN_EXE_nlrom"))
+        .args(["march"])
+        .arg(&bad)
+        .args(["-o"])
+        .arg(dir.path().join("x.h5"))
+        .output()
+        .unwrap();
+    assert_eq!(res.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert!(err.contains("damper") && err.contains("contact"), "{err}");
+    assert!(!dir.path().join("x.h5").exists());
+}
+
+/// A matrix-defined case (methods.md's Jenkins oscillator: m = k = 1, Rayleigh c = 0.1 M, k_t = 1,
+/// F_s = 0.3, F = 0.5 at ω = 0.952957) through `nlrom march`: marched to steady state, its
+/// first-harmonic amplitude equals the independent H = 7 harmonic balance of
+/// tests/march_schemes.rs (0.991347) within 1e-3.
+#[test]
+fn matrix_case_marches_to_the_harmonic_balance_amplitude() {
+    let dir = tempfile::tempdir().unwrap();
+    let one = "%%MatrixMarket matrix coordinate real symmetric\n1 1 1\n1 1 1.0\n";
+    std::fs::write(dir.path().join("K.mtx"), one).unwrap();
+    std::fs::write(dir.path().join("M.mtx"), one).unwrap();
+    let case = dir.path().join("sdof.toml");
+    std::fs::write(
+        &case,
+        r#"
+[model]
+stiffness = "K.mtx"
+mass = "M.mtx"
+damping = { rayleigh = [0.1, 0.0] }
+
+[excitation]
+dofs = [0]
+force = [0.5]
+
+[[element]]
+kind = "friction"
+tangential = { dofs = [0], weights = [1.0] }
+kt = 1.0
+mu = 1.0
+n0 = 0.3
+
+[harmonic_balance]
+harmonics = 3
+
+[march]
+frequency_rad_s = 0.952957
+periods = 200
+steps_per_period = 800
+scheme = "piecewise-linear"
+stop_at_steady = true
+steady_tolerance = 1e-7
+"#,
+    )
+    .unwrap();
+    let out = dir.path().join("sdof.h5");
+    let report = march_json(&case, &out, &[]);
+    let amp = report["first_harmonic_last_period"][0].as_f64().unwrap();
+    assert!((amp - 0.991347).abs() < 1e-3, "{amp}");
+    assert!(report["steady_period"].as_u64().unwrap() < 200);
+    let file = H5Reader::open(&out).unwrap();
+    assert_eq!(
+        file.dataset("/march/harmonics_last_period").unwrap().shape,
+        vec![1, 4]
+    );
+}
