@@ -15,11 +15,16 @@
 //! "Results file" and "ROM file".
 
 pub mod h5;
+pub mod results;
 pub mod rom_file;
 
 use std::time::{SystemTime, UNIX_EPOCH};
 
 pub use h5::{Attr, Column, Data, Dataset, Group, H5File, H5Reader, Records};
+pub use results::{
+    read_results, write_results, ContactData, ContactPairData, FrfData, FrfPoint, MarchData,
+    ResponseDof, ResultsFile,
+};
 pub use rom_file::{read_rom, write_rom};
 
 use crate::error::Result;

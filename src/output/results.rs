@@ -1,0 +1,775 @@
+//! The results file of `nlrom solve`, `march` and `run` (`interface.md` "Results (HDF5)"): plain
+//! data types the solvers fill, a writer and a reader.
+//!
+//! The solvers fill a [`ResultsFile`]: one [`FrfData`] per sweep point (one without a sweep),
+//! one [`ContactData`] per contact interface, and a [`MarchData`] for a time-marching run;
+//! [`write_results`] checks the sizes and writes the layout below atomically.
+//!
+//! | path | type [shape] | unit | content |
+//! |---|---|---|---|
+//! | `/frf/<i>` attributes | | | `harmonics` H, `sweep_parameters` (names), one attribute per sweep parameter (its value) |
+//! | `/frf/<i>/omega` | f64 [P] | rad/s | excitation frequency of each point, path order |
+//! | `/frf/<i>/frequency_hz` | f64 [P] | Hz | ω/2π |
+//! | `/frf/<i>/amplitude` | f64 [P, R] | m | first-harmonic amplitude abs(Q⁽¹⁾) of each response DOF |
+//! | `/frf/<i>/peak` | f64 [P, R] | m | max over the period of abs(q(t)) |
+//! | `/frf/<i>/harmonics` | complex [P, R, H+1] | m | Q⁽ⁿ⁾, q(τ) = Re Σ Q⁽ⁿ⁾ e^{inτ} (`conventions.md` §4) |
+//! | `/frf/<i>/response_dofs` | compound [R] {kind enum(node, row), node_tag u64, component i64} | 1 | node tag and component 0/1/2, or matrix row (component −1) |
+//! | `/frf/<i>/arc_length` | f64 [P] | 1 | continuation arc length |
+//! | `/frf/<i>/newton_iterations` | u64 [P] | 1 | Newton iterations of each point |
+//! | `/frf/<i>/stable` | i64 [P] | 1 | 1 stable, 0 unstable (only when computed) |
+//! | `/contact` attributes | | | `names`: the interfaces in the order of the points' contact fractions |
+//! | `/contact/<name>` attributes | | | `model`, `element`, `sigma`, `mu` |
+//! | `/contact/<name>/pairs` | compound [E] {contact_node u64, target_node u64} | 1 | the node-to-node elements (c, t_j) |
+//! | `/contact/<name>/weights`, `kt`, `kn`, `preload` | f64 [E] | 1, N/m, N/m, N | w_j, k_tj, k_nj, n0_j of each element (SAMA eq. 29–31) |
+//! | `/contact/<name>/frames` | f64 [E, 3, 3] | 1 | local frame, rows t1, t2, n (global axes) |
+//! | `/contact/<name>/state_fractions/<i>` | f64 [P, 3] | 1 | per point of `/frf/<i>`: fractions of the period in stick, slip, separation, averaged over the elements |
+//! | `/march` attributes | | | `scheme`, `wall_seconds`, `omega` (rad/s), `frequency_hz`, `steps` |
+//! | `/march/time` | f64 [T] | s | instants |
+//! | `/march/response` | f64 [T, R] | m | response DOFs (`/march/response_dofs`) |
+//! | `/march/response_dofs` | compound [R] | 1 | as `/frf/<i>/response_dofs` |
+//! | `/march/contact_force` | f64 [T, E, 2] | N | per element (f_t, f_n) |
+//! | `/march/contact_state` | i64 [T, E] | 1 | per element 0 separated, 1 stick, 2 slip +, 3 slip − |
+//! | `/march/element_names` | strings [E] | 1 | the friction elements |
+//! | `/march/first_harmonic_last_period` | f64 [R] | m | abs(Q⁽¹⁾) of each response DOF over the last period |
+//! | `/march/iterations_per_step` | u64 [T] | 1 | corrector iterations of each step |
+
+use std::collections::BTreeMap;
+use std::f64::consts::PI;
+use std::path::Path;
+
+use faer::c64;
+
+use super::h5::{Attr, Column, Data, Dataset, Group, H5File, H5Reader, Records};
+use super::{check_file_kind, file_attributes, FileInfo};
+use crate::error::{Error, Result};
+
+/// Root attribute `file_kind` of a results file.
+pub const RESULTS_KIND: &str = "results";
+
+/// Labels of `contact_state` codes, by code.
+pub const STATE_LABELS: [&str; 4] = ["separated", "stick", "slip+", "slip-"];
+/// Column labels of `state_fractions`.
+pub const FRACTION_LABELS: [&str; 3] = ["stick", "slip", "separation"];
+const RESPONSE_KINDS: [&str; 2] = ["node", "row"];
+
+/// One response DOF: a node component of a mesh model, or a row of a matrix model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ResponseDof {
+    /// Gmsh node tag and component 0/1/2 = x/y/z.
+    Node { tag: u64, component: u8 },
+    /// A matrix row (0-based) of a case defined by matrices.
+    Row(u64),
+}
+
+/// One point of a frequency response curve.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrfPoint {
+    /// Excitation frequency ω (rad/s).
+    pub omega: f64,
+    /// Harmonics Q⁽ⁿ⁾ (m), n = 0..=H, response-major: `harmonics[r * (H + 1) + n]`.
+    pub harmonics: Vec<c64>,
+    /// max over one period of abs(q_r(t)) (m), one per response DOF.
+    pub peak: Vec<f64>,
+    /// Continuation arc length at this point (dimensionless, as the continuation defines it).
+    pub arc_length: f64,
+    /// Newton iterations the point took.
+    pub newton_iterations: u64,
+    /// Stability, when computed (the same for all points of a curve: all `Some` or all `None`).
+    pub stable: Option<bool>,
+    /// Per contact interface (in the order of [`ResultsFile::contacts`]): the fractions of the
+    /// period in stick, slip and separation, averaged over the interface's elements.
+    pub contact_fractions: Vec<[f64; 3]>,
+}
+
+/// One frequency response curve (one sweep point).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrfData {
+    /// The sweep parameters of this curve and their values (e.g. `"contact.shroud.n0"` → 113.0);
+    /// empty without a sweep.
+    pub sweep: BTreeMap<String, f64>,
+    /// Number of harmonics H (each point has H + 1 harmonics per response DOF).
+    pub harmonics: usize,
+    /// The response DOFs, R of them.
+    pub response_dofs: Vec<ResponseDof>,
+    /// The points, in path order (ω may go back and forth at a fold).
+    pub points: Vec<FrfPoint>,
+}
+
+/// One node-to-node friction element (c, t_j) of a contact interface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactPairData {
+    /// Gmsh tag of the contact node c.
+    pub contact_node: u64,
+    /// Gmsh tag of the target node t_j.
+    pub target_node: u64,
+    /// SAMA weight w_j (eq. 29; 1 for node-to-node).
+    pub weight: f64,
+    /// Local frame, rows t1, t2, n (`conventions.md` §3).
+    pub frame: [[f64; 3]; 3],
+    /// Tangential stiffness k_tj (N/m).
+    pub kt: f64,
+    /// Normal stiffness k_nj (N/m).
+    pub kn: f64,
+    /// Static normal preload n0_j (N).
+    pub preload: f64,
+}
+
+/// One contact interface (`[[contact]]`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactData {
+    /// The interface's name.
+    pub name: String,
+    /// `"sama"` or `"node-to-node"`.
+    pub model: String,
+    /// `"1d"` or `"2d"`.
+    pub element: String,
+    /// Sector offset σ of the target (`conventions.md` §3).
+    pub sigma: i64,
+    /// Friction coefficient μ.
+    pub mu: f64,
+    /// The elements.
+    pub pairs: Vec<ContactPairData>,
+}
+
+impl ContactData {
+    /// The elements (c, t_j) of a SAMA / node-to-node interface, one per target node of each
+    /// contact node, with the weights, frames and eq. 31 parameters `sama` computed.
+    pub fn from_interface(interface: &crate::sama::ContactInterface) -> Self {
+        let pairs = interface
+            .pairs
+            .iter()
+            .flat_map(|pair| {
+                (0..pair.targets.len()).map(move |j| ContactPairData {
+                    contact_node: pair.contact_node,
+                    target_node: pair.targets[j],
+                    weight: pair.weights[j],
+                    frame: pair.frame,
+                    kt: pair.kt[j],
+                    kn: pair.kn[j],
+                    preload: pair.n0[j],
+                })
+            })
+            .collect();
+        ContactData {
+            name: interface.name.clone(),
+            model: match interface.model {
+                crate::case::ContactModel::Sama => "sama",
+                crate::case::ContactModel::NodeToNode => "node-to-node",
+            }
+            .to_string(),
+            element: match interface.element {
+                crate::case::ContactElement::OneD => "1d",
+                crate::case::ContactElement::TwoD => "2d",
+            }
+            .to_string(),
+            sigma: i64::from(interface.sigma),
+            mu: interface.mu,
+            pairs,
+        }
+    }
+}
+
+/// A time-marching run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MarchData {
+    /// The scheme (`newmark`, `adaptive`, `piecewise-linear`, `quasi-static`).
+    pub scheme: String,
+    /// Wall time of the march (s).
+    pub wall_seconds: f64,
+    /// Excitation frequency ω (rad/s).
+    pub omega: f64,
+    /// Accepted time steps.
+    pub steps: u64,
+    /// The response DOFs, R of them.
+    pub response_dofs: Vec<ResponseDof>,
+    /// Instants (s), T of them.
+    pub time: Vec<f64>,
+    /// Responses (m), [T × R] row-major.
+    pub response: Vec<f64>,
+    /// Names of the friction elements, E of them.
+    pub element_names: Vec<String>,
+    /// Per element (f_t, f_n) (N), [T × E × 2] row-major.
+    pub contact_force: Vec<f64>,
+    /// Per element state code (0 separated, 1 stick, 2 slip+, 3 slip−), [T × E].
+    pub contact_state: Vec<u8>,
+    /// abs(Q⁽¹⁾) of each response DOF over the last period (m), [R].
+    pub first_harmonic_last_period: Vec<f64>,
+    /// Corrector iterations of each step, [T].
+    pub iterations_per_step: Vec<u64>,
+}
+
+/// Everything a results file holds.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ResultsFile {
+    /// Case title and text (root attributes).
+    pub info: FileInfo,
+    /// Frequency responses, `/frf/0`, `/frf/1`, … in sweep order.
+    pub frfs: Vec<FrfData>,
+    /// Contact interfaces, `/contact/<name>`.
+    pub contacts: Vec<ContactData>,
+    /// The time-marching run, `/march`.
+    pub march: Option<MarchData>,
+}
+
+/// Writes `results` to `path` atomically. Fails (exit status 1, naming the curve or element) when
+/// the sizes are inconsistent.
+pub fn write_results(path: &Path, results: &ResultsFile) -> Result<()> {
+    results_file(results)?.write(path)
+}
+
+/// The in-memory HDF5 file of `results`.
+pub fn results_file(results: &ResultsFile) -> Result<H5File> {
+    let mut file = H5File {
+        root: file_attributes(&results.info, RESULTS_KIND),
+    };
+    for (i, frf) in results.frfs.iter().enumerate() {
+        check_frf(frf, i, results.contacts.len())?;
+        frf_group(file.root.group("frf").group(&i.to_string()), frf);
+    }
+    for contact in &results.contacts {
+        contact_group(file.root.group("contact"), contact, &results.frfs)?;
+    }
+    if !results.contacts.is_empty() {
+        let names = results.contacts.iter().map(|c| c.name.clone()).collect();
+        file.root
+            .group("contact")
+            .set_attr("names", Attr::Strs(names));
+    }
+    if let Some(march) = &results.march {
+        check_march(march)?;
+        march_group(file.root.group("march"), march);
+    }
+    Ok(file)
+}
+
+fn size_error(what: String) -> Error {
+    Error::Compute(format!("results file: {what}"))
+}
+
+fn check_frf(frf: &FrfData, i: usize, contacts: usize) -> Result<()> {
+    let r = frf.response_dofs.len();
+    let per_point = r * (frf.harmonics + 1);
+    let some_stable = frf.points.iter().filter(|p| p.stable.is_some()).count();
+    if some_stable != 0 && some_stable != frf.points.len() {
+        return Err(size_error(format!(
+            "/frf/{i}: stability is given for {some_stable} of {} points (all or none)",
+            frf.points.len()
+        )));
+    }
+    for (p, point) in frf.points.iter().enumerate() {
+        if point.harmonics.len() != per_point || point.peak.len() != r {
+            return Err(size_error(format!(
+                "/frf/{i} point {p}: {} harmonics and {} peaks, expected {per_point} (R = {r}, H = {}) and {r}",
+                point.harmonics.len(),
+                point.peak.len(),
+                frf.harmonics
+            )));
+        }
+        if point.contact_fractions.len() != contacts {
+            return Err(size_error(format!(
+                "/frf/{i} point {p}: contact fractions for {} interfaces, the file has {contacts}",
+                point.contact_fractions.len()
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn response_dofs_dataset(dofs: &[ResponseDof]) -> Dataset {
+    let mut kind = Vec::with_capacity(dofs.len());
+    let mut tag = Vec::with_capacity(dofs.len());
+    let mut component = Vec::with_capacity(dofs.len());
+    for dof in dofs {
+        let (k, t, c) = match *dof {
+            ResponseDof::Node { tag, component } => (0, tag, i64::from(component)),
+            ResponseDof::Row(row) => (1, row, -1),
+        };
+        kind.push(k);
+        tag.push(t);
+        component.push(c);
+    }
+    let records = Records::new()
+        .column(
+            "kind",
+            Column::Enum {
+                labels: RESPONSE_KINDS.iter().map(|s| s.to_string()).collect(),
+                codes: kind,
+            },
+        )
+        .column("node_tag", Column::U64(tag))
+        .column("component", Column::I64(component));
+    Dataset::records(
+        records,
+        "1",
+        "response DOFs: kind node (node_tag = Gmsh tag, component 0/1/2 = x/y/z) or row (node_tag = matrix row, component -1)",
+    )
+}
+
+fn frf_group(group: &mut Group, frf: &FrfData) {
+    let p = frf.points.len();
+    let r = frf.response_dofs.len();
+    let h1 = frf.harmonics + 1;
+    group
+        .set_attr("harmonics", Attr::U64(frf.harmonics as u64))
+        .set_attr(
+            "sweep_parameters",
+            Attr::Strs(frf.sweep.keys().cloned().collect()),
+        );
+    for (name, value) in &frf.sweep {
+        group.set_attr(name, Attr::F64(*value));
+    }
+    let omega: Vec<f64> = frf.points.iter().map(|q| q.omega).collect();
+    let hz = omega.iter().map(|w| w / (2.0 * PI)).collect();
+    group.add(
+        "omega",
+        Dataset::f64s(omega, "rad/s", "excitation frequency, path order"),
+    );
+    group.add(
+        "frequency_hz",
+        Dataset::f64s(hz, "Hz", "excitation frequency omega/(2 pi)"),
+    );
+    let amplitude = frf
+        .points
+        .iter()
+        .flat_map(|q| (0..r).map(move |j| first_harmonic(&q.harmonics, j, h1)))
+        .collect();
+    group.add(
+        "amplitude",
+        Dataset::new(
+            &[p, r],
+            Data::F64(amplitude),
+            "m",
+            "first-harmonic amplitude abs(Q1) of each response DOF",
+        ),
+    );
+    let peak = frf.points.iter().flat_map(|q| q.peak.clone()).collect();
+    group.add(
+        "peak",
+        Dataset::new(
+            &[p, r],
+            Data::F64(peak),
+            "m",
+            "max over the period of abs(q(t)) of each response DOF",
+        ),
+    );
+    let harmonics = frf
+        .points
+        .iter()
+        .flat_map(|q| q.harmonics.clone())
+        .collect();
+    group.add(
+        "harmonics",
+        Dataset::new(
+            &[p, r, h1],
+            Data::Complex(harmonics),
+            "m",
+            "harmonics Q_n, n = 0..H: q(tau) = Re sum Q_n exp(i n tau), tau = omega t",
+        ),
+    );
+    group.add("response_dofs", response_dofs_dataset(&frf.response_dofs));
+    group.add(
+        "arc_length",
+        Dataset::f64s(
+            frf.points.iter().map(|q| q.arc_length).collect(),
+            "1",
+            "continuation arc length",
+        ),
+    );
+    group.add(
+        "newton_iterations",
+        Dataset::u64s(
+            frf.points.iter().map(|q| q.newton_iterations).collect(),
+            "1",
+            "Newton iterations of each point",
+        ),
+    );
+    let stable: Option<Vec<i64>> = frf.points.iter().map(|q| q.stable.map(i64::from)).collect();
+    if let (Some(stable), false) = (stable, frf.points.is_empty()) {
+        group.add("stable", Dataset::i64s(stable, "1", "1 stable, 0 unstable"));
+    }
+}
+
+/// abs(Q⁽¹⁾) of response DOF `j` (0 when H = 0).
+fn first_harmonic(harmonics: &[c64], j: usize, h1: usize) -> f64 {
+    if h1 < 2 {
+        return 0.0;
+    }
+    harmonics[j * h1 + 1].norm()
+}
+
+fn contact_group(parent: &mut Group, contact: &ContactData, frfs: &[FrfData]) -> Result<()> {
+    if parent.groups.contains_key(&contact.name) {
+        return Err(size_error(format!(
+            "two contact interfaces named {:?}",
+            contact.name
+        )));
+    }
+    let index = parent.groups.len();
+    let group = parent.group(&contact.name);
+    group
+        .set_attr("model", Attr::Str(contact.model.clone()))
+        .set_attr("element", Attr::Str(contact.element.clone()))
+        .set_attr("sigma", Attr::I64(contact.sigma))
+        .set_attr("mu", Attr::F64(contact.mu));
+    let pairs = &contact.pairs;
+    let records = Records::new()
+        .column(
+            "contact_node",
+            Column::U64(pairs.iter().map(|p| p.contact_node).collect()),
+        )
+        .column(
+            "target_node",
+            Column::U64(pairs.iter().map(|p| p.target_node).collect()),
+        );
+    group.add(
+        "pairs",
+        Dataset::records(
+            records,
+            "1",
+            "node-to-node elements: Gmsh tags of the contact node c and the target node t_j",
+        ),
+    );
+    let column = |f: fn(&ContactPairData) -> f64| pairs.iter().map(f).collect::<Vec<f64>>();
+    group.add(
+        "weights",
+        Dataset::f64s(column(|p| p.weight), "1", "SAMA weight w_j (eq. 29)"),
+    );
+    group.add(
+        "kt",
+        Dataset::f64s(column(|p| p.kt), "N/m", "tangential stiffness k_tj"),
+    );
+    group.add(
+        "kn",
+        Dataset::f64s(column(|p| p.kn), "N/m", "normal stiffness k_nj"),
+    );
+    group.add(
+        "preload",
+        Dataset::f64s(column(|p| p.preload), "N", "static normal preload n0_j"),
+    );
+    let frames = pairs
+        .iter()
+        .flat_map(|p| p.frame.iter().flatten().copied())
+        .collect();
+    group.add(
+        "frames",
+        Dataset::new(
+            &[pairs.len(), 3, 3],
+            Data::F64(frames),
+            "1",
+            "local frame of each element, rows t1, t2, n (global axes)",
+        ),
+    );
+    for (i, frf) in frfs.iter().enumerate() {
+        let fractions = frf
+            .points
+            .iter()
+            .flat_map(|p| p.contact_fractions[index])
+            .collect();
+        group.group("state_fractions").add(
+            &i.to_string(),
+            Dataset::new(
+                &[frf.points.len(), 3],
+                Data::F64(fractions),
+                "1",
+                "per point of /frf/<i>: fractions of the period in stick, slip, separation",
+            )
+            .with_attr(
+                "columns",
+                Attr::Strs(FRACTION_LABELS.iter().map(|s| s.to_string()).collect()),
+            ),
+        );
+    }
+    Ok(())
+}
+
+fn check_march(m: &MarchData) -> Result<()> {
+    let t = m.time.len();
+    let r = m.response_dofs.len();
+    let e = m.element_names.len();
+    let checks = [
+        ("response", m.response.len(), t * r),
+        ("contact_force", m.contact_force.len(), t * e * 2),
+        ("contact_state", m.contact_state.len(), t * e),
+        (
+            "first_harmonic_last_period",
+            m.first_harmonic_last_period.len(),
+            r,
+        ),
+        ("iterations_per_step", m.iterations_per_step.len(), t),
+    ];
+    for (name, got, expected) in checks {
+        if got != expected {
+            return Err(size_error(format!(
+                "/march/{name}: {got} values, expected {expected} (T = {t}, R = {r}, E = {e})"
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn march_group(group: &mut Group, m: &MarchData) {
+    let t = m.time.len();
+    let r = m.response_dofs.len();
+    let e = m.element_names.len();
+    group
+        .set_attr("scheme", Attr::Str(m.scheme.clone()))
+        .set_attr("wall_seconds", Attr::F64(m.wall_seconds))
+        .set_attr("omega", Attr::F64(m.omega))
+        .set_attr("frequency_hz", Attr::F64(m.omega / (2.0 * PI)))
+        .set_attr("steps", Attr::U64(m.steps));
+    group.add("time", Dataset::f64s(m.time.clone(), "s", "instants"));
+    group.add(
+        "response",
+        Dataset::new(
+            &[t, r],
+            Data::F64(m.response.clone()),
+            "m",
+            "displacement of each response DOF",
+        ),
+    );
+    group.add("response_dofs", response_dofs_dataset(&m.response_dofs));
+    group.add(
+        "contact_force",
+        Dataset::new(
+            &[t, e, 2],
+            Data::F64(m.contact_force.clone()),
+            "N",
+            "per friction element (f_t, f_n)",
+        ),
+    );
+    group.add(
+        "contact_state",
+        Dataset::new(
+            &[t, e],
+            Data::I64(m.contact_state.iter().map(|&s| i64::from(s)).collect()),
+            "1",
+            "per friction element: 0 separated, 1 stick, 2 slip +, 3 slip -",
+        )
+        .with_attr(
+            "labels",
+            Attr::Strs(STATE_LABELS.iter().map(|s| s.to_string()).collect()),
+        ),
+    );
+    group.add(
+        "element_names",
+        Dataset::new(
+            &[e],
+            Data::Strings(m.element_names.clone()),
+            "1",
+            "friction elements",
+        ),
+    );
+    group.add(
+        "first_harmonic_last_period",
+        Dataset::f64s(
+            m.first_harmonic_last_period.clone(),
+            "m",
+            "abs(Q1) of each response DOF over the last period",
+        ),
+    );
+    group.add(
+        "iterations_per_step",
+        Dataset::u64s(
+            m.iterations_per_step.clone(),
+            "1",
+            "corrector iterations of each step",
+        ),
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading
+
+/// Reads a results file written by [`write_results`]. Errors (exit status 2) name the file and the
+/// dataset.
+pub fn read_results(path: &Path) -> Result<ResultsFile> {
+    let reader = H5Reader::open(path)?;
+    let info = check_file_kind(&reader, RESULTS_KIND)?;
+    let contact_names = if reader.has_group("/contact") {
+        match reader.attr("/contact", "names")? {
+            Attr::Strs(names) => names,
+            other => {
+                return Err(reader.error(
+                    "/contact",
+                    format!("attribute \"names\" should be strings, found {other:?}"),
+                ))
+            }
+        }
+    } else {
+        Vec::new()
+    };
+    let mut frfs = Vec::new();
+    if reader.has_group("/frf") {
+        let count = reader.group_names("/frf")?.len();
+        for i in 0..count {
+            frfs.push(read_frf(&reader, i, &contact_names)?);
+        }
+    }
+    let mut contacts = Vec::new();
+    for name in &contact_names {
+        contacts.push(read_contact(&reader, name)?);
+    }
+    let march = if reader.has_group("/march") {
+        Some(read_march(&reader)?)
+    } else {
+        None
+    };
+    Ok(ResultsFile {
+        info,
+        frfs,
+        contacts,
+        march,
+    })
+}
+
+fn read_response_dofs(reader: &H5Reader, path: &str) -> Result<Vec<ResponseDof>> {
+    let records = reader.records(path, None, &["kind", "node_tag", "component"])?;
+    let tags = reader.column(path, &records, "node_tag", Column::as_u64, "u64")?;
+    let components = reader.column(path, &records, "component", Column::as_i64, "i64")?;
+    let Some(Column::Enum { codes, .. }) = records.get("kind") else {
+        return Err(reader.error(path, "field \"kind\" should be an enumeration"));
+    };
+    let mut dofs = Vec::with_capacity(records.len());
+    for j in 0..records.len() {
+        dofs.push(match (codes[j], u8::try_from(components[j])) {
+            (0, Ok(component)) if component < 3 => ResponseDof::Node {
+                tag: tags[j],
+                component,
+            },
+            (1, _) => ResponseDof::Row(tags[j]),
+            _ => {
+                return Err(reader.error(
+                    path,
+                    format!("record {j}: node DOF with component {}", components[j]),
+                ))
+            }
+        });
+    }
+    Ok(dofs)
+}
+
+fn read_frf(reader: &H5Reader, i: usize, contact_names: &[String]) -> Result<FrfData> {
+    let base = format!("/frf/{i}");
+    let harmonics = reader.attr_u64(&base, "harmonics")? as usize;
+    let mut sweep = BTreeMap::new();
+    if let Attr::Strs(names) = reader.attr(&base, "sweep_parameters")? {
+        for name in names {
+            let value = reader.attr_f64(&base, &name)?;
+            sweep.insert(name, value);
+        }
+    }
+    let response_dofs = read_response_dofs(reader, &format!("{base}/response_dofs"))?;
+    let omega = reader.f64_vector(&format!("{base}/omega"))?;
+    let (p, r, h1) = (omega.len(), response_dofs.len(), harmonics + 1);
+    let values = reader.complexes(&format!("{base}/harmonics"), &[p, r, h1])?;
+    let peak = reader.f64s(&format!("{base}/peak"), &[p, r])?;
+    let arc = reader.f64s(&format!("{base}/arc_length"), &[p])?;
+    let newton = reader.u64s(&format!("{base}/newton_iterations"), &[p])?;
+    let stable = if reader.group(&base)?.datasets.contains_key("stable") {
+        Some(reader.i64s(&format!("{base}/stable"), &[p])?)
+    } else {
+        None
+    };
+    let mut fractions = Vec::with_capacity(contact_names.len());
+    for name in contact_names {
+        fractions.push(reader.f64s(&format!("/contact/{name}/state_fractions/{i}"), &[p, 3])?);
+    }
+    let points = (0..p)
+        .map(|q| FrfPoint {
+            omega: omega[q],
+            harmonics: values[q * r * h1..(q + 1) * r * h1].to_vec(),
+            peak: peak[q * r..(q + 1) * r].to_vec(),
+            arc_length: arc[q],
+            newton_iterations: newton[q],
+            stable: stable.as_ref().map(|s| s[q] != 0),
+            contact_fractions: fractions
+                .iter()
+                .map(|f| [f[3 * q], f[3 * q + 1], f[3 * q + 2]])
+                .collect(),
+        })
+        .collect();
+    Ok(FrfData {
+        sweep,
+        harmonics,
+        response_dofs,
+        points,
+    })
+}
+
+fn read_contact(reader: &H5Reader, name: &str) -> Result<ContactData> {
+    let base = format!("/contact/{name}");
+    let path = format!("{base}/pairs");
+    let records = reader.records(&path, None, &["contact_node", "target_node"])?;
+    let e = records.len();
+    let contact = reader.column(&path, &records, "contact_node", Column::as_u64, "u64")?;
+    let target = reader.column(&path, &records, "target_node", Column::as_u64, "u64")?;
+    let column = |n: &str| reader.f64s(&format!("{base}/{n}"), &[e]);
+    let (weight, kt, kn, preload) = (
+        column("weights")?,
+        column("kt")?,
+        column("kn")?,
+        column("preload")?,
+    );
+    let frames = reader.f64s(&format!("{base}/frames"), &[e, 3, 3])?;
+    let pairs = (0..e)
+        .map(|j| {
+            let f = &frames[9 * j..9 * j + 9];
+            ContactPairData {
+                contact_node: contact[j],
+                target_node: target[j],
+                weight: weight[j],
+                frame: [[f[0], f[1], f[2]], [f[3], f[4], f[5]], [f[6], f[7], f[8]]],
+                kt: kt[j],
+                kn: kn[j],
+                preload: preload[j],
+            }
+        })
+        .collect();
+    Ok(ContactData {
+        name: name.to_string(),
+        model: reader.attr_str(&base, "model")?,
+        element: reader.attr_str(&base, "element")?,
+        sigma: reader.attr_i64(&base, "sigma")?,
+        mu: reader.attr_f64(&base, "mu")?,
+        pairs,
+    })
+}
+
+fn read_march(reader: &H5Reader) -> Result<MarchData> {
+    let response_dofs = read_response_dofs(reader, "/march/response_dofs")?;
+    let time = reader.f64_vector("/march/time")?;
+    let names = match reader.dataset("/march/element_names")?.data {
+        Data::Strings(v) => v,
+        other => {
+            return Err(reader.error(
+                "/march/element_names",
+                format!("element type {}, expected strings", other.type_name()),
+            ))
+        }
+    };
+    let (t, r, e) = (time.len(), response_dofs.len(), names.len());
+    let state = reader.i64s("/march/contact_state", &[t, e])?;
+    let state = state
+        .iter()
+        .map(|&s| {
+            u8::try_from(s)
+                .ok()
+                .filter(|&c| (c as usize) < STATE_LABELS.len())
+        })
+        .collect::<Option<Vec<u8>>>()
+        .ok_or_else(|| reader.error("/march/contact_state", "state code outside 0..=3"))?;
+    Ok(MarchData {
+        scheme: reader.attr_str("/march", "scheme")?,
+        wall_seconds: reader.attr_f64("/march", "wall_seconds")?,
+        omega: reader.attr_f64("/march", "omega")?,
+        steps: reader.attr_u64("/march", "steps")?,
+        response: reader.f64s("/march/response", &[t, r])?,
+        contact_force: reader.f64s("/march/contact_force", &[t, e, 2])?,
+        contact_state: state,
+        first_harmonic_last_period: reader.f64s("/march/first_harmonic_last_period", &[r])?,
+        iterations_per_step: reader.u64s("/march/iterations_per_step", &[t])?,
+        response_dofs,
+        time,
+        element_names: names,
+    })
+}
