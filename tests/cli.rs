@@ -88,7 +88,11 @@ fn unimplemented_commands_exit_1_and_every_command_has_help() {
         .join("meshes/sector_conforming.msh")
         .exists());
     let out = nlrom(&["modes", "no/such/case.toml", "--stage", "cb"]);
-    assert_eq!(out.status.code(), Some(2), "a missing case file is bad input");
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "a missing case file is bad input"
+    );
     let out = nlrom(&["solve", "case.toml", "-o", "r.h5"]);
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("not implemented yet"));
