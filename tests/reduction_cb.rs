@@ -46,11 +46,53 @@ fn relative_errors(approx: &[f64], exact: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// The interior eigenvalues λ (rad²/s²) of tests/data/sector_interior_modes.json (scipy eigsh,
+/// `python3 tools/bench_reduce.py reference`).
+fn scipy_interior_eigenvalues() -> Vec<f64> {
+    let text = std::fs::read_to_string(root().join("tests/data/sector_interior_modes.json"))
+        .expect("reference");
+    let reference: serde_json::Value = serde_json::from_str(&text).expect("json");
+    reference["eigenvalues"]
+        .as_array()
+        .expect("list")
+        .iter()
+        .map(|v| v.as_f64().expect("number"))
+        .collect()
+}
+
+/// With `NLROM_CB_DUMP=DIR`: K.mtx, M.mtx and masters.txt (0-based free rows) for
+/// `tools/bench_reduce.py` (the scipy reference of the interior modes and the scipy CB).
+fn dump_for_scipy(model: &StructuralModel, rows: &[usize]) {
+    let Ok(dir) = std::env::var("NLROM_CB_DUMP") else {
+        return;
+    };
+    let dir = PathBuf::from(dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    nlrom::matrix_io::write_matrix_market_symmetric(&dir.join("K.mtx"), &model.free.k).unwrap();
+    nlrom::matrix_io::write_matrix_market_symmetric(&dir.join("M.mtx"), &model.free.m).unwrap();
+    let text: Vec<String> = rows.iter().map(|r| r.to_string()).collect();
+    std::fs::write(dir.join("masters.txt"), text.join("\n")).unwrap();
+}
+
+// Acceptance of issue 4 (CB): the lowest 10 frequencies of the CB model against the full model.
+//
+// Finding (checked independently with scipy, tools/bench_reduce.py on the same K, M and master
+// rows, dense eigh of the reduced matrices): nlrom's static-mode blocks agree with scipy's
+// K_bb + K_ibᵀΨ to 2e-16 and M_bb + M_ibᵀΨ + Ψᵀ(M_ib + M_iiΨ) to 1.5e-13, its 40 fixed-interface
+// eigenvalues with eigsh's to 4e-13 (the lowest 40, no gap), and scipy's own CB gives the same
+// errors as below to two digits for every count. The slow convergence of mode 10 (6963 Hz) is a
+// property of this master set: of its interior part q = φ_i − Ψφ_b (32 % of its modal mass), the
+// first 30 fixed-interface modes leave 1.4e-4 of the M-norm², the first 40 1.2e-4, the first 60
+// 1e-5 — the missing part sits in interface modes of 48–61 kHz, 7–9× the frequency of the mode,
+// whose error contribution grows as (λ_j/λ)². Hence 0.1 % for all 10 modes needs 60 interface
+// modes on this sector (3.3e-4 measured, asserted < 1e-3); with 30, modes 1–9 are within 0.05 %
+// and mode 10 is 0.24 % off. The sector of the paper has a different master set.
 #[test]
 fn cb_frequencies_converge_to_the_full_model() {
     let (_, model) = load(SECTOR);
     let part = partition(&model, &master_groups()).expect("partition");
     assert_eq!(part.n_masters() + part.interior.len(), model.free.n_free());
+    dump_for_scipy(&model, &part.master_rows());
     // Masters ordered by role, then node, then component.
     assert!(part
         .masters
@@ -67,15 +109,25 @@ fn cb_frequencies_converge_to_the_full_model() {
     .expect("full modes");
     let f_full = full.frequencies_hz();
 
-    // One CB model with 40 interface modes; the models with fewer modes are its leading blocks
+    // One CB model with 100 interface modes; the models with fewer modes are its leading blocks
     // (the fixed-interface modes are sorted, so truncation is exact).
     let opts = CbOptions {
-        interface_modes: 40,
+        interface_modes: 100,
         block_columns: 100,
         ..CbOptions::default()
     };
     let cb = craig_bampton(model.free.k.as_ref(), model.free.m.as_ref(), &part, &opts).unwrap();
     assert!(cb.interface_residuals.iter().all(|&r| r < 1e-8));
+    // The 100 fixed-interface eigenvalues (10 878-DOF interior) against scipy's eigsh: the
+    // lowest 100, none skipped, to 1e-8 relative.
+    let reference = scipy_interior_eigenvalues();
+    assert_eq!(reference.len(), 100);
+    let err = relative_errors(&cb.interface_eigenvalues, &reference)
+        .into_iter()
+        .fold(0.0, f64::max);
+    println!("fixed-interface eigenvalues vs scipy eigsh: max rel. difference {err:.1e}");
+    assert!(err < 1e-8, "{err:e}");
+
     let n_b = cb.n_masters;
     println!(
         "CB on sector_conforming: {} master DOF, {} interior DOF",
@@ -84,9 +136,10 @@ fn cb_frequencies_converge_to_the_full_model() {
     );
     println!("| interface modes | max rel. error, modes 1–10 | mode-by-mode relative error |");
     println!("|---|---|---|");
+    let counts = [0, 5, 10, 20, 30, 40, 60, 100];
     let mut worst = Vec::new();
     let mut worst_first9 = Vec::new();
-    for n_m in [0, 5, 10, 20, 30, 40] {
+    for n_m in counts {
         let n = n_b + n_m;
         let k = cb.stiffness.as_ref().submatrix(0, 0, n, n);
         let m = cb.mass.as_ref().submatrix(0, 0, n, n);
@@ -111,14 +164,17 @@ fn cb_frequencies_converge_to_the_full_model() {
         worst.push(max);
         worst_first9.push(err[..9].iter().cloned().fold(0.0, f64::max));
     }
-    // 30 interface modes: the lowest 9 within 0.05 %, the 10th (6963 Hz) within 0.25 % (measured
-    // 2.4e-3; the issue's goal of 0.1 % for all 10 is not met on this master set, see README).
+    // 30 interface modes: the lowest 9 within 0.05 %, the 10th (6963 Hz) within 0.25 %
+    // (measured 2.4e-3; see the finding above).
     assert!(worst[4] < 2.5e-3, "30 modes: {:e}", worst[4]);
     assert!(
         worst_first9[4] < 5e-4,
         "30 modes, modes 1–9: {:e}",
         worst_first9[4]
     );
+    // 0.1 % for all 10 modes with 60 interface modes (measured 3.3e-4), 1.2e-4 with 100.
+    assert!(worst[6] < 1e-3, "60 modes: {:e}", worst[6]);
+    assert!(worst[7] < 2e-4, "100 modes: {:e}", worst[7]);
     // The error falls as modes are added.
     assert!(worst.windows(2).all(|w| w[1] <= w[0] * 1.0001), "{worst:?}");
     assert!(worst[5] < worst[1] / 10.0, "{worst:?}");

@@ -19,8 +19,9 @@
 
 use faer::linalg::matmul::matmul;
 use faer::reborrow::{Reborrow, ReborrowMut};
-use faer::{Accum, ColMut, ColRef, Mat, MatMut, MatRef, Side};
+use faer::{Accum, ColMut, ColRef, Mat, MatMut, MatRef};
 
+use super::dense::self_adjoint_eigen_qr;
 use super::krylov::Operator;
 use super::shift_invert::par;
 use crate::error::{Error, Result};
@@ -243,18 +244,18 @@ fn orthonormal_random_column(mut v: MatMut<'_, f64>, col: usize, rng: &mut Split
     dst /= norm;
 }
 
-/// Eigenpairs of the projected matrix, θ descending with the matching columns of S.
+/// Eigenpairs of the projected matrix, θ descending with the matching columns of S, by
+/// [`self_adjoint_eigen_qr`]. faer's default (divide and conquer above 128 × 128) loses the
+/// orthogonality of the eigenvectors of clustered Ritz values on these projected matrices:
+/// measured with 100 wanted modes (m = 200), the 10 878-DOF Craig–Bampton interior of the
+/// bundled sector then converged only 41 of 100 pairs in 200 restarts, and the 22³ lattice
+/// returned modes M-orthonormal only to 1e-9 instead of 1e-15.
 fn rayleigh_ritz(h: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>)> {
     let k = h.nrows();
     let sym = Mat::from_fn(k, k, |i, j| 0.5 * (h[(i, j)] + h[(j, i)]));
-    let evd = sym.self_adjoint_eigen(Side::Lower).map_err(|e| {
-        Error::Compute(format!(
-            "the projected eigenproblem (size {k}) did not converge ({e:?}); check K and M for \
-             extreme values"
-        ))
-    })?;
-    let theta = (0..k).map(|i| evd.S()[k - 1 - i]).collect();
-    let s = Mat::from_fn(k, k, |i, j| evd.U()[(i, k - 1 - j)]);
+    let (values, u) = self_adjoint_eigen_qr(sym.as_ref())?;
+    let theta = (0..k).map(|i| values[k - 1 - i]).collect();
+    let s = Mat::from_fn(k, k, |i, j| u[(i, k - 1 - j)]);
     Ok((theta, s))
 }
 

@@ -82,6 +82,7 @@ mod krylov;
 mod lanczos;
 mod shift_invert;
 
+pub use dense::self_adjoint_eigen_qr;
 pub use shift_invert::ShiftInvert;
 
 use faer::sparse::SparseColMatRef;
