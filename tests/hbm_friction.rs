@@ -148,7 +148,10 @@ fn den_hartog_rigid_coulomb_ratios() {
             &last.x,
             r,
             1.0,
-            &ResponseOptions { peak_samples: 4096 },
+            &ResponseOptions {
+                peak_samples: 4096,
+                ..ResponseOptions::default()
+            },
         )
         .unwrap()
         .peak[0];

@@ -4,6 +4,7 @@
 
 use super::newton::NewtonOptions;
 use super::response::{output_response, OutputResponse, ResponseOptions};
+use super::stability::is_stable;
 use super::system::{FrequencyPath, HbmSystem};
 use crate::case::Case;
 use crate::continuation::{trace, ContinuationOptions, PathEnd, PathPoint};
@@ -25,6 +26,9 @@ pub struct FrfPoint<S> {
     pub q: Vec<f64>,
     /// The nonlinear force's memory at the point.
     pub state: S,
+    /// Stable by Hill's method ([`super::stability::is_stable`]); `None` unless
+    /// `ResponseOptions::stability` asked for it.
+    pub stable: Option<bool>,
 }
 
 /// A traced frequency response.
@@ -58,7 +62,13 @@ pub fn frequency_response<F: HarmonicForce>(
         .points
         .into_iter()
         .map(|p| {
+            let stable = if response.stability {
+                Some(is_stable(system, &p.x, p.parameter, &p.state)?)
+            } else {
+                None
+            };
             Ok(FrfPoint {
+                stable,
                 omega: p.parameter,
                 response: output_response(system, &p.x, p.parameter, 1.0, response)?,
                 arc_length: p.arc_length,

@@ -61,6 +61,18 @@ impl Split {
         }
     }
 
+    /// The whole matrix with the rows and columns ordered [nonlinear; linear].
+    fn joined(&self) -> Mat<c64> {
+        let n_n = self.nn.nrows();
+        let n = n_n + self.ll.nrows();
+        Mat::from_fn(n, n, |i, j| match (i < n_n, j < n_n) {
+            (true, true) => self.nn[(i, j)],
+            (true, false) => self.nl[(i, j - n_n)],
+            (false, true) => self.ln[(i - n_n, j)],
+            (false, false) => self.ll[(i - n_n, j - n_n)],
+        })
+    }
+
     fn new(a: MatRef<'_, c64>, nonlinear: &[usize], linear: &[usize]) -> Split {
         let sub = |r: &[usize], c: &[usize]| Mat::from_fn(r.len(), c.len(), |i, j| a[(r[i], c[j])]);
         Split {
@@ -107,6 +119,18 @@ impl Partitioned {
             d
         })
     }
+}
+
+/// The uncondensed matrices of one harmonic n, rows and columns ordered [nonlinear DOFs (in the
+/// nonlinear force's order); linear DOFs] (for Hill's method, [`super::stability`]).
+#[derive(Clone, Debug)]
+pub struct Uncondensed {
+    /// K (N/m).
+    pub stiffness: Mat<c64>,
+    /// M (kg).
+    pub mass: Mat<c64>,
+    /// C (N·s/m), zero when the block is undamped.
+    pub damping: Mat<c64>,
 }
 
 /// One harmonic n condensed on the nonlinear DOFs at one frequency (eqs. 16–18).
@@ -257,6 +281,20 @@ impl LinearModel {
             .map(|f| f.norm_sqr())
             .sum::<f64>()
             .sqrt()
+    }
+
+    /// The uncondensed K, M, C of harmonic n's block, ordered [nonlinear; linear].
+    pub fn uncondensed(&self, n: usize) -> Uncondensed {
+        let part = &self.blocks[self.harmonic_block[n]];
+        let size = part.n_rows;
+        Uncondensed {
+            stiffness: part.k.joined(),
+            mass: part.m.joined(),
+            damping: part
+                .c
+                .as_ref()
+                .map_or_else(|| Mat::zeros(size, size), Split::joined),
+        }
     }
 
     /// Harmonic n condensed on the nonlinear DOFs at ω (rad/s), with its ω-derivatives and the

@@ -13,6 +13,8 @@
 //! - [`newton`]: Newton with step damping, convergence on residual and increment;
 //! - [`response`]: harmonics, amplitude and peak of the output DOFs at a solution;
 //! - [`frf`]: a frequency response (continuation + recovery) and a case's continuation settings;
+//! - [`stability`]: Hill's method on the uncondensed model — Floquet exponents and a `stable`
+//!   flag per solution point;
 //! - [`setup`]: the linear part of a matrix-defined case (dense K, M, C, excitation, rows).
 //!
 //! Path following is in [`crate::continuation`].
@@ -22,9 +24,10 @@ pub mod linear;
 pub mod newton;
 pub mod response;
 pub mod setup;
+pub mod stability;
 pub mod system;
 
-pub use linear::{Condensed, LinearModel, MatrixBlock};
+pub use linear::{Condensed, LinearModel, MatrixBlock, Uncondensed};
 pub use newton::{solve_fixed, NewtonFailure, NewtonOptions, NewtonSolution};
 pub use response::{OutputResponse, ResponseOptions};
 pub use system::{FrequencyPath, HbmSystem, LevelPath, Linearization, ParameterSystem};

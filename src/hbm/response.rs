@@ -13,11 +13,17 @@ use crate::harmonics::HarmonicForce;
 pub struct ResponseOptions {
     /// Samples per period for the peak (at least 8(H+1) are used).
     pub peak_samples: usize,
+    /// Whether [`super::frf::frequency_response`] fills `FrfPoint::stable` (Hill's method,
+    /// [`super::stability`]; a dense eigenproblem per point).
+    pub stability: bool,
 }
 
 impl Default for ResponseOptions {
     fn default() -> Self {
-        ResponseOptions { peak_samples: 256 }
+        ResponseOptions {
+            peak_samples: 256,
+            stability: false,
+        }
     }
 }
 
