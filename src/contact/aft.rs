@@ -27,6 +27,8 @@ pub struct Aft {
     synthesis: Vec<f64>,
     /// Row k (length N_t): Q_k = Σ_j analysis[k][j] q(τ_j) for a band-limited q.
     analysis: Vec<f64>,
+    /// The analysis table transposed: row j (length m) holds ∂Q_k/∂q(τ_j) for k = 0..2H.
+    analysis_columns: Vec<f64>,
     /// cos(2πq/N_t), sin(2πq/N_t) for q = 0..N_t−1.
     unit_circle: (Vec<f64>, Vec<f64>),
 }
@@ -67,6 +69,12 @@ impl Aft {
                 analysis[2 * h * n + j] = -2.0 * s / n as f64;
             }
         }
+        let mut analysis_columns = vec![0.0; n * m];
+        for k in 0..m {
+            for j in 0..n {
+                analysis_columns[j * m + k] = analysis[k * n + j];
+            }
+        }
         let unit_circle = (0..n)
             .map(|q| {
                 let (s, c) = (2.0 * std::f64::consts::PI * q as f64 / n as f64).sin_cos();
@@ -79,6 +87,7 @@ impl Aft {
             inverse,
             synthesis,
             analysis,
+            analysis_columns,
             unit_circle,
         })
     }
@@ -150,6 +159,36 @@ impl Aft {
     pub fn analysis_row(&self, k: usize) -> &[f64] {
         let n = self.layout.time_samples;
         &self.analysis[k * n..(k + 1) * n]
+    }
+
+    /// Column j of the analysis table: ∂Q_k/∂q(τ_j) for k = 0..2H (length 2H+1, contiguous).
+    pub fn analysis_column(&self, j: usize) -> &[f64] {
+        let m = self.layout.coefficients();
+        &self.analysis_columns[j * m..(j + 1) * m]
+    }
+
+    /// Discrete Fourier sums of the samples `a` (length N_t) of orders p = 0..=2H:
+    /// c_p = Σ_j a_j cos(pτ_j)/N_t into `sums[2p]` and s_p = Σ_j a_j sin(pτ_j)/N_t into
+    /// `sums[2p + 1]` (length 2(2H+1)), by one real FFT X_p = Σ_j a_j e^{−ipτ_j}
+    /// (c_p = Re X_p/N_t, s_p = −Im X_p/N_t; orders above N_t/2 by X_p = conj X_{N_t−p}).
+    pub fn fourier_sums(&self, a: &[f64], sums: &mut [f64], scratch: &mut AftScratch) {
+        let h = self.layout.harmonics;
+        let n = self.layout.time_samples;
+        let scale = 1.0 / n as f64;
+        scratch.time.copy_from_slice(a);
+        self.forward
+            .process_with_scratch(&mut scratch.time, &mut scratch.spectrum, &mut scratch.fft)
+            .expect("AFT forward transform: buffer lengths fixed by the plan");
+        let spec = &scratch.spectrum;
+        for p in 0..=2 * h {
+            let (x, sign) = if p < spec.len() {
+                (spec[p], 1.0)
+            } else {
+                (spec[n - p], -1.0)
+            };
+            sums[2 * p] = x.re * scale;
+            sums[2 * p + 1] = -sign * x.im * scale;
+        }
     }
 
     /// cos(2πq/N_t) and sin(2πq/N_t) for q = 0..N_t−1.

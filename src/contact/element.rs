@@ -120,14 +120,8 @@ pub struct Workspace {
     /// Local Jacobian, row-major (signals·m) × (signals·m + 1); last column ∂F/∂n0.
     jacobian: Vec<f64>,
     jacobian_cols: usize,
-    // derivative carriers
-    grad_w: [Vec<f64>; 2],
-    grad_tmp: [Vec<f64>; 2],
-    dforce: Vec<f64>,
-    periodic: Vec<f64>,
-    tangents: Vec<law::SampleTangent>,
-    weights: Vec<f64>,
-    sums: Vec<f64>,
+    /// Buffers of [`differentiate`].
+    derivative: DerivativeBuffers,
 }
 
 impl Workspace {
@@ -153,13 +147,7 @@ impl Workspace {
             },
             jacobian: Vec::new(),
             jacobian_cols: 0,
-            grad_w: [Vec::new(), Vec::new()],
-            grad_tmp: [Vec::new(), Vec::new()],
-            dforce: Vec::new(),
-            periodic: Vec::new(),
-            tangents: Vec::with_capacity(n_t),
-            weights: Vec::with_capacity(n_t),
-            sums: Vec::new(),
+            derivative: DerivativeBuffers::default(),
         }
     }
 
@@ -283,10 +271,7 @@ pub fn evaluate(
         aft.to_harmonics(&ws.fnormal, &mut force[o..o + m], &mut ws.aft_scratch);
     }
     if jacobian {
-        match element.variant {
-            Variant::OneD => differentiate_one_d(element, aft, w_start, ws),
-            Variant::TwoD => differentiate(element, aft, w_start, ws),
-        }
+        differentiate(element, aft, w_start, ws);
     }
     Ok(marching)
 }
@@ -307,170 +292,324 @@ fn march_period(element: &LocalElement, ws: &mut Workspace, w: &mut [f64; 2]) {
     }
 }
 
-/// The local Jacobian of the periodic solution starting from `w_start` (SAMA paper eq. 25 in
-/// local coordinates, plus the column ∂F/∂n0).
-///
-/// With x = (local coefficients, n0) and E_j the synthesis row of sample j, each sample gives
-/// ∂f_j = (∂f/∂x)(E_j ⊗ ·) + (∂f/∂w) ∂w_{j−1} and ∂w_j = (∂w'/∂x)(E_j ⊗ ·) + (∂w'/∂w) ∂w_{j−1}.
-/// ∂w is split as G_j + Φ_j ∂w_start (G carried from ∂w_start = 0, Φ_j = ∂w_j/∂w_start); the
-/// periodicity w_end = w_start then gives ∂w_start = (I − Φ_end)⁻¹ G_end, and
-/// ∂F_k = Σ_j B_kj ∂f_j with B the analysis table.
-fn differentiate(element: &LocalElement, aft: &Aft, w_start: [f64; 2], ws: &mut Workspace) {
-    let p = &element.params;
-    let m = ws.m;
-    let n_t = ws.n_t;
-    let nt = element.tangential;
-    let nsig = element.signals();
-    let cols = nsig * m + 1;
-    let rows = nsig * m;
-    let n0_col = nsig * m;
-    ws.jacobian.clear();
-    ws.jacobian.resize(rows * cols, 0.0);
-    ws.jacobian_cols = cols;
-    for d in 0..2 {
-        ws.grad_w[d].clear();
-        ws.grad_w[d].resize(cols, 0.0);
-        ws.grad_tmp[d].clear();
-        ws.grad_tmp[d].resize(cols, 0.0);
+/// Buffers of [`differentiate`] (one set per thread, reused across elements).
+#[derive(Default)]
+struct DerivativeBuffers {
+    /// ∂w_d (d = 1, 2) after the current sample: rows of length `ext` = local inputs, n0, and
+    /// the two columns ∂/∂w_start (the unknown derivative of the starting state).
+    dw: [Vec<f64>; 2],
+    /// s = vᵀ ∂w of a 2-D slip sample (length `ext`).
+    s: Vec<f64>,
+    /// β_d = Σ_j (∂f_j,d/∂w_d) B_·j over the samples since ∂w_d last changed (length m).
+    beta: [Vec<f64>; 2],
+    /// Whether β_d holds a contribution.
+    live: [bool; 2],
+    /// Memory terms of force d as rank-one products left_r ⊗ right_r: left vectors (m each).
+    left: [Vec<f64>; 2],
+    /// Right rows (`ext` each).
+    right: [Vec<f64>; 2],
+    /// ∂f/∂(u1, u2, v, n0) at fixed w per sample: sequence (f, c) at [(4f + c)·N_t ..].
+    weights: Vec<f64>,
+    /// Which of the sequences hold a non-zero sample.
+    nonzero: [[bool; 4]; 3],
+    /// Fourier sums of one weight sequence (2(2H+1)).
+    sums: Vec<f64>,
+    /// Harmonics of one n0 weight sequence (m).
+    column: Vec<f64>,
+    /// Σ_r left_r ⊗ right_r on the two ∂w_start columns (m × 2).
+    start_coef: Vec<f64>,
+    /// ∂w_start from the periodicity condition (two rows of length cols).
+    start: [Vec<f64>; 2],
+}
+
+impl DerivativeBuffers {
+    fn reset(&mut self, m: usize, n_t: usize, cols: usize) {
+        let ext = cols + 2;
+        for d in 0..2 {
+            self.dw[d].clear();
+            self.dw[d].resize(ext, 0.0);
+            self.dw[d][cols + d] = 1.0;
+            self.beta[d].clear();
+            self.beta[d].resize(m, 0.0);
+            self.live[d] = false;
+            self.left[d].clear();
+            self.right[d].clear();
+            self.start[d].clear();
+            self.start[d].resize(cols, 0.0);
+        }
+        self.s.clear();
+        self.s.resize(ext, 0.0);
+        self.weights.clear();
+        self.weights.resize(12 * n_t, 0.0);
+        self.nonzero = [[false; 4]; 3];
+        self.sums.resize(4 * m, 0.0);
+        self.column.resize(m, 0.0);
+        self.start_coef.resize(2 * m, 0.0);
     }
-    ws.dforce.clear();
-    ws.dforce.resize(nsig * cols, 0.0);
-    // periodic[(row) * 2 + a]: Σ_j B ∂f/∂w Φ_j, the coefficient of ∂w_start.
-    ws.periodic.clear();
-    ws.periodic.resize(rows * 2, 0.0);
-    // Local input component c ∈ {u1, u2, v} → offset of its coefficients in x (None if absent).
-    let offset = |c: usize| -> Option<usize> {
-        match c {
-            0 => Some(0),
-            1 if nt == 2 => Some(m),
-            2 if element.normal => Some(nt * m),
-            _ => None,
-        }
-    };
-    // Local force f ∈ {f1, f2, fn} → row block.
-    let force_block = offset;
-    let mut phi = [[1.0, 0.0], [0.0, 1.0]];
-    let mut w = w_start;
-    let analysis = aft.analysis_table();
-    for j in 0..n_t {
-        let t = law::sample_with_tangent(element.variant, p, [ws.u[0][j], ws.u[1][j]], ws.v[j], w);
-        w = t.sample.slider;
-        let e = aft.synthesis_row(j);
-        // ∂f_j for every present force, as rows of length `cols`.
-        for f in 0..3 {
-            let Some(fb) = force_block(f) else { continue };
-            let row_index = fb / m;
-            let row = &mut ws.dforce[row_index * cols..(row_index + 1) * cols];
-            row.fill(0.0);
-            for c in 0..3 {
-                let g = t.dforce_dx[f][c];
-                if g != 0.0 {
-                    if let Some(o) = offset(c) {
-                        for (r, ev) in row[o..o + m].iter_mut().zip(e) {
-                            *r += g * ev;
-                        }
-                    }
-                }
-            }
-            row[n0_col] += t.dforce_dx[f][3];
-            if f < 2 {
-                for a in 0..2 {
-                    let g = t.dforce_dw[f][a];
-                    if g != 0.0 {
-                        for (r, gw) in row.iter_mut().zip(&ws.grad_w[a]) {
-                            *r += g * gw;
-                        }
-                    }
-                }
-            }
-            // Accumulate the forward transform and the periodic coupling.
-            let dfphi = if f < 2 {
-                [
-                    t.dforce_dw[f][0] * phi[0][0] + t.dforce_dw[f][1] * phi[1][0],
-                    t.dforce_dw[f][0] * phi[0][1] + t.dforce_dw[f][1] * phi[1][1],
-                ]
-            } else {
-                [0.0, 0.0]
-            };
-            let row_is_zero = row.iter().all(|&r| r == 0.0);
-            for k in 0..m {
-                let b = analysis[k * n_t + j];
-                let out = (fb + k) * cols;
-                if !row_is_zero {
-                    for (jv, r) in ws.jacobian[out..out + cols].iter_mut().zip(row.iter()) {
-                        *jv += b * r;
-                    }
-                }
-                ws.periodic[(fb + k) * 2] += b * dfphi[0];
-                ws.periodic[(fb + k) * 2 + 1] += b * dfphi[1];
-            }
-        }
-        // ∂w_j and Φ_j.
-        for a in 0..2 {
-            let tmp = &mut ws.grad_tmp[a];
-            tmp.fill(0.0);
-            for c in 0..3 {
-                let g = t.dslider_dx[a][c];
-                if g != 0.0 {
-                    if let Some(o) = offset(c) {
-                        for (r, ev) in tmp[o..o + m].iter_mut().zip(e) {
-                            *r += g * ev;
-                        }
-                    }
-                }
-            }
-            tmp[n0_col] += t.dslider_dx[a][3];
-            for b in 0..2 {
-                let g = t.dslider_dw[a][b];
-                if g != 0.0 {
-                    for (r, gw) in tmp.iter_mut().zip(&ws.grad_w[b]) {
-                        *r += g * gw;
-                    }
-                }
-            }
-        }
-        std::mem::swap(&mut ws.grad_w, &mut ws.grad_tmp);
-        let dw = t.dslider_dw;
-        phi = [
-            [
-                dw[0][0] * phi[0][0] + dw[0][1] * phi[1][0],
-                dw[0][0] * phi[0][1] + dw[0][1] * phi[1][1],
-            ],
-            [
-                dw[1][0] * phi[0][0] + dw[1][1] * phi[1][0],
-                dw[1][0] * phi[0][1] + dw[1][1] * phi[1][1],
-            ],
-        ];
-    }
-    // Periodicity: ∂w_start = (I − Φ)⁻¹ G_end; directions that never left stick keep ∂w_start = 0.
-    let start = periodic_start(element.variant, phi, &ws.grad_w, cols);
-    for r in 0..rows {
-        let (c0, c1) = (ws.periodic[r * 2], ws.periodic[r * 2 + 1]);
-        if c0 == 0.0 && c1 == 0.0 {
-            continue;
-        }
-        let out = &mut ws.jacobian[r * cols..(r + 1) * cols];
-        for (k, o) in out.iter_mut().enumerate() {
-            *o += c0 * start[0][k] + c1 * start[1][k];
+
+    /// Ends the stick accumulation of direction d (before ∂w_d changes): emits β_d ⊗ ∂w_d.
+    fn flush(&mut self, d: usize) {
+        if self.live[d] {
+            self.left[d].extend_from_slice(&self.beta[d]);
+            self.right[d].extend_from_slice(&self.dw[d]);
+            self.beta[d].fill(0.0);
+            self.live[d] = false;
         }
     }
 }
 
-/// ∂w_start from the periodicity w_start = w_end = Φ w_start + G (per derivative column).
+/// Which local signal (u1, u2, v) sits at which offset of the local coefficient vector.
+#[derive(Clone, Copy)]
+struct Offsets {
+    m: usize,
+    tangential: usize,
+    normal: bool,
+}
+
+impl Offsets {
+    /// Offset of the coefficients of signal c ∈ {0: u1, 1: u2, 2: v}; None if absent. The same
+    /// offsets index the force rows (f1, f2, f_n).
+    fn of(&self, c: usize) -> Option<usize> {
+        match c {
+            0 => Some(0),
+            1 if self.tangential == 2 => Some(self.m),
+            2 if self.normal => Some(self.tangential * self.m),
+            _ => None,
+        }
+    }
+}
+
+/// `row` += Σ_c g_c E_j (in the coefficients of input c) + g_n0 e_n0 for the partial
+/// derivatives g = ∂(·)/∂(u1, u2, v, n0) of one sample with synthesis row `e` = E_j.
+fn add_input_row(row: &mut [f64], g: &[f64; 4], e: &[f64], offsets: Offsets, n0_col: usize) {
+    for (c, &gc) in g.iter().enumerate().take(3) {
+        if gc == 0.0 {
+            continue;
+        }
+        if let Some(o) = offsets.of(c) {
+            for (r, ev) in row[o..o + e.len()].iter_mut().zip(e) {
+                *r += gc * ev;
+            }
+        }
+    }
+    row[n0_col] += g[3];
+}
+
+/// The local Jacobian of the periodic solution starting from `w_start` (SAMA paper eq. 25 in
+/// local coordinates, plus the column ∂F/∂n0), in O(N_t·H + N_mem·H²) with N_mem the number of
+/// slider-memory terms (stick runs, and 2-D slip samples).
+///
+/// With x = (local coefficients, n0), E_j the synthesis row and B_·j the analysis column of
+/// sample j, the law gives ∂f_j = D_j ∂x_j + W_j ∂w_{j−1} and ∂w_j = C_j ∂x_j + A_j ∂w_{j−1}
+/// (∂x_j = E_j ⊗ ·; [`law::sample_with_tangent`]), and ∂F = Σ_j B_·j ∂f_j:
+/// * the fixed-w part Σ_j B_·j D_j E_j is, per (force, input) pair, the harmonic matrix of
+///   multiplication by the sampled weight (D_j)_fc, built from its Fourier sums
+///   ([`add_multiplication_block`]); the n0 column is the harmonics of (D_j)_f,n0;
+/// * the memory part Σ_j B_·j W_j ∂w_{j−1}: where A_j, W_j are diagonal (stick: A = 1,
+///   W = −k_t; slip of the 1-D law and separation: A = W = 0) ∂w_d stays constant over a stick
+///   run and the run contributes the rank-one product (Σ_run W B_·j) ⊗ ∂w_d; a 2-D slip sample
+///   has A = v vᵀ (rank one, the radial-return projection) and W = −k_t A, one rank-one product
+///   (−k_t v B_·j) ⊗ (vᵀ ∂w_{j−1}). The products are summed at the end ([`add_products`]).
+///
+/// ∂w is carried with two extra columns for ∂w_start, so that ∂w_end = G + Φ ∂w_start; the
+/// periodicity w_start = w_end gives ∂w_start = (I − Φ)⁻¹ G ([`periodic_start`]; a direction
+/// that never leaves stick keeps ∂w_start = 0), which closes the extra columns.
+fn differentiate(element: &LocalElement, aft: &Aft, w_start: [f64; 2], ws: &mut Workspace) {
+    let p = &element.params;
+    let (m, n_t) = (ws.m, ws.n_t);
+    let h = (m - 1) / 2;
+    let nt = element.tangential;
+    let nsig = element.signals();
+    let cols = nsig * m + 1;
+    let n0_col = nsig * m;
+    let offsets = Offsets {
+        m,
+        tangential: nt,
+        normal: element.normal,
+    };
+    let Workspace {
+        jacobian,
+        jacobian_cols,
+        derivative: b,
+        aft_scratch,
+        u,
+        v,
+        ..
+    } = ws;
+    jacobian.clear();
+    jacobian.resize(nsig * m * cols, 0.0);
+    *jacobian_cols = cols;
+    b.reset(m, n_t, cols);
+    let two_d = element.variant == Variant::TwoD;
+    let mut w = w_start;
+    for j in 0..n_t {
+        let t = law::sample_with_tangent(element.variant, p, [u[0][j], u[1][j]], v[j], w);
+        w = t.sample.slider;
+        for f in 0..3 {
+            for c in 0..4 {
+                let g = t.dforce_dx[f][c];
+                b.weights[(4 * f + c) * n_t + j] = g;
+                b.nonzero[f][c] |= g != 0.0;
+            }
+        }
+        let e = aft.synthesis_row(j);
+        let bj = aft.analysis_column(j);
+        if two_d && t.sample.regime[0] == Regime::Slip {
+            slip_2d(&t, p.kt, e, bj, offsets, n0_col, b);
+            continue;
+        }
+        // A_j, W_j diagonal.
+        for d in 0..nt {
+            let g = t.dforce_dw[d][d];
+            if g != 0.0 {
+                for (bk, bv) in b.beta[d].iter_mut().zip(bj) {
+                    *bk += g * bv;
+                }
+                b.live[d] = true;
+            }
+            let a = t.dslider_dw[d][d];
+            if a == 1.0 && t.dslider_dx[d].iter().all(|&x| x == 0.0) {
+                continue;
+            }
+            b.flush(d);
+            if a != 1.0 {
+                for r in b.dw[d].iter_mut() {
+                    *r *= a;
+                }
+            }
+            add_input_row(&mut b.dw[d], &t.dslider_dx[d], e, offsets, n0_col);
+        }
+    }
+    for d in 0..nt {
+        b.flush(d);
+    }
+    // Periodic closure.
+    let phi = [
+        [b.dw[0][cols], b.dw[0][cols + 1]],
+        [b.dw[1][cols], b.dw[1][cols + 1]],
+    ];
+    periodic_start(element.variant, phi, &b.dw, cols, &mut b.start);
+    // Fixed-w part.
+    for f in 0..3 {
+        let Some(fb) = offsets.of(f) else { continue };
+        for c in 0..3 {
+            let Some(cb) = offsets.of(c) else { continue };
+            if !b.nonzero[f][c] {
+                continue;
+            }
+            let seq = &b.weights[(4 * f + c) * n_t..(4 * f + c + 1) * n_t];
+            aft.fourier_sums(seq, &mut b.sums, aft_scratch);
+            add_multiplication_block(h, &b.sums, jacobian, cols, fb, cb);
+        }
+        if b.nonzero[f][3] {
+            let seq = &b.weights[(4 * f + 3) * n_t..(4 * f + 4) * n_t];
+            aft.to_harmonics(seq, &mut b.column, aft_scratch);
+            for (k, ck) in b.column.iter().enumerate() {
+                jacobian[(fb + k) * cols + n0_col] += ck;
+            }
+        }
+    }
+    // Memory part, closed with ∂w_start.
+    for d in 0..nt {
+        let rows = &mut jacobian[d * m * cols..(d + 1) * m * cols];
+        add_products(&b.left[d], &b.right[d], m, cols, rows, &mut b.start_coef);
+        for (k, row) in rows.chunks_exact_mut(cols).enumerate() {
+            let (c0, c1) = (b.start_coef[2 * k], b.start_coef[2 * k + 1]);
+            if c0 == 0.0 && c1 == 0.0 {
+                continue;
+            }
+            for ((r, s0), s1) in row.iter_mut().zip(&b.start[0]).zip(&b.start[1]) {
+                *r += c0 * s0 + c1 * s1;
+            }
+        }
+    }
+}
+
+/// Memory and ∂w update of a 2-D slip sample: A = ∂w'/∂w = v vᵀ (rank one, symmetric, from
+/// the radial return) and ∂f/∂w = −k_t A, so ∂f_j gains −k_t v (vᵀ ∂w_{j−1}) and
+/// ∂w_j = v (vᵀ ∂w_{j−1}) + C_j ∂x_j.
+fn slip_2d(
+    t: &law::SampleTangent,
+    kt: f64,
+    e: &[f64],
+    bj: &[f64],
+    offsets: Offsets,
+    n0_col: usize,
+    b: &mut DerivativeBuffers,
+) {
+    b.flush(0);
+    b.flush(1);
+    let a = t.dslider_dw;
+    let k = if a[0][0] >= a[1][1] { 0 } else { 1 };
+    let pivot = a[k][k];
+    if pivot > 0.0 {
+        let root = pivot.sqrt();
+        let vv = [a[0][k] / root, a[1][k] / root];
+        for ((s, d0), d1) in b.s.iter_mut().zip(&b.dw[0]).zip(&b.dw[1]) {
+            *s = vv[0] * d0 + vv[1] * d1;
+        }
+        for (d, vd) in vv.into_iter().enumerate() {
+            b.left[d].extend(bj.iter().map(|bv| -kt * vd * bv));
+            b.right[d].extend_from_slice(&b.s);
+            for (r, s) in b.dw[d].iter_mut().zip(&b.s) {
+                *r = vd * s;
+            }
+        }
+    } else {
+        b.dw[0].fill(0.0);
+        b.dw[1].fill(0.0);
+    }
+    for d in 0..2 {
+        add_input_row(&mut b.dw[d], &t.dslider_dx[d], e, offsets, n0_col);
+    }
+}
+
+/// `rows` (m × cols, row-major) += Σ_r left_r ⊗ right_r[..cols] and `coef` (m × 2) =
+/// Σ_r left_r ⊗ right_r[cols..cols+2], for left vectors of length m and right rows of length
+/// cols + 2.
+fn add_products(
+    left: &[f64],
+    right: &[f64],
+    m: usize,
+    cols: usize,
+    rows: &mut [f64],
+    coef: &mut [f64],
+) {
+    coef.fill(0.0);
+    let ext = cols + 2;
+    for (l, r) in left.chunks_exact(m).zip(right.chunks_exact(ext)) {
+        for (k, &a) in l.iter().enumerate() {
+            if a == 0.0 {
+                continue;
+            }
+            let row = &mut rows[k * cols..(k + 1) * cols];
+            for (o, x) in row.iter_mut().zip(&r[..cols]) {
+                *o += a * x;
+            }
+            coef[2 * k] += a * r[cols];
+            coef[2 * k + 1] += a * r[cols + 1];
+        }
+    }
+}
+
+/// ∂w_start from the periodicity w_start = w_end = Φ w_start + G (per derivative column) into
+/// `start` (two rows of length `cols`); G is the first `cols` entries of the rows of `g`.
 fn periodic_start(
     variant: Variant,
     phi: [[f64; 2]; 2],
     g: &[Vec<f64>; 2],
     cols: usize,
-) -> [Vec<f64>; 2] {
-    let mut start = [vec![0.0; cols], vec![0.0; cols]];
+    start: &mut [Vec<f64>; 2],
+) {
+    start[0].fill(0.0);
+    start[1].fill(0.0);
     match variant {
         Variant::OneD => {
             // Φ is diagonal with entries exactly 1 (stuck all period) or 0 (slider reset).
             for d in 0..2 {
                 if phi[d][d] != 1.0 {
                     let s = 1.0 / (1.0 - phi[d][d]);
-                    for (o, gv) in start[d].iter_mut().zip(&g[d]) {
+                    for (o, gv) in start[d].iter_mut().zip(&g[d][..cols]) {
                         *o = s * gv;
                     }
                 }
@@ -478,7 +617,7 @@ fn periodic_start(
         }
         Variant::TwoD => {
             if phi == [[1.0, 0.0], [0.0, 1.0]] {
-                return start;
+                return;
             }
             let a = [[1.0 - phi[0][0], -phi[0][1]], [-phi[1][0], 1.0 - phi[1][1]]];
             let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
@@ -487,185 +626,54 @@ fn periodic_start(
                 [-a[1][0] / det, a[0][0] / det],
             ];
             for k in 0..cols {
-                start[0][k] = inv[0][0] * g[0][k] + inv[0][1] * g[1][k];
-                start[1][k] = inv[1][0] * g[0][k] + inv[1][1] * g[1][k];
+                let (g0, g1) = (g[0][k], g[1][k]);
+                start[0][k] = inv[0][0] * g0 + inv[0][1] * g1;
+                start[1][k] = inv[1][0] * g0 + inv[1][1] * g1;
             }
         }
-    }
-    start
-}
-
-/// The local Jacobian of the 1-D variant in O(N_t·H + runs·H²) instead of O(N_t·H²).
-///
-/// In the 1-D law the slider memory is reset at every slip or separation sample (∂w'/∂w = 0
-/// there) and frozen during stick (∂w'/∂w = 1, ∂w'/∂x = 0), so ∂w during a stick run equals
-/// ∂w' of the run's *anchor* (its last slip/separation sample, wrapping around the period: the
-/// periodic closure of [`differentiate`]). ∂F therefore splits into
-/// * Σ_j B_kj a_j E_jl for each weight sequence a_j = ∂f_j/∂x_c (fixed w): the harmonic
-///   multiplication matrix of a, built from its discrete Fourier sums of orders 0..2H
-///   ([`add_multiplication_block`]);
-/// * per stick run, (Σ_{j∈run} B_kj ∂f_j/∂w) ⊗ ∂w'_anchor, a rank-one update;
-/// * the column ∂/∂n0, Σ_j B_kj ∂f_j/∂n0.
-///
-/// A direction that never slips or separates has no anchor and keeps ∂w_start = 0.
-fn differentiate_one_d(element: &LocalElement, aft: &Aft, w_start: [f64; 2], ws: &mut Workspace) {
-    let p = &element.params;
-    let m = ws.m;
-    let n_t = ws.n_t;
-    let nt = element.tangential;
-    let nsig = element.signals();
-    let cols = nsig * m + 1;
-    let n0_col = nsig * m;
-    ws.jacobian.clear();
-    ws.jacobian.resize(nsig * m * cols, 0.0);
-    ws.jacobian_cols = cols;
-    let offset = |c: usize| -> Option<usize> {
-        match c {
-            0 => Some(0),
-            1 if nt == 2 => Some(m),
-            2 if element.normal => Some(nt * m),
-            _ => None,
-        }
-    };
-    ws.tangents.clear();
-    let mut w = w_start;
-    for j in 0..n_t {
-        let t = law::sample_with_tangent(element.variant, p, [ws.u[0][j], ws.u[1][j]], ws.v[j], w);
-        w = t.sample.slider;
-        ws.tangents.push(t);
-    }
-    let analysis = aft.analysis_table();
-    // Fixed-w terms: multiplication blocks and the n0 column.
-    for f in 0..3 {
-        let Some(fb) = offset(f) else { continue };
-        for c in 0..3 {
-            let Some(cb) = offset(c) else { continue };
-            ws.weights.clear();
-            ws.weights
-                .extend(ws.tangents.iter().map(|t| t.dforce_dx[f][c]));
-            if ws.weights.iter().all(|&a| a == 0.0) {
-                continue;
-            }
-            add_multiplication_block(
-                aft,
-                &ws.weights,
-                &mut ws.jacobian,
-                cols,
-                fb,
-                cb,
-                &mut ws.sums,
-            );
-        }
-        for (j, t) in ws.tangents.iter().enumerate() {
-            let a = t.dforce_dx[f][3];
-            if a != 0.0 {
-                for k in 0..m {
-                    ws.jacobian[(fb + k) * cols + n0_col] += analysis[k * n_t + j] * a;
-                }
-            }
-        }
-    }
-    // Slider memory: one rank-one update per stick run.
-    for d in 0..nt {
-        let is_anchor = |t: &law::SampleTangent| t.dslider_dw[d][d] == 0.0;
-        let Some(last) = ws.tangents.iter().rposition(is_anchor) else {
-            continue;
-        };
-        let fb = d * m;
-        let mut anchor = last;
-        let mut beta = vec![0.0; m];
-        let flush =
-            |anchor: usize, beta: &mut [f64], jac: &mut [f64], tangents: &[law::SampleTangent]| {
-                let ta = &tangents[anchor];
-                let e = aft.synthesis_row(anchor);
-                for (k, bk) in beta.iter_mut().enumerate() {
-                    if *bk == 0.0 {
-                        continue;
-                    }
-                    let row = &mut jac[(fb + k) * cols..(fb + k + 1) * cols];
-                    for c in [d, 2] {
-                        let g = ta.dslider_dx[d][c];
-                        if let (Some(o), true) = (offset(c), g != 0.0) {
-                            for (r, ev) in row[o..o + m].iter_mut().zip(e) {
-                                *r += *bk * g * ev;
-                            }
-                        }
-                    }
-                    row[n0_col] += *bk * ta.dslider_dx[d][3];
-                    *bk = 0.0;
-                }
-            };
-        for j in 0..n_t {
-            let t = &ws.tangents[j];
-            if is_anchor(t) {
-                flush(anchor, &mut beta, &mut ws.jacobian, &ws.tangents);
-                anchor = j;
-            } else {
-                let g = t.dforce_dw[d][d];
-                if g != 0.0 {
-                    for (k, b) in beta.iter_mut().enumerate() {
-                        *b += analysis[k * n_t + j] * g;
-                    }
-                }
-            }
-        }
-        flush(anchor, &mut beta, &mut ws.jacobian, &ws.tangents);
     }
 }
 
-/// Adds M(a)_kl = Σ_j B_kj a_j E_jl (the harmonic matrix of multiplication by the sampled
-/// weight a) to the block at (`row0`, `col0`) of `jac` (row-major, `cols` columns), from the
-/// discrete Fourier sums c_p = Σ_j a_j cos(pτ_j)/N_t, s_p = Σ_j a_j sin(pτ_j)/N_t, p = 0..2H:
+/// Adds M(a)_kl = Σ_j B_kj a_j E_jl (the harmonic matrix of multiplication by a sampled weight
+/// a) to the block at (`row0`, `col0`) of `jac` (row-major, `cols` columns), from the discrete
+/// Fourier sums c_p = `sums[2p]`, s_p = `sums[2p+1]`, p = 0..2H ([`Aft::fourier_sums`]):
 /// M_00 = c_0, M_0,ν = (c_ν, −s_ν), M_κ,0 = (2c_κ, −2s_κ),
 /// M_κν = [[c_{κ−ν} + c_{κ+ν}, −(s_{κ+ν} + s_{ν−κ})], [−(s_{κ+ν} + s_{κ−ν}), c_{κ−ν} − c_{κ+ν}]]
 /// (2×2 blocks of (Re, Im) rows and columns; s_{−p} = −s_p).
 fn add_multiplication_block(
-    aft: &Aft,
-    a: &[f64],
+    h: usize,
+    sums: &[f64],
     jac: &mut [f64],
     cols: usize,
     row0: usize,
     col0: usize,
-    sums: &mut Vec<f64>,
 ) {
-    let h = aft.layout().harmonics;
-    let n_t = a.len();
-    let (cos, sin) = aft.unit_circle();
-    sums.clear();
-    sums.resize(2 * (2 * h + 1), 0.0);
-    for p in 0..=2 * h {
-        let (mut c, mut s) = (0.0, 0.0);
-        let mut q = 0;
-        for &aj in a {
-            c += aj * cos[q];
-            s += aj * sin[q];
-            q += p;
-            if q >= n_t {
-                q -= n_t;
-            }
+    let m = 2 * h + 1;
+    let c = |p: usize| sums[2 * p];
+    let s = |p: usize| sums[2 * p + 1];
+    {
+        let row = &mut jac[row0 * cols + col0..row0 * cols + col0 + m];
+        row[0] += c(0);
+        for nu in 1..=h {
+            row[2 * nu - 1] += c(nu);
+            row[2 * nu] -= s(nu);
         }
-        sums[2 * p] = c / n_t as f64;
-        sums[2 * p + 1] = s / n_t as f64;
     }
-    let cp = |p: isize| sums[2 * p.unsigned_abs()];
-    let sp = |p: isize| p.signum() as f64 * sums[2 * p.unsigned_abs() + 1];
-    let mut add = |r: usize, c: usize, v: f64| jac[(row0 + r) * cols + col0 + c] += v;
-    add(0, 0, cp(0));
-    for nu in 1..=h as isize {
-        let l = 2 * nu as usize;
-        add(0, l - 1, cp(nu));
-        add(0, l, -sp(nu));
-    }
-    for ka in 1..=h as isize {
-        let k = 2 * ka as usize;
-        add(k - 1, 0, 2.0 * cp(ka));
-        add(k, 0, -2.0 * sp(ka));
-        for nu in 1..=h as isize {
-            let l = 2 * nu as usize;
-            add(k - 1, l - 1, cp(ka - nu) + cp(ka + nu));
-            add(k - 1, l, -(sp(ka + nu) + sp(nu - ka)));
-            add(k, l - 1, -(sp(ka + nu) + sp(ka - nu)));
-            add(k, l, cp(ka - nu) - cp(ka + nu));
+    for ka in 1..=h {
+        let two = &mut jac[(row0 + 2 * ka - 1) * cols..(row0 + 2 * ka + 1) * cols];
+        let (re, im) = two.split_at_mut(cols);
+        let re = &mut re[col0..col0 + m];
+        let im = &mut im[col0..col0 + m];
+        re[0] += 2.0 * c(ka);
+        im[0] -= 2.0 * s(ka);
+        for nu in 1..=h {
+            let (cm, cp, sp) = (c(ka.abs_diff(nu)), c(ka + nu), s(ka + nu));
+            // s_{κ−ν} with its sign.
+            let sm = if ka >= nu { s(ka - nu) } else { -s(nu - ka) };
+            re[2 * nu - 1] += cm + cp;
+            re[2 * nu] -= sp - sm;
+            im[2 * nu - 1] -= sp + sm;
+            im[2 * nu] += cm - cp;
         }
     }
 }

@@ -15,6 +15,7 @@ use faer::MatMut;
 
 use crate::case::{FrictionElement, WeightedDofs};
 use crate::contact::aft::{check_finite, global_index, Aft, AftCache};
+use crate::contact::assembly::{assemble, Outputs, Slot, SlotStorage, Wanted};
 use crate::contact::element::{
     evaluate as evaluate_element, ElementReport, HysteresisLoop, LocalElement, Workspace,
 };
@@ -55,6 +56,7 @@ pub struct DofElements {
     n_dofs: usize,
     elements: Vec<DofElement>,
     aft: AftCache,
+    slots: SlotStorage,
 }
 
 impl std::fmt::Debug for DofElements {
@@ -101,6 +103,7 @@ impl DofElements {
             n_dofs,
             elements,
             aft: AftCache::default(),
+            slots: SlotStorage::default(),
         })
     }
 
@@ -193,75 +196,64 @@ impl DofElements {
         Ok(())
     }
 
-    /// Evaluates every element and adds forces, Jacobian and ∂F/∂n0 (each if given).
-    fn run(
+    /// Node-space results of element `i` into `slot` (entries (signal s, DOF i of its
+    /// combination, coefficient l); column-major Jacobian
+    /// J[(s, i, l), (t, i', l')] = w_i w_i' J_local[(s, l), (t, l')]).
+    #[allow(clippy::too_many_arguments)]
+    fn element_slot(
         &self,
+        i: usize,
+        aft: &Aft,
         layout: &HarmonicLayout,
         q: &[f64],
-        state: &mut [f64],
-        mut force: Option<&mut [f64]>,
-        mut jacobian: Option<MatMut<'_, f64>>,
-        mut dn0: Option<&mut [f64]>,
+        w: &mut f64,
+        wanted: Wanted,
+        b: &mut ElementBuffers,
+        slot: Slot<'_>,
     ) -> Result<()> {
-        let aft = self.prepare(layout, q, state)?;
-        let mut ws = Workspace::new(&aft);
+        let e = &self.elements[i];
         let m = layout.coefficients();
-        let (mut x, mut g) = (vec![0.0; 2 * m], vec![0.0; 2 * m]);
-        let want_jac = jacobian.is_some() || dn0.is_some();
-        for (e, w) in self.elements.iter().zip(state.iter_mut()) {
-            let mut slider = [*w, 0.0];
-            self.local_eval(
-                e,
-                &aft,
-                layout,
-                q,
-                &mut slider,
-                want_jac,
-                &mut x,
-                &mut g,
-                &mut ws,
-            )?;
-            *w = slider[0];
-            let combos: Vec<&WeightedDofs> = e.combinations().collect();
-            let index = |l: usize, d: usize| global_index(layout, l, d, self.n_dofs);
-            if let Some(f) = force.as_deref_mut() {
-                for (s, c) in combos.iter().enumerate() {
-                    for (&d, &wt) in c.dofs.iter().zip(&c.weights) {
-                        for l in 0..m {
-                            f[index(l, d)] += wt * g[s * m + l];
-                        }
-                    }
+        let local_jacobian = wanted.jacobian || wanted.dn0;
+        let mut slider = [*w, 0.0];
+        let (x, g, ws) = (&mut b.x, &mut b.g, &mut b.ws);
+        self.local_eval(e, aft, layout, q, &mut slider, local_jacobian, x, g, ws)?;
+        *w = slider[0];
+        // (signal, weight) of each node-space DOF, in entry order.
+        let mut np = 0;
+        for (s, c) in e.combinations().enumerate() {
+            for (&d, &wt) in c.dofs.iter().zip(&c.weights) {
+                for l in 0..m {
+                    slot.index[np] = global_index(layout, l, d, self.n_dofs);
+                    slot.force[np] = wt * g[s * m + l];
+                    np += 1;
                 }
             }
-            if !want_jac {
-                continue;
-            }
-            let (jac, cols) = ws.jacobian();
+        }
+        *slot.len = np;
+        if !local_jacobian {
+            return Ok(());
+        }
+        let (jac, cols) = ws.jacobian();
+        let weights = || {
+            e.combinations()
+                .enumerate()
+                .flat_map(|(s, c)| c.weights.iter().map(move |&wt| (s, wt)))
+        };
+        if wanted.dn0 {
             let n0_col = cols - 1;
-            if let Some(dv) = dn0.as_deref_mut() {
-                for (s, c) in combos.iter().enumerate() {
-                    for (&d, &wt) in c.dofs.iter().zip(&c.weights) {
-                        for l in 0..m {
-                            dv[index(l, d)] += wt * jac[(s * m + l) * cols + n0_col];
-                        }
-                    }
+            for (k, (s, wt)) in weights().enumerate() {
+                for l in 0..m {
+                    slot.dn0[k * m + l] = wt * jac[(s * m + l) * cols + n0_col];
                 }
             }
-            let Some(jm) = jacobian.as_mut() else {
-                continue;
-            };
-            // J_phys[(d_i, l), (d_j, l')] += w_i w_j J_local[(s, l), (s', l')].
-            for (s, cs) in combos.iter().enumerate() {
-                for (t, ct) in combos.iter().enumerate() {
-                    for (&di, &wi) in cs.dofs.iter().zip(&cs.weights) {
-                        for (&dj, &wj) in ct.dofs.iter().zip(&ct.weights) {
-                            for l in 0..m {
-                                let row = &jac[(s * m + l) * cols..(s * m + l + 1) * cols];
-                                let gi = index(l, di);
-                                for lp in 0..m {
-                                    jm[(gi, index(lp, dj))] += wi * wj * row[t * m + lp];
-                                }
-                            }
+        }
+        if wanted.jacobian {
+            for (kc, (t, wc)) in weights().enumerate() {
+                for lp in 0..m {
+                    let column = &mut slot.jacobian[(kc * m + lp) * np..(kc * m + lp + 1) * np];
+                    for (kr, (s, wr)) in weights().enumerate() {
+                        for l in 0..m {
+                            column[kr * m + l] = wr * wc * jac[(s * m + l) * cols + t * m + lp];
                         }
                     }
                 }
@@ -269,6 +261,44 @@ impl DofElements {
         }
         Ok(())
     }
+
+    /// Evaluates every element (in parallel) and adds forces, Jacobian and ∂F/∂n0 (each if
+    /// given).
+    fn run(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &mut [f64],
+        outputs: Outputs<'_>,
+    ) -> Result<()> {
+        let aft = self.prepare(layout, q, state)?;
+        let m = layout.coefficients();
+        let capacity = self
+            .elements
+            .iter()
+            .map(|e| m * e.combinations().map(|c| c.dofs.len()).sum::<usize>())
+            .max()
+            .unwrap_or(0);
+        assemble(
+            state,
+            capacity,
+            outputs,
+            &self.slots,
+            || ElementBuffers {
+                ws: Workspace::new(&aft),
+                x: vec![0.0; 2 * m],
+                g: vec![0.0; 2 * m],
+            },
+            |i, w, b, wanted, slot| self.element_slot(i, &aft, layout, q, w, wanted, b, slot),
+        )
+    }
+}
+
+/// Buffers of one thread.
+struct ElementBuffers {
+    ws: Workspace,
+    x: Vec<f64>,
+    g: Vec<f64>,
 }
 
 fn check_combination(key: &str, c: &WeightedDofs, n_dofs: usize) -> Result<()> {
@@ -312,7 +342,12 @@ impl HarmonicForce for DofElements {
         force: &mut [f64],
         jacobian: Option<MatMut<'_, f64>>,
     ) -> Result<()> {
-        self.run(layout, q, state, Some(force), jacobian, None)
+        let outputs = Outputs {
+            force: Some(force),
+            dn0: None,
+            jacobian,
+        };
+        self.run(layout, q, state, outputs)
     }
 
     /// ∂F/∂n0 with the static normal load n0 of every element moving together (∂n0_e/∂p = 1).
@@ -324,6 +359,11 @@ impl HarmonicForce for DofElements {
         out: &mut [f64],
     ) -> Result<()> {
         let mut s = state.clone();
-        self.run(layout, q, &mut s, None, None, Some(out))
+        let outputs = Outputs {
+            force: None,
+            dn0: Some(out),
+            jacobian: None,
+        };
+        self.run(layout, q, &mut s, outputs)
     }
 }

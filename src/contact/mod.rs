@@ -12,8 +12,10 @@
 //!   [`HarmonicForce`](crate::harmonics::HarmonicForce) (parallel over pairs).
 //! * [`grounded`]: [`grounded::DofElements`], the `[[element]]` friction elements on DOF
 //!   combinations of a matrix model as a `HarmonicForce`.
+//! * `assembly`: the parallel evaluate-and-sum loop shared by the two.
 
 pub mod aft;
+pub(crate) mod assembly;
 pub mod element;
 pub mod grounded;
 pub mod kinematics;

@@ -10,15 +10,15 @@
 //! return to the nodes through the transpose, and the Jacobian is Lᵀ J_local L (eq. 26 with the
 //! kinematic map L in place of eq. 27's R).
 //!
-//! Pairs are evaluated in parallel (rayon, per-pair results then summed in pair order, so the
-//! result does not depend on the number of threads).
+//! Pairs are evaluated in parallel and summed by [`super::assembly`] (the result does not
+//! depend on the number of threads).
 
 use std::sync::Arc;
 
 use faer::MatMut;
-use rayon::prelude::*;
 
 use crate::contact::aft::{check_finite, gather, global_index, Aft, AftCache};
+use crate::contact::assembly::{assemble, Outputs, Slot, SlotStorage, Wanted};
 use crate::contact::element::{
     evaluate as evaluate_element, ElementReport, HysteresisLoop, LocalElement, Workspace,
 };
@@ -80,6 +80,7 @@ pub struct PairSet {
     prepared: Vec<Prepared>,
     coupling: Option<SectorCoupling>,
     aft: AftCache,
+    slots: SlotStorage,
 }
 
 impl std::fmt::Debug for PairSet {
@@ -90,20 +91,6 @@ impl std::fmt::Debug for PairSet {
             .field("pairs", &self.pairs.len())
             .finish()
     }
-}
-
-/// Pairs evaluated in parallel per block (bounds the memory of per-pair Jacobians).
-const BLOCK: usize = 256;
-
-/// Per-pair results before they are summed.
-#[derive(Default)]
-struct PairOut {
-    /// Node force coefficients [contact (3m); target (3m)].
-    force: Vec<f64>,
-    /// ∂(node forces)/∂n0 of the pair.
-    dn0: Vec<f64>,
-    /// Node Jacobian, row-major (6m or 3m)².
-    jacobian: Vec<f64>,
 }
 
 /// The inputs shared by all pairs of one evaluation.
@@ -123,6 +110,7 @@ struct Buffers {
     x: Vec<f64>,
     g: Vec<f64>,
     jl: Vec<f64>,
+    col: Vec<f64>,
 }
 
 impl PairSet {
@@ -176,6 +164,7 @@ impl PairSet {
             prepared,
             coupling,
             aft: AftCache::default(),
+            slots: SlotStorage::default(),
         })
     }
 
@@ -316,43 +305,56 @@ impl PairSet {
         Ok(())
     }
 
-    /// Node-space results of pair `i` (forces, ∂/∂n0, Jacobian Lᵀ J L).
-    fn pair_out(
+    /// Node-space results of pair `i` into `slot`: forces, ∂/∂n0 (times the preload rate) and
+    /// the Jacobian Lᵀ J L (column-major), as asked by `wanted`.
+    fn pair_slot(
         &self,
         i: usize,
         input: &Inputs<'_>,
         slider: &mut [f64; 2],
-        jacobian: bool,
+        wanted: Wanted,
         b: &mut Buffers,
-    ) -> Result<PairOut> {
-        self.evaluate_pair(i, input, slider, jacobian, true, b)?;
+        slot: Slot<'_>,
+    ) -> Result<()> {
+        let local_jacobian = wanted.jacobian || wanted.dn0;
+        self.evaluate_pair(i, input, slider, local_jacobian, true, b)?;
         let pair = &self.pairs[i];
         let prep = &self.prepared[i];
         let ph = &input.phases[(pair.sigma + 1) as usize];
-        let m = input.layout.coefficients();
+        let layout = input.layout;
+        let m = layout.coefficients();
         let sides = if pair.target.is_some() { 2 } else { 1 };
         let np = 3 * m * sides;
-        let mut out = PairOut {
-            force: b.q[..np].to_vec(),
-            ..PairOut::default()
-        };
-        if !jacobian {
-            return Ok(out);
+        *slot.len = np;
+        for (p, g) in slot.index[..np].iter_mut().enumerate() {
+            *g = global_index(layout, p % m, self.node_row(i, p, m), self.n_dofs);
+        }
+        slot.force[..np].copy_from_slice(&b.q[..np]);
+        if !local_jacobian {
+            return Ok(());
         }
         let nl = 3 * m;
         let (jac, cols) = b.ws.jacobian();
-        // Local ∂F/∂n0 (last column) to the nodes.
-        let local_dn0: Vec<f64> = (0..nl).map(|r| jac[r * cols + nl]).collect();
-        out.dn0 = vec![0.0; 6 * m];
-        {
-            let (fc, ft) = out.dn0.split_at_mut(3 * m);
-            let ft = pair.target.map(|_| ft);
-            relative_transpose(&prep.frame, &prep.target_frame, ph, &local_dn0, fc, ft);
+        if wanted.dn0 {
+            // Local ∂F/∂n0 (last column) to the nodes.
+            for (r, c) in b.col.iter_mut().enumerate() {
+                *c = pair.preload_rate * jac[r * cols + nl];
+            }
+            let (fc, ft) = b.q.split_at_mut(3 * m);
+            relative_transpose(
+                &prep.frame,
+                &prep.target_frame,
+                ph,
+                &b.col,
+                fc,
+                pair.target.map(|_| ft),
+            );
+            slot.dn0[..np].copy_from_slice(&b.q[..np]);
         }
-        out.dn0.truncate(np);
+        if !wanted.jacobian {
+            return Ok(());
+        }
         // J L: row r of J_local times L is the transpose map of that row.
-        b.jl.clear();
-        b.jl.resize(nl * 6 * m, 0.0);
         for r in 0..nl {
             let row = &jac[r * cols..r * cols + nl];
             let (fc, ft) = b.jl[r * 6 * m..(r + 1) * 6 * m].split_at_mut(3 * m);
@@ -365,28 +367,23 @@ impl PairSet {
                 pair.target.map(|_| ft),
             );
         }
-        // Lᵀ (J L): the transpose map of every column.
-        out.jacobian = vec![0.0; np * np];
-        let mut col = vec![0.0; nl];
-        let mut node = vec![0.0; 6 * m];
+        // Lᵀ (J L): the transpose map of every column, written as a column of the slot.
         for c in 0..np {
-            for (r, v) in col.iter_mut().enumerate() {
+            for (r, v) in b.col.iter_mut().enumerate() {
                 *v = b.jl[r * 6 * m + c];
             }
-            let (fc, ft) = node.split_at_mut(3 * m);
+            let (fc, ft) = b.q.split_at_mut(3 * m);
             relative_transpose(
                 &prep.frame,
                 &prep.target_frame,
                 ph,
-                &col,
+                &b.col,
                 fc,
                 pair.target.map(|_| ft),
             );
-            for (r, v) in node[..np].iter().enumerate() {
-                out.jacobian[r * np + c] = *v;
-            }
+            slot.jacobian[c * np..(c + 1) * np].copy_from_slice(&b.q[..np]);
         }
-        Ok(out)
+        Ok(())
     }
 
     /// Row in the DOF vector of node-space index `p` (side, component, coefficient) of pair `i`.
@@ -401,64 +398,30 @@ impl PairSet {
         }
     }
 
-    /// Evaluates every pair in parallel blocks and sums into the outputs.
+    /// Evaluates every pair in parallel and sums into the outputs.
     fn run(
         &self,
         layout: &HarmonicLayout,
         q: &[f64],
         state: &mut PairState,
-        force: Option<&mut [f64]>,
-        mut jacobian: Option<MatMut<'_, f64>>,
-        mut dn0: Option<&mut [f64]>,
+        outputs: Outputs<'_>,
     ) -> Result<()> {
         let (aft, phases) = self.prepare(layout, q, state)?;
         let m = layout.coefficients();
-        let want_jac = jacobian.is_some() || dn0.is_some();
-        let mut force = force;
         let input = Inputs {
             aft: &aft,
             phases: &phases,
             layout,
             q,
         };
-        for (block, sliders) in state.chunks_mut(BLOCK).enumerate() {
-            let first = block * BLOCK;
-            let outs: Vec<Result<PairOut>> = sliders
-                .par_iter_mut()
-                .enumerate()
-                .map_init(
-                    || buffers(&aft, m),
-                    |b, (k, slider)| self.pair_out(first + k, &input, slider, want_jac, b),
-                )
-                .collect();
-            for (k, out) in outs.into_iter().enumerate() {
-                let out = out?;
-                let i = first + k;
-                let np = out.force.len();
-                let index =
-                    |p: usize| global_index(layout, p % m, self.node_row(i, p, m), self.n_dofs);
-                if let Some(f) = force.as_deref_mut() {
-                    for (p, v) in out.force.iter().enumerate() {
-                        f[index(p)] += v;
-                    }
-                }
-                if let Some(d) = dn0.as_deref_mut() {
-                    let rate = self.pairs[i].preload_rate;
-                    for (p, v) in out.dn0.iter().enumerate() {
-                        d[index(p)] += rate * v;
-                    }
-                }
-                if let Some(j) = jacobian.as_mut() {
-                    let rows: Vec<usize> = (0..np).map(index).collect();
-                    for (r, &gr) in rows.iter().enumerate() {
-                        for (c, &gc) in rows.iter().enumerate() {
-                            j[(gr, gc)] += out.jacobian[r * np + c];
-                        }
-                    }
-                }
-            }
-        }
-        Ok(())
+        assemble(
+            state,
+            6 * m,
+            outputs,
+            &self.slots,
+            || buffers(&aft, m),
+            |i, slider, b, wanted, slot| self.pair_slot(i, &input, slider, wanted, b, slot),
+        )
     }
 }
 
@@ -468,7 +431,8 @@ fn buffers(aft: &Aft, m: usize) -> Buffers {
         q: vec![0.0; 6 * m],
         x: vec![0.0; 3 * m],
         g: vec![0.0; 3 * m],
-        jl: Vec::new(),
+        jl: vec![0.0; 3 * m * 6 * m],
+        col: vec![0.0; 3 * m],
     }
 }
 
@@ -502,7 +466,12 @@ impl HarmonicForce for PairSet {
         force: &mut [f64],
         jacobian: Option<MatMut<'_, f64>>,
     ) -> Result<()> {
-        self.run(layout, q, state, Some(force), jacobian, None)
+        let outputs = Outputs {
+            force: Some(force),
+            dn0: None,
+            jacobian,
+        };
+        self.run(layout, q, state, outputs)
     }
 
     /// ∂F/∂p with each pair's preload moving as ∂n0_j/∂p = `preload_rate` (SAMA: p = the
@@ -515,6 +484,11 @@ impl HarmonicForce for PairSet {
         out: &mut [f64],
     ) -> Result<()> {
         let mut s = state.clone();
-        self.run(layout, q, &mut s, None, None, Some(out))
+        let outputs = Outputs {
+            force: None,
+            dn0: Some(out),
+            jacobian: None,
+        };
+        self.run(layout, q, &mut s, outputs)
     }
 }
