@@ -17,6 +17,7 @@ use crate::error::{Error, Result};
 use crate::hbm::setup::modal_damping;
 use crate::matrix_io::read_real_matrix;
 use crate::model::{self, StructuralModel};
+use crate::output::ResponseDof;
 
 /// The marched model of a case and the DOF indices it reports.
 pub struct CaseMarch {
@@ -24,6 +25,9 @@ pub struct CaseMarch {
     pub system: MarchSystem,
     /// Reported DOF (indices into the system's DOF).
     pub response: Vec<usize>,
+    /// The reported DOF as results-file response DOFs: the matrix row of a matrix-defined case,
+    /// the DOF index (0 u, 1 w, 2 φ) of a damper.
+    pub response_dofs: Vec<ResponseDof>,
     /// How to march.
     pub settings: MarchSettings,
 }
@@ -65,21 +69,27 @@ pub fn case_march(
         ));
         return Ok(CaseMarch {
             response: (0..system.n).collect(),
+            response_dofs: (0..system.n as u64).map(ResponseDof::Row).collect(),
             system,
             settings,
         });
     }
-    if case.model.mesh.is_some() {
-        return Err(Error::NotImplemented(format!(
-            "{}: nlrom march on a mesh model (it needs the reduced-order model of `nlrom reduce`); march a matrix-defined model or a [damper] case",
+    if case.model.mesh.is_some() || case.rom.is_some() || case.cyclic.is_some() {
+        return Err(Error::input(format!(
+            "{}: nlrom march integrates a [damper] or a matrix-defined model ([model] stiffness/mass with [[element]] friction elements); marching a mesh model, its reduced-order model ([rom]) or a cyclic sector ([cyclic]) is not supported yet (a sector's ROM is complex for harmonic index k ≠ 0) — export the matrices of a real model (k = 0 or a non-cyclic reduction) and march them as a matrix case",
             case.path.display()
         )));
     }
     let structural = model::build(case, log)?;
     let (system, response) = matrix_system(case, &structural)?;
+    let response_dofs = response
+        .iter()
+        .map(|&i| ResponseDof::Row(structural.free.free_dofs[i] as u64))
+        .collect();
     Ok(CaseMarch {
         system,
         response,
+        response_dofs,
         settings,
     })
 }
@@ -180,6 +190,7 @@ fn matrix_system(case: &Case, sm: &StructuralModel) -> Result<(MarchSystem, Vec<
         damping: c,
         stiffness: k,
         force,
+        damping_force: Vec::new(),
         elements,
         dof_names: sm
             .free
