@@ -281,7 +281,14 @@ fn contact_springs(s: &Setup, k: usize, closed: &[bool]) -> Mat<c64> {
         h.row_of(d.node_tag, d.component).unwrap()
     };
     let mut kc = Mat::<c64>::zeros(h.len(), h.len());
-    for (pair, _) in p.contact.pairs().iter().zip(closed).filter(|(_, &c)| c) {
+    for (pair, _) in p
+        .contact
+        .inner
+        .pairs()
+        .iter()
+        .zip(closed)
+        .filter(|(_, &c)| c)
+    {
         let f = pair.frame;
         let pm = [f[0], f[1], [-f[2][0], -f[2][1], -f[2][2]]];
         let stiff = [pair.params.kt, pair.params.kt, pair.params.kn];
@@ -326,6 +333,7 @@ fn geom_of(s: &Setup) -> CyclicGeometry {
 fn closed_pairs(p: &SectorProblem, x: &[f64], geom: &CyclicGeometry) -> Vec<bool> {
     let q0 = |r: usize| x[p.layout.static_index(r)];
     p.contact
+        .inner
         .pairs()
         .iter()
         .map(|pair| {
@@ -410,6 +418,7 @@ fn contact_force_h1(p: &SectorProblem, u1: &[f64]) -> Vec<f64> {
         let mut state: PairState = p.contact.initial_state();
         let mut f = vec![0.0; len];
         p.contact
+            .inner
             .evaluate(&p.layout, q, &mut state, &mut f, None)
             .unwrap();
         f

@@ -15,6 +15,8 @@
 //! - [`frf`]: a frequency response (continuation + recovery) and a case's continuation settings;
 //! - [`stability`]: Hill's method on the uncondensed model — Floquet exponents and a `stable`
 //!   flag per solution point;
+//! - [`preload`]: [`preload::FromStaticEquilibrium`] — contact forces measured from the preloaded
+//!   static equilibrium (the balancing static load of the uncoupled approach, SAMA paper §6.1);
 //! - [`setup`]: the linear part of a matrix-defined case (dense K, M, C, excitation, rows).
 //!
 //! Path following is in [`crate::continuation`].
@@ -22,6 +24,7 @@
 pub mod frf;
 pub mod linear;
 pub mod newton;
+pub mod preload;
 pub mod response;
 pub mod setup;
 pub mod stability;

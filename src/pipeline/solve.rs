@@ -452,7 +452,7 @@ fn sector_curve(
         .map(|i| i.pairs.iter().map(|p| p.targets.len()).sum())
         .collect();
     let fractions = |q: &[f64], state: &PairState| {
-        interface_fractions(&problem.contact, &problem.layout, q, state, &sizes)
+        interface_fractions(&problem.contact.inner, &problem.layout, q, state, &sizes)
     };
     let dofs = problem
         .outputs

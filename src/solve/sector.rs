@@ -21,6 +21,7 @@ use crate::contact::pairs::{PairSet, SectorCoupling};
 use crate::cyclic::harmonic_indices;
 use crate::error::{Error, Result};
 use crate::harmonics::HarmonicLayout;
+use crate::hbm::preload::FromStaticEquilibrium;
 use crate::hbm::{HbmSystem, LinearModel, MatrixBlock};
 use crate::mesh::Mesh;
 use crate::rom::{HarmonicRom, Rom};
@@ -40,8 +41,10 @@ pub struct SectorProblem {
     /// Per harmonic n the dynamic stiffness of k_n, condensed on [`SectorProblem::nonlinear`],
     /// excited on n = 1.
     pub linear: LinearModel,
-    /// The contact pairs of every interface on the nonlinear DOFs (same order).
-    pub contact: PairSet,
+    /// The contact pairs of every interface on the nonlinear DOFs (same order), their forces
+    /// measured from the preloaded static equilibrium (`contact.inner` is the [`PairSet`]; see
+    /// [`crate::hbm::preload`]): at Q = 0 every pair with n0 > 0 is closed with its preload.
+    pub contact: FromStaticEquilibrium<PairSet>,
     /// Real harmonic layout (H, AFT samples) of the case.
     pub layout: HarmonicLayout,
     /// Harmonic index k_n of each temporal harmonic n = 0..=H.
@@ -101,7 +104,8 @@ impl SectorProblem {
         };
         let nonlinear = contact_dofs(interfaces);
         let node_rows = node_row_map(&nonlinear);
-        let contact = pair_set(rom, interfaces, &node_rows, nonlinear.len(), &k_n)?;
+        let pairs = pair_set(rom, interfaces, &node_rows, nonlinear.len(), &k_n)?;
+        let contact = FromStaticEquilibrium::new(pairs, &layout)?;
         let excitation_nodes = tags_of(mesh, &group)?;
         let outputs = output_dofs(case, mesh, &excitation_nodes)?;
         let distinct: Vec<usize> = k_n
@@ -145,7 +149,7 @@ impl SectorProblem {
     }
 
     /// The harmonic balance system r(Q, ω) of the problem (SAMA eq 19).
-    pub fn system(&self) -> Result<HbmSystem<'_, PairSet>> {
+    pub fn system(&self) -> Result<HbmSystem<'_, FromStaticEquilibrium<PairSet>>> {
         HbmSystem::new(self.layout, &self.linear, &self.contact)
     }
 }
