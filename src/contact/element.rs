@@ -328,7 +328,7 @@ fn march_period_differentiated(
         let t = law::sample_with_tangent(element.variant, p, [ws.u[0][j], ws.u[1][j]], ws.v[j], *w);
         ws.store(j, &t.sample);
         *w = t.sample.slider;
-        derivative_step(&shape, aft, j, ws.n_t, &t, &mut ws.derivative);
+        derivative_step(&shape, aft, j, &t, &mut ws.derivative);
     }
 }
 
@@ -348,10 +348,10 @@ struct DerivativeBuffers {
     left: [Vec<f64>; 2],
     /// Right rows (`ext` each).
     right: [Vec<f64>; 2],
-    /// ∂f/∂(u1, u2, v, n0) at fixed w per sample: sequence (f, c) at [(4f + c)·N_t ..].
-    weights: Vec<f64>,
-    /// Which of the sequences hold a non-zero sample.
-    nonzero: [[bool; 4]; 3],
+    /// ∂(f1, f2, f_n)/∂(u1, u2, v, n0) at fixed w of each sample.
+    weights: Vec<[[f64; 4]; 3]>,
+    /// One weight sequence (f, c) over the samples (N_t).
+    sequence: Vec<f64>,
     /// Fourier sums of one weight sequence (2(2H+1)).
     sums: Vec<f64>,
     /// Harmonics of one n0 weight sequence (m).
@@ -380,11 +380,21 @@ impl DerivativeBuffers {
         self.s.clear();
         self.s.resize(ext, 0.0);
         self.weights.clear();
-        self.weights.resize(12 * n_t, 0.0);
-        self.nonzero = [[false; 4]; 3];
+        self.weights.resize(n_t, [[0.0; 4]; 3]);
+        self.sequence.resize(n_t, 0.0);
         self.sums.resize(4 * m, 0.0);
         self.column.resize(m, 0.0);
         self.start_coef.resize(2 * m, 0.0);
+    }
+
+    /// Copies the weight sequence ∂f_f/∂x_c into `sequence`; false if it is zero.
+    fn gather(&mut self, f: usize, c: usize) -> bool {
+        let mut nonzero = false;
+        for (s, w) in self.sequence.iter_mut().zip(&self.weights) {
+            *s = w[f][c];
+            nonzero |= *s != 0.0;
+        }
+        nonzero
     }
 
     /// Ends the stick accumulation of direction d (before ∂w_d changes): emits β_d ⊗ ∂w_d.
@@ -419,6 +429,7 @@ impl Offsets {
     }
 }
 
+#[inline]
 /// `row` += Σ_c g_c E_j (in the coefficients of input c) + g_n0 e_n0 for the partial
 /// derivatives g = ∂(·)/∂(u1, u2, v, n0) of one sample with synthesis row `e` = E_j.
 fn add_input_row(row: &mut [f64], g: &[f64; 4], e: &[f64], offsets: Offsets, n0_col: usize) {
@@ -475,17 +486,10 @@ fn derivative_step(
     shape: &Shape,
     aft: &Aft,
     j: usize,
-    n_t: usize,
     t: &law::SampleTangent,
     b: &mut DerivativeBuffers,
 ) {
-    for f in 0..3 {
-        for c in 0..4 {
-            let g = t.dforce_dx[f][c];
-            b.weights[(4 * f + c) * n_t + j] = g;
-            b.nonzero[f][c] |= g != 0.0;
-        }
-    }
+    b.weights[j] = t.dforce_dx;
     let e = aft.synthesis_row(j);
     let bj = aft.analysis_column(j);
     if shape.two_d && t.sample.regime[0] == Regime::Slip {
@@ -544,7 +548,6 @@ fn derivative_step(
 /// that never leaves stick keeps ∂w_start = 0), which closes the extra columns.
 fn finish_jacobian(element: &LocalElement, aft: &Aft, ws: &mut Workspace) {
     let m = ws.m;
-    let n_t = ws.n_t;
     let h = (m - 1) / 2;
     let shape = Shape::new(element, m);
     let (nt, cols, n0_col, offsets) = (element.tangential, shape.cols, shape.n0_col, shape.offsets);
@@ -572,16 +575,14 @@ fn finish_jacobian(element: &LocalElement, aft: &Aft, ws: &mut Workspace) {
         let Some(fb) = offsets.of(f) else { continue };
         for c in 0..3 {
             let Some(cb) = offsets.of(c) else { continue };
-            if !b.nonzero[f][c] {
+            if !b.gather(f, c) {
                 continue;
             }
-            let seq = &b.weights[(4 * f + c) * n_t..(4 * f + c + 1) * n_t];
-            aft.fourier_sums(seq, &mut b.sums, aft_scratch);
+            aft.fourier_sums(&b.sequence, &mut b.sums, aft_scratch);
             add_multiplication_block(h, &b.sums, jacobian, cols, fb, cb);
         }
-        if b.nonzero[f][3] {
-            let seq = &b.weights[(4 * f + 3) * n_t..(4 * f + 4) * n_t];
-            aft.to_harmonics(seq, &mut b.column, aft_scratch);
+        if b.gather(f, 3) {
+            aft.to_harmonics(&b.sequence, &mut b.column, aft_scratch);
             for (k, ck) in b.column.iter().enumerate() {
                 jacobian[(fb + k) * cols + n0_col] += ck;
             }
