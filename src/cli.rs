@@ -615,7 +615,7 @@ fn contact(case_path: &Path, as_json: bool) -> Result<()> {
 /// reports the counts (steps, iterations per step, state changes, wall time).
 fn march(a: &MarchArgs) -> Result<()> {
     use crate::march::{
-        from_case::case_march, integrate::march as run_march, output::results_file,
+        from_case::case_march, integrate::march as run_march, output::write_march_results,
     };
     let start = Instant::now();
     let case = Case::load(&a.case)?;
@@ -625,7 +625,7 @@ fn march(a: &MarchArgs) -> Result<()> {
         title: case.title.clone(),
         case_text: case.source_text.clone(),
     };
-    results_file(&info, &cm.system, &cm.settings, &out, &cm.response).write(&a.output)?;
+    write_march_results(&a.output, &info, &cm, &out)?;
     let last = out.periods.last();
     let report = json!({
         "scheme": out.scheme.as_str(),

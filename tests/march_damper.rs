@@ -9,7 +9,7 @@ use std::process::Command;
 use nlrom::case::{Case, MarchScheme};
 use nlrom::march::from_case::case_march;
 use nlrom::march::{march, MarchOutcome};
-use nlrom::output::H5Reader;
+use nlrom::output::{read_results, H5Reader, ResponseDof};
 
 /// Runs `nlrom march CASE -o OUT --json EXTRA...`, asserts success and returns the JSON report.
 fn march_json(case: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
@@ -75,6 +75,26 @@ fn force_difference(out: &MarchOutcome, reference: &MarchOutcome) -> f64 {
     worst / scale
 }
 
+/// Changes of the interfaces' states over the last period, counted cyclically: the left
+/// (flat-on-flat: L1, L2) and the right interface are each "in gross slip" when all their points
+/// slip (in the same direction), and "stuck" otherwise (the paper's count of §6 is per interface).
+fn interface_changes(out: &MarchOutcome) -> usize {
+    let h = &out.history;
+    let first = out.periods[out.periods.len() - 2].end_index + 1;
+    let interface = |k: usize| -> (u8, u8) {
+        let s = &h.state[3 * k..3 * k + 3];
+        let left = if s[0] == s[1] && s[0] >= 2 { s[0] } else { 1 };
+        (left, s[2])
+    };
+    let last = h.len() - 1;
+    (first..=last)
+        .filter(|&k| {
+            let prev = if k == first { last } else { k - 1 };
+            interface(k) != interface(prev)
+        })
+        .count()
+}
+
 /// Instants of the last period at which every contact slips (bilateral gross slip).
 fn bilateral_slip_instants(out: &MarchOutcome) -> usize {
     let h = &out.history;
@@ -120,6 +140,13 @@ fn all_methods_agree_on_the_damper_with_bilateral_gross_slip() {
     // (measured: standard 7, adaptive 9, piecewise-linear 7, both 9, quasi-static 8)
     let count = |o: &MarchOutcome| o.periods.last().unwrap().state_changes;
     eprintln!("state changes per period: standard {}", count(&standard));
+    // per interface (left flat, right), as the paper counts: six, stick → left slips → both slip →
+    // stick twice a period, or five when both interfaces start sliding within one step
+    for (s, o) in std::iter::once(&(MarchScheme::Newmark, standard.clone())).chain(&others) {
+        let n = interface_changes(o);
+        eprintln!("interface state changes per period: {s} {n}");
+        assert!((5..=6).contains(&n), "{s}: {n}");
+    }
     assert!((5..=8).contains(&count(&standard)), "{}", count(&standard));
     for (s, o) in &others {
         eprintln!("state changes per period: {s} {}", count(o));
@@ -165,6 +192,25 @@ fn march_command_writes_the_results_file() {
     assert_eq!(force.unit(), Some("N"));
     let g = file.group("/march").unwrap();
     assert_eq!(g.attrs["scheme"].as_str(), Some("quasi-static"));
+    // one writer owns the file: output::results reads it back whole
+    let m = read_results(&out).unwrap().march.unwrap();
+    assert_eq!(m.time.len(), 901);
+    assert_eq!(m.steps, 900);
+    assert_eq!(m.element_names, ["L1", "L2", "R"]);
+    assert_eq!(
+        m.response_dofs,
+        (0..3).map(ResponseDof::Row).collect::<Vec<_>>()
+    );
+    assert_eq!(m.contact_state.len(), 901 * 3);
+    assert_eq!(m.first_harmonic_last_period.len(), 3);
+    for name in [
+        "contact_displacement",
+        "iteration_histogram",
+        "state_changes",
+        "response_names",
+    ] {
+        assert!(m.extra.datasets.contains_key(name), "{name}");
+    }
 
     // bad input: a march case whose scheme needs mass it does not have is refused by the library;
     // a case without [march] and a mesh model are clear errors with exit status 2 / 1

@@ -11,6 +11,7 @@ use nlrom::output::{
     read_results, write_results, ContactData, ContactPairData, FileInfo, FrfData, FrfPoint,
     MarchData, ResponseDof, ResultsFile,
 };
+use nlrom::output::{Attr, Data, Dataset, Group};
 use serde_json::{json, Value};
 
 fn frf(n0: f64, points: usize, harmonics: usize, contacts: usize) -> FrfData {
@@ -97,7 +98,24 @@ fn march(t: usize) -> MarchData {
         contact_state: (0..2 * t).map(|i| (i % 4) as u8).collect(),
         first_harmonic_last_period: vec![1e-3, 2.5e-4],
         iterations_per_step: (0..t).map(|i| (i % 3) as u64).collect(),
+        extra: march_extra(t),
     }
+}
+
+/// Datasets and attributes beyond the /march layout (the marcher's own), read back verbatim.
+fn march_extra(t: usize) -> Group {
+    let mut g = Group::default();
+    g.add(
+        "contact_displacement",
+        Dataset::new(
+            &[t, 2, 2],
+            Data::F64((0..4 * t).map(|i| i as f64 * 1e-7).collect()),
+            "m",
+            "(u_t, v) per element",
+        ),
+    )
+    .set_attr("steady_period", Attr::I64(-1));
+    g
 }
 
 fn sample() -> ResultsFile {

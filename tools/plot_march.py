@@ -28,13 +28,13 @@ def read(path):
         g = f["march"]
         data = {k: g[k][()] for k in g.keys()}
         data["attrs"] = dict(g.attrs)
-    for key in ("response_dofs", "contact_names"):
+    for key in ("response_names", "element_names"):
         data[key] = [s.decode() if isinstance(s, bytes) else str(s) for s in data[key]]
     return data
 
 
 def last_period_mask(d):
-    omega = d["attrs"]["omega_rad_s"]
+    omega = d["attrs"]["omega"]
     period = 2 * np.pi / omega
     t = d["time"]
     return t >= t[-1] - period * (1 + 1e-9)
@@ -52,9 +52,9 @@ def main():
         label = d["attrs"].get("scheme", path)
         m = last_period_mask(d) if a.last_period else slice(None)
         t = d["time"][m] * 1e3
-        for j, name in enumerate(d["response_dofs"]):
+        for j, name in enumerate(d["response_names"]):
             ax[0, 0].plot(t, d["response"][m, j], label=f"{label}: {name}")
-        for e, name in enumerate(d["contact_names"]):
+        for e, name in enumerate(d["element_names"]):
             ax[0, 1].plot(d["contact_displacement"][m, e, 0] * 1e6, d["contact_force"][m, e, 0], label=f"{label}: {name}")
             ax[1, 0].plot(t, d["contact_force"][m, e, 1], label=f"{label}: {name}")
         hist = d["iteration_histogram"]
@@ -75,7 +75,7 @@ def main():
     for s in states[1:]:
         if tuple(s) != seq[-1]:
             seq.append(tuple(s))
-    names = d["contact_names"]
+    names = d["element_names"]
     print(f"{path}: {len(seq) - 1} state changes in the last period")
     for s in seq:
         print("  " + ", ".join(f"{n}={STATE[int(c)]}" for n, c in zip(names, s)))

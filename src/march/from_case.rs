@@ -17,6 +17,7 @@ use crate::error::{Error, Result};
 use crate::hbm::setup::modal_damping;
 use crate::matrix_io::read_real_matrix;
 use crate::model::{self, StructuralModel};
+use crate::output::ResponseDof;
 
 /// The marched model of a case and the DOF indices it reports.
 pub struct CaseMarch {
@@ -24,6 +25,9 @@ pub struct CaseMarch {
     pub system: MarchSystem,
     /// Reported DOF (indices into the system's DOF).
     pub response: Vec<usize>,
+    /// The reported DOF as results-file response DOFs: the matrix row of a matrix-defined case,
+    /// the DOF index (0 u, 1 w, 2 φ) of a damper.
+    pub response_dofs: Vec<ResponseDof>,
     /// How to march.
     pub settings: MarchSettings,
 }
@@ -65,6 +69,7 @@ pub fn case_march(
         ));
         return Ok(CaseMarch {
             response: (0..system.n).collect(),
+            response_dofs: (0..system.n as u64).map(ResponseDof::Row).collect(),
             system,
             settings,
         });
@@ -77,9 +82,14 @@ pub fn case_march(
     }
     let structural = model::build(case, log)?;
     let (system, response) = matrix_system(case, &structural)?;
+    let response_dofs = response
+        .iter()
+        .map(|&i| ResponseDof::Row(structural.free.free_dofs[i] as u64))
+        .collect();
     Ok(CaseMarch {
         system,
         response,
+        response_dofs,
         settings,
     })
 }

@@ -32,6 +32,7 @@
 //! | `/march/element_names` | strings [E] | 1 | the friction elements |
 //! | `/march/first_harmonic_last_period` | f64 [R] | m | abs(Q⁽¹⁾) of each response DOF over the last period |
 //! | `/march/iterations_per_step` | u64 [T] | 1 | corrector iterations of each step |
+//! | `/march/<other>` | | | [`MarchData::extra`]: the marcher's further datasets and attributes |
 
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -196,6 +197,10 @@ pub struct MarchData {
     pub first_harmonic_last_period: Vec<f64>,
     /// Corrector iterations of each step, [T].
     pub iterations_per_step: Vec<u64>,
+    /// Further datasets and attributes of `/march` beyond the layout above (the marcher's loops,
+    /// histograms, periodicity record, …), written and read back verbatim; their names must not
+    /// clash with the layout's.
+    pub extra: Group,
 }
 
 /// Everything a results file holds.
@@ -482,7 +487,39 @@ fn contact_group(parent: &mut Group, contact: &ContactData, frfs: &[FrfData]) ->
     Ok(())
 }
 
+/// Dataset and attribute names of `/march` that [`MarchData`]'s typed fields own.
+const MARCH_DATASETS: [&str; 8] = [
+    "time",
+    "iterations_per_step",
+    "response",
+    "response_dofs",
+    "contact_force",
+    "contact_state",
+    "element_names",
+    "first_harmonic_last_period",
+];
+const MARCH_ATTRS: [&str; 5] = ["scheme", "wall_seconds", "omega", "frequency_hz", "steps"];
+
 fn check_march(m: &MarchData) -> Result<()> {
+    let owned = |name: &String| {
+        MARCH_DATASETS.contains(&name.as_str()) || MARCH_ATTRS.contains(&name.as_str())
+    };
+    if let Some(name) = m
+        .extra
+        .datasets
+        .keys()
+        .chain(m.extra.attrs.keys())
+        .find(|n| owned(n))
+    {
+        return Err(size_error(format!(
+            "/march/{name}: an extra dataset or attribute takes the name of a layout one"
+        )));
+    }
+    if let Some(name) = m.extra.groups.keys().next() {
+        return Err(size_error(format!(
+            "/march/{name}: extra sub-groups are not written"
+        )));
+    }
     let t = m.time.len();
     let r = m.response_dofs.len();
     let e = m.element_names.len();
@@ -511,6 +548,12 @@ fn march_group(group: &mut Group, m: &MarchData) {
     let t = m.time.len();
     let r = m.response_dofs.len();
     let e = m.element_names.len();
+    for (name, d) in &m.extra.datasets {
+        group.add(name, d.clone());
+    }
+    for (name, a) in &m.extra.attrs {
+        group.set_attr(name, a.clone());
+    }
     group
         .set_attr("scheme", Attr::Str(m.scheme.clone()))
         .set_attr("wall_seconds", Attr::F64(m.wall_seconds))
@@ -735,6 +778,17 @@ fn read_contact(reader: &H5Reader, name: &str) -> Result<ContactData> {
     })
 }
 
+/// The datasets and attributes of `/march` beyond the layout ([`MarchData::extra`]).
+fn march_extra(reader: &H5Reader) -> Result<Group> {
+    let mut g = reader.group("/march")?;
+    g.datasets
+        .retain(|name, _| !MARCH_DATASETS.contains(&name.as_str()));
+    g.attrs
+        .retain(|name, _| !MARCH_ATTRS.contains(&name.as_str()));
+    g.groups.clear();
+    Ok(g)
+}
+
 fn read_march(reader: &H5Reader) -> Result<MarchData> {
     let response_dofs = read_response_dofs(reader, "/march/response_dofs")?;
     let time = reader.f64_vector("/march/time")?;
@@ -771,5 +825,6 @@ fn read_march(reader: &H5Reader) -> Result<MarchData> {
         response_dofs,
         time,
         element_names: names,
+        extra: march_extra(reader)?,
     })
 }
