@@ -213,7 +213,7 @@ fn march_command_writes_the_results_file() {
     }
 
     // bad input: a march case whose scheme needs mass it does not have is refused by the library;
-    // a case without [march] and a mesh model are clear errors with exit status 2 / 1
+    // a case without [march] and a sector (mesh, cyclic) model are clear input errors (exit 2)
     let bad = dir.path().join("bad.toml");
     std::fs::write(&bad, "[damper]\nmass = 0.01\ninertia = 1e-7\ncentrifugal_force = 10.0\nplatform = []\ncontact = []\n").unwrap();
     let res = Command::new(env!("CARGO_BIN_EXE_nlrom"))
@@ -227,6 +227,45 @@ fn march_command_writes_the_results_file() {
     let err = String::from_utf8_lossy(&res.stderr);
     assert!(err.contains("damper") && err.contains("contact"), "{err}");
     assert!(!dir.path().join("x.h5").exists());
+
+    let sector = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cases/sector8_cs.toml"
+    ))
+    .unwrap()
+    .replace(
+        "../meshes/",
+        concat!(env!("CARGO_MANIFEST_DIR"), "/meshes/"),
+    );
+    let sector_case = dir.path().join("sector.toml");
+    std::fs::write(
+        &sector_case,
+        format!(
+            "{sector}
+[march]
+frequency_hz = 200.0
+periods = 1
+steps_per_period = 100
+"
+        ),
+    )
+    .unwrap();
+    let res = Command::new(env!("CARGO_BIN_EXE_nlrom"))
+        .arg("march")
+        .arg(&sector_case)
+        .arg("-o")
+        .arg(dir.path().join("y.h5"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert_eq!(res.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("sector.toml")
+            && err.contains("not supported yet")
+            && err.contains("matrix case"),
+        "{err}"
+    );
+    assert!(!dir.path().join("y.h5").exists());
 }
 
 /// A matrix-defined case (methods.md's Jenkins oscillator: m = k = 1, Rayleigh c = 0.1 M, k_t = 1,

@@ -74,9 +74,9 @@ pub fn case_march(
             settings,
         });
     }
-    if case.model.mesh.is_some() {
-        return Err(Error::NotImplemented(format!(
-            "{}: nlrom march on a mesh model (it needs the reduced-order model of `nlrom reduce`); march a matrix-defined model or a [damper] case",
+    if case.model.mesh.is_some() || case.rom.is_some() || case.cyclic.is_some() {
+        return Err(Error::input(format!(
+            "{}: nlrom march integrates a [damper] or a matrix-defined model ([model] stiffness/mass with [[element]] friction elements); marching a mesh model, its reduced-order model ([rom]) or a cyclic sector ([cyclic]) is not supported yet (a sector's ROM is complex for harmonic index k ≠ 0) — export the matrices of a real model (k = 0 or a non-cyclic reduction) and march them as a matrix case",
             case.path.display()
         )));
     }
