@@ -22,6 +22,7 @@ fn sdof(m: f64, c: f64, k: f64, f: f64, kt: f64, fs: f64) -> MarchSystem {
             cos: f,
             sin: 0.0,
         }],
+        damping_force: Vec::new(),
         elements: vec![Element {
             name: "jenkins".into(),
             tangential: Direction {

@@ -74,6 +74,7 @@ pub fn damper_system(d: &Damper, omega: f64) -> Result<MarchSystem> {
             Harmonic::constant(-d.centrifugal_force),
             Harmonic::default(),
         ],
+        damping_force: Vec::new(),
         elements,
         dof_names: vec!["u".into(), "w".into(), "phi".into()],
         initial: InitialCondition::Static,
@@ -93,7 +94,8 @@ pub fn damper_system(d: &Damper, omega: f64) -> Result<MarchSystem> {
 /// ζ (ω_j/ω_1) e_j, e_j its share of strain energy in the normal springs (stiffness-proportional
 /// damping of the normal springs only). The dashpot force on the damper is −c_i v̇_i g_i with v_i = g_i·q + p_i(t) the normal
 /// approach (m), so C = Σ c_i g_i g_iᵀ (N·s/m) and the platforms' normal velocity enters as the
-/// external force −c_i ṗ_i(t) g_i at the excitation frequency `omega` (rad/s). Sliding along a flank
+/// damping force −c_i ṗ_i(t) g_i at the excitation frequency `omega` (rad/s) (with C, absent from
+/// the quasi-static method). Sliding along a flank
 /// and following the platforms in stick leave v̇ ≈ 0: the dashpots damp the inner vibration, not the
 /// 200 Hz motion. They act in every contact state (the demonstrator never lifts off).
 fn add_normal_dashpots(sys: &mut MarchSystem, zeta: f64, omega: f64) -> Result<()> {
@@ -104,6 +106,7 @@ fn add_normal_dashpots(sys: &mut MarchSystem, zeta: f64, omega: f64) -> Result<(
         ))
     })?;
     let beta = 2.0 * zeta / lowest;
+    sys.damping_force = vec![Harmonic::default(); n];
     for e in &sys.elements {
         let Some(dir) = &e.normal else { continue };
         let c = beta * e.params.kn;
@@ -113,8 +116,8 @@ fn add_normal_dashpots(sys: &mut MarchSystem, zeta: f64, omega: f64) -> Result<(
             }
             // ṗ = ω(−cos_p sin ωt + sin_p cos ωt): force −c ṗ g_i
             let p = dir.prescribed;
-            sys.force[i].cos -= c * gi * omega * p.sin;
-            sys.force[i].sin += c * gi * omega * p.cos;
+            sys.damping_force[i].cos -= c * gi * omega * p.sin;
+            sys.damping_force[i].sin += c * gi * omega * p.cos;
         }
     }
     Ok(())

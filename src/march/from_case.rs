@@ -190,6 +190,7 @@ fn matrix_system(case: &Case, sm: &StructuralModel) -> Result<(MarchSystem, Vec<
         damping: c,
         stiffness: k,
         force,
+        damping_force: Vec::new(),
         elements,
         dof_names: sm
             .free

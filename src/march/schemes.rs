@@ -200,7 +200,7 @@ pub fn standard_step(
     for it in 1..=ctx.max_iterations {
         let (a1, v1) = newmark_rates(&q, &qs, &vs, dt);
         evaluate_law(sys, ctx.omega, ctx.t1, &q, sliders, &mut samples);
-        sys.external_force(ctx.omega, ctx.t1, &mut f);
+        sys.dynamic_force(ctx.omega, ctx.t1, &mut f);
         add_contact_force(sys, &samples, &mut f);
         // R = M a + C v + K q − f
         dense::matvec(&sys.mass, &a1, &mut r);
@@ -271,7 +271,11 @@ fn state_iteration(
             cache.factorisations += 1;
         }
         let ainv = &per_dt[&codes];
-        sys.external_force(ctx.omega, ctx.t1, &mut f);
+        if dynamic {
+            sys.dynamic_force(ctx.omega, ctx.t1, &mut f);
+        } else {
+            sys.external_force(ctx.omega, ctx.t1, &mut f);
+        }
         for i in 0..n {
             f[i] += rc[i] + b_extra[i];
         }

@@ -31,6 +31,10 @@ pub struct MarchSystem {
     pub stiffness: Vec<f64>,
     /// External force f_e(t) per DOF (N).
     pub force: Vec<Harmonic>,
+    /// The viscous force of C against prescribed velocities (e.g. a dashpot to a moving platform,
+    /// −c ṗ(t) g) per DOF (N), empty for none: part of the dynamic equation with C q̇, and like C
+    /// absent from the quasi-static one (eq. 10).
+    pub damping_force: Vec<Harmonic>,
     /// Friction contact elements.
     pub elements: Vec<Element>,
     /// A name per DOF (results, messages).
@@ -61,6 +65,12 @@ impl MarchSystem {
                     "{what}: the {name} matrix has a non-finite entry"
                 )));
             }
+        }
+        if !(self.damping_force.is_empty() || self.damping_force.len() == n) {
+            return Err(Error::input(format!(
+                "{what}: {} damping forces for {n} DOF",
+                self.damping_force.len()
+            )));
         }
         if self.force.len() != n || self.dof_names.len() != n {
             return Err(Error::input(format!(
@@ -94,6 +104,15 @@ impl MarchSystem {
     pub fn external_force(&self, omega: f64, t: f64, f: &mut [f64]) {
         for (fi, h) in f.iter_mut().zip(&self.force) {
             *fi = h.at(omega, t);
+        }
+    }
+
+    /// f_e(t) plus the damping force against prescribed velocities (N) into `f`: the force side of
+    /// the dynamic equation M q̈ + C q̇ + K q = f_e + f_d + f_c.
+    pub fn dynamic_force(&self, omega: f64, t: f64, f: &mut [f64]) {
+        self.external_force(omega, t, f);
+        for (fi, h) in f.iter_mut().zip(&self.damping_force) {
+            *fi += h.at(omega, t);
         }
     }
 
