@@ -173,7 +173,10 @@ fn solve_chain3_equals_the_library_frequency_response() {
     // serde_json's default float parser is not exactly round-trip: compare to 1e-14.
     let close = |key: &str, want: f64| {
         let got = s[key].as_f64().unwrap_or(f64::NAN);
-        assert!((got - want).abs() <= 1e-14 * want.abs(), "{key}: {got} vs {want}");
+        assert!(
+            (got - want).abs() <= 1e-14 * want.abs(),
+            "{key}: {got} vs {want}"
+        );
     };
     close("peak_amplitude", best);
     close("resonance_hz", at);
