@@ -301,6 +301,30 @@ fn march_command_writes_the_results_file() {
     assert!(err.contains("damper") && err.contains("contact"), "{err}");
     assert!(!dir.path().join("x.h5").exists());
 
+    // a damping ratio of 1 or more is refused naming the key
+    let damper_text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/cases/damper.toml")).unwrap();
+    assert!(damper_text.contains("damping_ratio = 0.2 "));
+    let overdamped = dir.path().join("overdamped.toml");
+    std::fs::write(
+        &overdamped,
+        damper_text.replace("damping_ratio = 0.2 ", "damping_ratio = 1.5 "),
+    )
+    .unwrap();
+    let res = Command::new(env!("CARGO_BIN_EXE_nlrom"))
+        .arg("march")
+        .arg(&overdamped)
+        .arg("-o")
+        .arg(dir.path().join("z.h5"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert_eq!(res.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("damping_ratio") && err.contains("below 1"),
+        "{err}"
+    );
+
     let sector = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/cases/sector8_cs.toml"

@@ -22,6 +22,10 @@ use crate::error::Result;
 /// Most f64 entries of per-element Jacobians held at once (16 MB).
 const JACOBIAN_BUDGET: usize = 1 << 21;
 
+/// Width in bytes of the column ranges of the dense Jacobian filled at a time (one range of a
+/// large matrix fits in a core's L2 cache).
+const COLUMN_TILE_BYTES: usize = 1 << 18;
+
 /// The outputs one evaluation adds into (each optional).
 pub struct Outputs<'a> {
     /// Harmonic force vector.
@@ -253,9 +257,11 @@ impl Slots<'_> {
     }
 
     /// `out`[(index_r, index_c)] += every slot's column-major block, in parallel over ranges of
-    /// columns of `out`.
+    /// columns of `out`. The ranges are narrow enough ([`COLUMN_TILE_BYTES`]) for their part of
+    /// a large dense `out` to stay in cache while all slots are added into it.
     fn add_matrix(&self, values: &[f64], stride: usize, out: MatMut<'_, f64>, threads: usize) {
-        let part = out.ncols().div_ceil(threads).max(1);
+        let tile = (COLUMN_TILE_BYTES / (8 * out.nrows().max(1))).max(1);
+        let part = out.ncols().div_ceil(threads).clamp(1, tile);
         let add = |(p, mut cols): (usize, MatMut<'_, f64>)| {
             let lo = p * part;
             let hi = lo + cols.ncols();
@@ -285,7 +291,7 @@ impl Slots<'_> {
                 }
             }
         };
-        if threads == 1 {
+        if part >= out.ncols() {
             add((0, out));
         } else {
             out.par_col_chunks_mut(part)

@@ -19,6 +19,9 @@
 //! [`law`]: super::law
 //! [`aft`]: super::aft
 
+use faer::linalg::matmul::matmul;
+use faer::{Accum, MatMut, MatRef, Par};
+
 use crate::contact::aft::{Aft, AftScratch};
 use crate::contact::law::{self, ContactParams, Regime, Variant};
 use crate::error::{Error, Result};
@@ -120,7 +123,7 @@ pub struct Workspace {
     /// Local Jacobian, row-major (signals·m) × (signals·m + 1); last column ∂F/∂n0.
     jacobian: Vec<f64>,
     jacobian_cols: usize,
-    /// Buffers of [`differentiate`].
+    /// Buffers of the Jacobian ([`march_period_differentiated`], [`finish_jacobian`]).
     derivative: DerivativeBuffers,
 }
 
@@ -156,6 +159,16 @@ impl Workspace {
     /// local displacement coefficient, then ∂n0). Returns (entries, number of columns).
     pub fn jacobian(&self) -> (&[f64], usize) {
         (&self.jacobian, self.jacobian_cols)
+    }
+
+    /// Stores sample j of the period.
+    fn store(&mut self, j: usize, s: &law::Sample) {
+        self.ft[0][j] = s.force[0];
+        self.ft[1][j] = s.force[1];
+        self.fnormal[j] = s.force[2];
+        self.w[0][j] = s.slider[0];
+        self.w[1][j] = s.slider[1];
+        self.regime[j] = s.regime;
     }
 
     /// State report of the last evaluated period.
@@ -247,9 +260,17 @@ pub fn evaluate(
         periods: 0,
         converged: false,
     };
+    let mut differentiated = false;
     while marching.periods < MAX_PERIODS {
         w_start = w;
-        march_period(element, ws, &mut w);
+        // With a Jacobian the first period also carries the derivative terms: from a converged
+        // state (every Newton call after the first) it is the last period.
+        differentiated = jacobian && marching.periods == 0;
+        if differentiated {
+            march_period_differentiated(element, aft, ws, &mut w);
+        } else {
+            march_period(element, ws, &mut w);
+        }
         marching.periods += 1;
         if (w[0] - w_start[0]).abs() <= tol && (w[1] - w_start[1]).abs() <= tol {
             marching.converged = true;
@@ -271,7 +292,12 @@ pub fn evaluate(
         aft.to_harmonics(&ws.fnormal, &mut force[o..o + m], &mut ws.aft_scratch);
     }
     if jacobian {
-        differentiate(element, aft, w_start, ws);
+        if !differentiated {
+            // The last period again (the same samples), now with the derivative terms.
+            let mut w_again = w_start;
+            march_period_differentiated(element, aft, ws, &mut w_again);
+        }
+        finish_jacobian(element, aft, ws);
     }
     Ok(marching)
 }
@@ -282,17 +308,31 @@ fn march_period(element: &LocalElement, ws: &mut Workspace, w: &mut [f64; 2]) {
     let p = &element.params;
     for j in 0..ws.n_t {
         let s = law::sample(element.variant, p, [ws.u[0][j], ws.u[1][j]], ws.v[j], *w);
-        ws.ft[0][j] = s.force[0];
-        ws.ft[1][j] = s.force[1];
-        ws.fnormal[j] = s.force[2];
-        ws.w[0][j] = s.slider[0];
-        ws.w[1][j] = s.slider[1];
-        ws.regime[j] = s.regime;
+        ws.store(j, &s);
         *w = s.slider;
     }
 }
 
-/// Buffers of [`differentiate`] (one set per thread, reused across elements).
+/// [`march_period`] with the law's tangents, also collecting the slider-memory and fixed-w
+/// terms of the Jacobian ([`derivative_step`]; finished by [`finish_jacobian`]).
+fn march_period_differentiated(
+    element: &LocalElement,
+    aft: &Aft,
+    ws: &mut Workspace,
+    w: &mut [f64; 2],
+) {
+    let p = &element.params;
+    let shape = Shape::new(element, ws.m);
+    ws.derivative.reset(ws.m, ws.n_t, shape.cols);
+    for j in 0..ws.n_t {
+        let t = law::sample_with_tangent(element.variant, p, [ws.u[0][j], ws.u[1][j]], ws.v[j], *w);
+        ws.store(j, &t.sample);
+        *w = t.sample.slider;
+        derivative_step(&shape, aft, j, &t, &mut ws.derivative);
+    }
+}
+
+/// Buffers of the Jacobian ([`derivative_step`], [`finish_jacobian`]; one set per thread, reused across elements).
 #[derive(Default)]
 struct DerivativeBuffers {
     /// ∂w_d (d = 1, 2) after the current sample: rows of length `ext` = local inputs, n0, and
@@ -308,10 +348,10 @@ struct DerivativeBuffers {
     left: [Vec<f64>; 2],
     /// Right rows (`ext` each).
     right: [Vec<f64>; 2],
-    /// ∂f/∂(u1, u2, v, n0) at fixed w per sample: sequence (f, c) at [(4f + c)·N_t ..].
-    weights: Vec<f64>,
-    /// Which of the sequences hold a non-zero sample.
-    nonzero: [[bool; 4]; 3],
+    /// ∂(f1, f2, f_n)/∂(u1, u2, v, n0) at fixed w of each sample.
+    weights: Vec<[[f64; 4]; 3]>,
+    /// One weight sequence (f, c) over the samples (N_t).
+    sequence: Vec<f64>,
     /// Fourier sums of one weight sequence (2(2H+1)).
     sums: Vec<f64>,
     /// Harmonics of one n0 weight sequence (m).
@@ -340,11 +380,21 @@ impl DerivativeBuffers {
         self.s.clear();
         self.s.resize(ext, 0.0);
         self.weights.clear();
-        self.weights.resize(12 * n_t, 0.0);
-        self.nonzero = [[false; 4]; 3];
+        self.weights.resize(n_t, [[0.0; 4]; 3]);
+        self.sequence.resize(n_t, 0.0);
         self.sums.resize(4 * m, 0.0);
         self.column.resize(m, 0.0);
         self.start_coef.resize(2 * m, 0.0);
+    }
+
+    /// Copies the weight sequence ∂f_f/∂x_c into `sequence`; false if it is zero.
+    fn gather(&mut self, f: usize, c: usize) -> bool {
+        let mut nonzero = false;
+        for (s, w) in self.sequence.iter_mut().zip(&self.weights) {
+            *s = w[f][c];
+            nonzero |= *s != 0.0;
+        }
+        nonzero
     }
 
     /// Ends the stick accumulation of direction d (before ∂w_d changes): emits β_d ⊗ ∂w_d.
@@ -379,6 +429,7 @@ impl Offsets {
     }
 }
 
+#[inline]
 /// `row` += Σ_c g_c E_j (in the coefficients of input c) + g_n0 e_n0 for the partial
 /// derivatives g = ∂(·)/∂(u1, u2, v, n0) of one sample with synthesis row `e` = E_j.
 fn add_input_row(row: &mut [f64], g: &[f64; 4], e: &[f64], offsets: Offsets, n0_col: usize) {
@@ -395,7 +446,88 @@ fn add_input_row(row: &mut [f64], g: &[f64; 4], e: &[f64], offsets: Offsets, n0_
     row[n0_col] += g[3];
 }
 
-/// The local Jacobian of the periodic solution starting from `w_start` (SAMA paper eq. 25 in
+/// Sizes and signal offsets of an element's local Jacobian.
+#[derive(Clone, Copy)]
+struct Shape {
+    /// Tangential directions.
+    tangential: usize,
+    /// Columns: local inputs, then n0.
+    cols: usize,
+    /// The n0 column.
+    n0_col: usize,
+    offsets: Offsets,
+    /// 2-D law.
+    two_d: bool,
+    /// k_t (N/m).
+    kt: f64,
+}
+
+impl Shape {
+    fn new(element: &LocalElement, m: usize) -> Self {
+        let nsig = element.signals();
+        Shape {
+            tangential: element.tangential,
+            cols: nsig * m + 1,
+            n0_col: nsig * m,
+            offsets: Offsets {
+                m,
+                tangential: element.tangential,
+                normal: element.normal,
+            },
+            two_d: element.variant == Variant::TwoD,
+            kt: element.params.kt,
+        }
+    }
+}
+
+/// The Jacobian terms of sample j with the law's tangent `t` (see [`finish_jacobian`]): its
+/// fixed-w weights, its slider-memory term and the update of ∂w.
+fn derivative_step(
+    shape: &Shape,
+    aft: &Aft,
+    j: usize,
+    t: &law::SampleTangent,
+    b: &mut DerivativeBuffers,
+) {
+    b.weights[j] = t.dforce_dx;
+    let e = aft.synthesis_row(j);
+    let bj = aft.analysis_column(j);
+    if shape.two_d && t.sample.regime[0] == Regime::Slip {
+        slip_2d(t, shape.kt, e, bj, shape.offsets, shape.n0_col, b);
+        return;
+    }
+    // A_j, W_j diagonal.
+    for d in 0..shape.tangential {
+        let g = t.dforce_dw[d][d];
+        if g != 0.0 {
+            for (bk, bv) in b.beta[d].iter_mut().zip(bj) {
+                *bk += g * bv;
+            }
+            b.live[d] = true;
+        }
+        let a = t.dslider_dw[d][d];
+        if a == 1.0 && t.dslider_dx[d].iter().all(|&x| x == 0.0) {
+            continue;
+        }
+        b.flush(d);
+        if a == 0.0 {
+            b.dw[d].fill(0.0);
+        } else if a != 1.0 {
+            for r in b.dw[d].iter_mut() {
+                *r *= a;
+            }
+        }
+        add_input_row(
+            &mut b.dw[d],
+            &t.dslider_dx[d],
+            e,
+            shape.offsets,
+            shape.n0_col,
+        );
+    }
+}
+
+/// The local Jacobian of the periodic solution (SAMA paper eq. 25 in
 /// local coordinates, plus the column ∂F/∂n0), in O(N_t·H + N_mem·H²) with N_mem the number of
 /// slider-memory terms (stick runs, and 2-D slip samples).
 ///
@@ -414,72 +546,21 @@ fn add_input_row(row: &mut [f64], g: &[f64; 4], e: &[f64], offsets: Offsets, n0_
 /// ∂w is carried with two extra columns for ∂w_start, so that ∂w_end = G + Φ ∂w_start; the
 /// periodicity w_start = w_end gives ∂w_start = (I − Φ)⁻¹ G ([`periodic_start`]; a direction
 /// that never leaves stick keeps ∂w_start = 0), which closes the extra columns.
-fn differentiate(element: &LocalElement, aft: &Aft, w_start: [f64; 2], ws: &mut Workspace) {
-    let p = &element.params;
-    let (m, n_t) = (ws.m, ws.n_t);
+fn finish_jacobian(element: &LocalElement, aft: &Aft, ws: &mut Workspace) {
+    let m = ws.m;
     let h = (m - 1) / 2;
-    let nt = element.tangential;
-    let nsig = element.signals();
-    let cols = nsig * m + 1;
-    let n0_col = nsig * m;
-    let offsets = Offsets {
-        m,
-        tangential: nt,
-        normal: element.normal,
-    };
+    let shape = Shape::new(element, m);
+    let (nt, cols, n0_col, offsets) = (element.tangential, shape.cols, shape.n0_col, shape.offsets);
     let Workspace {
         jacobian,
         jacobian_cols,
         derivative: b,
         aft_scratch,
-        u,
-        v,
         ..
     } = ws;
     jacobian.clear();
-    jacobian.resize(nsig * m * cols, 0.0);
+    jacobian.resize(element.signals() * m * cols, 0.0);
     *jacobian_cols = cols;
-    b.reset(m, n_t, cols);
-    let two_d = element.variant == Variant::TwoD;
-    let mut w = w_start;
-    for j in 0..n_t {
-        let t = law::sample_with_tangent(element.variant, p, [u[0][j], u[1][j]], v[j], w);
-        w = t.sample.slider;
-        for f in 0..3 {
-            for c in 0..4 {
-                let g = t.dforce_dx[f][c];
-                b.weights[(4 * f + c) * n_t + j] = g;
-                b.nonzero[f][c] |= g != 0.0;
-            }
-        }
-        let e = aft.synthesis_row(j);
-        let bj = aft.analysis_column(j);
-        if two_d && t.sample.regime[0] == Regime::Slip {
-            slip_2d(&t, p.kt, e, bj, offsets, n0_col, b);
-            continue;
-        }
-        // A_j, W_j diagonal.
-        for d in 0..nt {
-            let g = t.dforce_dw[d][d];
-            if g != 0.0 {
-                for (bk, bv) in b.beta[d].iter_mut().zip(bj) {
-                    *bk += g * bv;
-                }
-                b.live[d] = true;
-            }
-            let a = t.dslider_dw[d][d];
-            if a == 1.0 && t.dslider_dx[d].iter().all(|&x| x == 0.0) {
-                continue;
-            }
-            b.flush(d);
-            if a != 1.0 {
-                for r in b.dw[d].iter_mut() {
-                    *r *= a;
-                }
-            }
-            add_input_row(&mut b.dw[d], &t.dslider_dx[d], e, offsets, n0_col);
-        }
-    }
     for d in 0..nt {
         b.flush(d);
     }
@@ -494,16 +575,14 @@ fn differentiate(element: &LocalElement, aft: &Aft, w_start: [f64; 2], ws: &mut 
         let Some(fb) = offsets.of(f) else { continue };
         for c in 0..3 {
             let Some(cb) = offsets.of(c) else { continue };
-            if !b.nonzero[f][c] {
+            if !b.gather(f, c) {
                 continue;
             }
-            let seq = &b.weights[(4 * f + c) * n_t..(4 * f + c + 1) * n_t];
-            aft.fourier_sums(seq, &mut b.sums, aft_scratch);
+            aft.fourier_sums(&b.sequence, &mut b.sums, aft_scratch);
             add_multiplication_block(h, &b.sums, jacobian, cols, fb, cb);
         }
-        if b.nonzero[f][3] {
-            let seq = &b.weights[(4 * f + 3) * n_t..(4 * f + 4) * n_t];
-            aft.to_harmonics(seq, &mut b.column, aft_scratch);
+        if b.gather(f, 3) {
+            aft.to_harmonics(&b.sequence, &mut b.column, aft_scratch);
             for (k, ck) in b.column.iter().enumerate() {
                 jacobian[(fb + k) * cols + n0_col] += ck;
             }
@@ -566,7 +645,7 @@ fn slip_2d(
 
 /// `rows` (m × cols, row-major) += Σ_r left_r ⊗ right_r[..cols] and `coef` (m × 2) =
 /// Σ_r left_r ⊗ right_r[cols..cols+2], for left vectors of length m and right rows of length
-/// cols + 2.
+/// cols + 2: one matrix product (faer, SIMD) of the m × R and R × (cols + 2) factors.
 fn add_products(
     left: &[f64],
     right: &[f64],
@@ -576,20 +655,23 @@ fn add_products(
     coef: &mut [f64],
 ) {
     coef.fill(0.0);
-    let ext = cols + 2;
-    for (l, r) in left.chunks_exact(m).zip(right.chunks_exact(ext)) {
-        for (k, &a) in l.iter().enumerate() {
-            if a == 0.0 {
-                continue;
-            }
-            let row = &mut rows[k * cols..(k + 1) * cols];
-            for (o, x) in row.iter_mut().zip(&r[..cols]) {
-                *o += a * x;
-            }
-            coef[2 * k] += a * r[cols];
-            coef[2 * k + 1] += a * r[cols + 1];
-        }
+    let r = left.len() / m;
+    if r == 0 {
+        return;
     }
+    let lhs = MatRef::from_column_major_slice(left, m, r);
+    let rhs = MatRef::from_row_major_slice(right, r, cols + 2);
+    let dst = MatMut::from_row_major_slice_mut(rows, m, cols);
+    matmul(dst, Accum::Add, lhs, rhs.subcols(0, cols), 1.0, Par::Seq);
+    let start = MatMut::from_row_major_slice_mut(coef, m, 2);
+    matmul(
+        start,
+        Accum::Replace,
+        lhs,
+        rhs.subcols(cols, 2),
+        1.0,
+        Par::Seq,
+    );
 }
 
 /// ∂w_start from the periodicity w_start = w_end = Φ w_start + G (per derivative column) into

@@ -195,3 +195,115 @@ pub fn check_frame(frame: &Mat3, context: &str) -> Result<()> {
     }
     Ok(())
 }
+
+/// The node-space Jacobian Lᵀ J L of a pair (SAMA paper eq. 26, with the kinematic map L of
+/// [`relative_local`]: L = [F ⊗ I, −(F R^σ) ⊗ P], P the per-harmonic rotation by θ_n).
+///
+/// `jac` is the local Jacobian, row-major with `cols` columns of which the first 3·m are the
+/// local coefficients (u1, u2, v); `out` receives the node Jacobian column-major, np × np with
+/// np = 3m (ground target) or 6m, node index (side, component, coefficient). Built from the
+/// 3×3 block contractions G^Y_{a,i'} = Σ_b J_ab Y_bi' and Σ_a X_ai G^Y_{a,i'} for X, Y ∈ {F, F R^σ}
+/// (m × m blocks), then the phase: K P for target columns, Pᵀ K for target rows, with sign
+/// (−1) per target side. `work` is scratch.
+#[allow(clippy::too_many_arguments)]
+pub fn node_jacobian(
+    frame: &Mat3,
+    target_frame: &Mat3,
+    phases: &Phases,
+    jac: &[f64],
+    cols: usize,
+    m: usize,
+    target: bool,
+    work: &mut Vec<f64>,
+    out: &mut [f64],
+) {
+    let sides = if target { 2 } else { 1 };
+    let np = 3 * m * sides;
+    let mm = m * m;
+    let h = (m - 1) / 2;
+    let maps = [frame, target_frame];
+    work.clear();
+    work.resize(sides * 9 * mm + mm, 0.0);
+    let (g, block) = work.split_at_mut(sides * 9 * mm);
+    // G^Y_{a,i'}[k][l] = Σ_b J[(a,k),(b,l)] Y_{b,i'}.
+    for (y, map) in maps.iter().enumerate().take(sides) {
+        for a in 0..3 {
+            for b in 0..3 {
+                for i in 0..3 {
+                    let coef = map[b][i];
+                    if coef == 0.0 {
+                        continue;
+                    }
+                    let gb = &mut g[((y * 3 + a) * 3 + i) * mm..((y * 3 + a) * 3 + i + 1) * mm];
+                    for k in 0..m {
+                        let src =
+                            &jac[(a * m + k) * cols + b * m..(a * m + k) * cols + (b + 1) * m];
+                        for (o, s) in gb[k * m..(k + 1) * m].iter_mut().zip(src) {
+                            *o += coef * s;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    for (x, xmap) in maps.iter().enumerate().take(sides) {
+        for (y, _) in maps.iter().enumerate().take(sides) {
+            let sign = if x == y { 1.0 } else { -1.0 };
+            for i in 0..3 {
+                for ip in 0..3 {
+                    block.fill(0.0);
+                    for a in 0..3 {
+                        let coef = sign * xmap[a][i];
+                        if coef == 0.0 {
+                            continue;
+                        }
+                        let gb = &g[((y * 3 + a) * 3 + ip) * mm..((y * 3 + a) * 3 + ip + 1) * mm];
+                        for (o, s) in block.iter_mut().zip(gb) {
+                            *o += coef * s;
+                        }
+                    }
+                    if y == 1 {
+                        rotate_columns(block, phases, m, h);
+                    }
+                    if x == 1 {
+                        rotate_rows(block, phases, m, h);
+                    }
+                    let row0 = x * 3 * m + i * m;
+                    let col0 = y * 3 * m + ip * m;
+                    for l in 0..m {
+                        let column = &mut out[(col0 + l) * np + row0..(col0 + l) * np + row0 + m];
+                        for (k, o) in column.iter_mut().enumerate() {
+                            *o = block[k * m + l];
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// `block` (m × m, row-major) ← block · P: the (Re, Im) columns of harmonic n mixed by
+/// P_n = [[cos θ_n, −sin θ_n], [sin θ_n, cos θ_n]].
+fn rotate_columns(block: &mut [f64], phases: &Phases, m: usize, h: usize) {
+    for row in block.chunks_exact_mut(m) {
+        for n in 1..=h {
+            let (c, s) = (phases.cos[n], phases.sin[n]);
+            let (re, im) = (row[2 * n - 1], row[2 * n]);
+            row[2 * n - 1] = re * c + im * s;
+            row[2 * n] = -re * s + im * c;
+        }
+    }
+}
+
+/// `block` (m × m, row-major) ← Pᵀ · block.
+fn rotate_rows(block: &mut [f64], phases: &Phases, m: usize, h: usize) {
+    for n in 1..=h {
+        let (c, s) = (phases.cos[n], phases.sin[n]);
+        let (re, im) = block[(2 * n - 1) * m..(2 * n + 1) * m].split_at_mut(m);
+        for (r, i) in re.iter_mut().zip(im.iter_mut()) {
+            let (a, b) = (*r, *i);
+            *r = c * a + s * b;
+            *i = -s * a + c * b;
+        }
+    }
+}

@@ -203,6 +203,7 @@ pub struct SampleTangent {
 /// ∂f_t = k_t (∂u − ∂w), ∂w' = ∂w; slip ∂f_t = sgn μ ∂f_n (1-D) or the radial-return tangent
 /// (2-D), ∂w' = ∂u − ∂f_t/k_t). Where the law is not differentiable (exactly on a regime
 /// boundary) the derivative of the regime selected by [`sample`] is returned.
+#[inline]
 pub fn sample_with_tangent(
     variant: Variant,
     p: &ContactParams,

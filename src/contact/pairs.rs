@@ -23,7 +23,7 @@ use crate::contact::element::{
     evaluate as evaluate_element, ElementReport, HysteresisLoop, LocalElement, Workspace,
 };
 use crate::contact::kinematics::{
-    check_frame, mat_mul, relative_local, relative_transpose, Mat3, Phases,
+    check_frame, mat_mul, node_jacobian, relative_local, relative_transpose, Mat3, Phases,
 };
 use crate::contact::law::{ContactParams, Variant};
 use crate::error::{Error, Result};
@@ -354,35 +354,17 @@ impl PairSet {
         if !wanted.jacobian {
             return Ok(());
         }
-        // J L: row r of J_local times L is the transpose map of that row.
-        for r in 0..nl {
-            let row = &jac[r * cols..r * cols + nl];
-            let (fc, ft) = b.jl[r * 6 * m..(r + 1) * 6 * m].split_at_mut(3 * m);
-            relative_transpose(
-                &prep.frame,
-                &prep.target_frame,
-                ph,
-                row,
-                fc,
-                pair.target.map(|_| ft),
-            );
-        }
-        // Lᵀ (J L): the transpose map of every column, written as a column of the slot.
-        for c in 0..np {
-            for (r, v) in b.col.iter_mut().enumerate() {
-                *v = b.jl[r * 6 * m + c];
-            }
-            let (fc, ft) = b.q.split_at_mut(3 * m);
-            relative_transpose(
-                &prep.frame,
-                &prep.target_frame,
-                ph,
-                &b.col,
-                fc,
-                pair.target.map(|_| ft),
-            );
-            slot.jacobian[c * np..(c + 1) * np].copy_from_slice(&b.q[..np]);
-        }
+        node_jacobian(
+            &prep.frame,
+            &prep.target_frame,
+            ph,
+            jac,
+            cols,
+            m,
+            pair.target.is_some(),
+            &mut b.jl,
+            &mut slot.jacobian[..np * np],
+        );
         Ok(())
     }
 
@@ -431,7 +413,7 @@ fn buffers(aft: &Aft, m: usize) -> Buffers {
         q: vec![0.0; 6 * m],
         x: vec![0.0; 3 * m],
         g: vec![0.0; 3 * m],
-        jl: vec![0.0; 3 * m * 6 * m],
+        jl: Vec::new(),
         col: vec![0.0; 3 * m],
     }
 }
