@@ -466,3 +466,37 @@ fn rigid_rotation_at_k0_gives_no_contact_force() {
         }
     }
 }
+
+/// The preload balanced by a static load ([`SectorProblem::balance_preload`]): the static
+/// solution is the undeformed interface (Q⁽⁰⁾ = 0 to 1e-9 of the harmonic-1 level) and every
+/// pair is closed, while without the balance some pairs open under their own preload.
+#[test]
+fn balanced_preload_keeps_every_pair_closed() {
+    let mut s = setup(3, 1, [1e8, 1e8, 1e6, 1e5]);
+    let k1 = s.problem.harmonic_indices[1];
+    let omega = 2.0 * std::f64::consts::PI * 0.5 * s.rom.harmonic(k1).unwrap().frequencies_hz[0];
+    let geom = geom_of(&s);
+    let before = closed_pairs(&s.problem, &hb_solve(&s.problem, omega), &geom);
+    s.problem.balance_preload().unwrap();
+    let x = hb_solve(&s.problem, omega);
+    let after = closed_pairs(&s.problem, &x, &geom);
+    let count = |v: &[bool]| v.iter().filter(|&&c| c).count();
+    println!(
+        "closed pairs: {} of {} unbalanced, {} balanced",
+        count(&before),
+        before.len(),
+        count(&after)
+    );
+    assert!(count(&before) < before.len());
+    assert_eq!(count(&after), after.len());
+    let nd = s.problem.linear.n_condensed();
+    let q0: f64 = (0..nd)
+        .map(|i| x[s.problem.layout.static_index(i)].powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let q1: f64 = x[nd..].iter().map(|v| v * v).sum::<f64>().sqrt();
+    assert!(
+        q0 <= 1e-9 * q1,
+        "static part {q0:.3e} vs harmonic 1 {q1:.3e}"
+    );
+}

@@ -283,6 +283,27 @@ impl LinearModel {
             .sqrt()
     }
 
+    /// Adds a static (harmonic 0) external force `force` (N, real, one entry per nonlinear DOF in
+    /// the force's order) on the nonlinear rows of harmonic 0's block.
+    pub fn add_static_force(&mut self, force: &[f64]) -> Result<()> {
+        let part = &self.blocks[self.harmonic_block[0]];
+        if force.len() != part.nonlinear.len() {
+            return Err(Error::input(format!(
+                "a static force of {} entries for {} nonlinear DOFs",
+                force.len(),
+                part.nonlinear.len()
+            )));
+        }
+        let f0 = &mut self.forcing[0];
+        if f0.is_empty() {
+            *f0 = vec![c64::new(0.0, 0.0); part.n_rows];
+        }
+        for (&row, &f) in part.nonlinear.iter().zip(force) {
+            f0[row] += c64::new(f, 0.0);
+        }
+        Ok(())
+    }
+
     /// The uncondensed K, M, C of harmonic n's block, ordered [nonlinear; linear].
     pub fn uncondensed(&self, n: usize) -> Uncondensed {
         let part = &self.blocks[self.harmonic_block[n]];

@@ -20,7 +20,7 @@ use crate::contact::law::Variant;
 use crate::contact::pairs::{PairSet, SectorCoupling};
 use crate::cyclic::harmonic_indices;
 use crate::error::{Error, Result};
-use crate::harmonics::HarmonicLayout;
+use crate::harmonics::{HarmonicForce, HarmonicLayout};
 use crate::hbm::{HbmSystem, LinearModel, MatrixBlock};
 use crate::mesh::Mesh;
 use crate::rom::{HarmonicRom, Rom};
@@ -142,6 +142,31 @@ impl SectorProblem {
             nonlinear,
             outputs,
         })
+    }
+
+    /// Balances the contact preload with a static external load, so that the undeformed
+    /// interface (Q = 0) is the static equilibrium with every pair closed at its n0.
+    ///
+    /// Why: in the SAMA paper (seed 004, §6) n0 and the interface state come from a nonlinear
+    /// static analysis (interference, centrifugal and pressure loads); the forced vibration is
+    /// computed *from that equilibrium*, i.e. the static loads that produce n0 balance it. Without
+    /// them, f_n = n0 + k_n v (eq 13) pushes the bodies apart in the harmonic-0 balance
+    /// K_0 Q⁽⁰⁾ + F_nl⁽⁰⁾ = 0 and the static solution relaxes the preload (on the bundled shroud
+    /// case about 27 of 45 pairs open, independently of n0, since everything scales with n0).
+    /// The load added is F_e⁽⁰⁾ = F_nl⁽⁰⁾(Q = 0) on the contact DOFs (harmonic 0 is real, k = 0).
+    /// Note: [`crate::hbm::LevelPath`] scales it with the excitation level, and a continuation in
+    /// n0 ([`crate::hbm::PreloadPath`]) keeps the load of the n0 the problem was built with.
+    pub fn balance_preload(&mut self) -> Result<()> {
+        let nd = self.linear.n_condensed();
+        let q = vec![0.0; self.layout.len(nd)];
+        let mut force = vec![0.0; q.len()];
+        let mut state = self.contact.initial_state();
+        self.contact
+            .evaluate(&self.layout, &q, &mut state, &mut force, None)?;
+        let static_part: Vec<f64> = (0..nd)
+            .map(|i| force[self.layout.static_index(i)])
+            .collect();
+        self.linear.add_static_force(&static_part)
     }
 
     /// The harmonic balance system r(Q, ω) of the problem (SAMA eq 19).
