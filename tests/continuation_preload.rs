@@ -3,10 +3,10 @@
 //! the linear start x = 0 and sliders at rest, at the same n0 values (1e-8 relative), and the
 //! parameter derivative against central finite differences of the residual.
 
-use faer::Mat;
-use nlrom::case::WeightedDofs;
-use nlrom::contact::grounded::{DofElement, DofElements};
-use nlrom::contact::law::ContactParams;
+mod hbm_support;
+
+use hbm_support::{tangential_normal_element, two_oscillators};
+use nlrom::contact::grounded::DofElements;
 use nlrom::continuation::{trace, ContinuationOptions, PathEnd};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::newton::norm;
@@ -22,34 +22,11 @@ const OMEGA: f64 = 1.0;
 /// variation (k_t = 1, k_n = 3, μ = 0.3), both excited; at ω = 1 the x oscillator slips over
 /// part of every period for n0 in 0.15..0.6 (so the periodic solution is unique).
 fn model() -> LinearModel {
-    let k = Mat::from_fn(2, 2, |i, j| if i == j { 1.0 } else { 0.0 });
-    let m = Mat::from_fn(2, 2, |i, j| if i == j { 1.0 } else { 0.0 });
-    let c = Mat::from_fn(2, 2, |i, j| if i == j { 0.02 } else { 0.0 });
-    LinearModel::from_real(
-        k.as_ref(),
-        m.as_ref(),
-        Some(c.as_ref()),
-        &[0.05, 0.03],
-        vec![0, 1],
-        vec![0, 1],
-        5,
-    )
-    .unwrap()
+    two_oscillators(0.02, [0.05, 0.03], 5)
 }
 
 fn contact(n0: f64) -> Result<DofElements> {
-    let one = |d: usize| WeightedDofs {
-        dofs: vec![d],
-        weights: vec![1.0],
-    };
-    DofElements::new(
-        vec![DofElement {
-            tangential: one(0),
-            normal: Some(one(1)),
-            params: ContactParams::new(1.0, 3.0, 0.3, n0, "test")?,
-        }],
-        2,
-    )
+    tangential_normal_element(n0)
 }
 
 fn tight() -> NewtonOptions {

@@ -13,10 +13,8 @@
 
 mod hbm_support;
 
-use faer::Mat;
-use nlrom::case::WeightedDofs;
-use nlrom::contact::grounded::{DofElement, DofElements};
-use nlrom::contact::law::ContactParams;
+use hbm_support::{tangential_normal_element, two_oscillators};
+use nlrom::contact::grounded::DofElements;
 use nlrom::continuation::{trace, ContinuationOptions, PathEnd};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::newton::norm;
@@ -26,35 +24,11 @@ use nlrom::hbm::{
 };
 
 fn model(h: usize) -> LinearModel {
-    let k = Mat::from_fn(2, 2, |i, j| if i == j { 1.0 } else { 0.0 });
-    let m = Mat::from_fn(2, 2, |i, j| if i == j { 1.0 } else { 0.0 });
-    let c = Mat::from_fn(2, 2, |i, j| if i == j { 0.005 } else { 0.0 });
-    LinearModel::from_real(
-        k.as_ref(),
-        m.as_ref(),
-        Some(c.as_ref()),
-        &[0.05, 0.03],
-        vec![0, 1],
-        vec![0, 1],
-        h,
-    )
-    .unwrap()
+    two_oscillators(0.005, [0.05, 0.03], h)
 }
 
 fn contact() -> DofElements {
-    let one = |d: usize| WeightedDofs {
-        dofs: vec![d],
-        weights: vec![1.0],
-    };
-    DofElements::new(
-        vec![DofElement {
-            tangential: one(0),
-            normal: Some(one(1)),
-            params: ContactParams::new(1.0, 3.0, 0.3, 0.2, "test").unwrap(),
-        }],
-        2,
-    )
-    .unwrap()
+    tangential_normal_element(0.2).unwrap()
 }
 
 #[test]

@@ -357,3 +357,40 @@ impl HarmonicForce for WeightedFriction {
         Ok(())
     }
 }
+
+/// Two unit oscillators (m = 1 kg, k = 1 N/m, damping c), DOF 0 tangential and DOF 1 normal at
+/// one friction element ([`tangential_normal_element`]), excited by `force` on harmonic 1, H
+/// harmonics; both DOFs nonlinear and output.
+pub fn two_oscillators(c: f64, force: [f64; 2], h: usize) -> nlrom::hbm::LinearModel {
+    let k = Mat::from_fn(2, 2, |i, j| if i == j { 1.0 } else { 0.0 });
+    let cm = Mat::from_fn(2, 2, |i, j| if i == j { c } else { 0.0 });
+    nlrom::hbm::LinearModel::from_real(
+        k.as_ref(),
+        k.as_ref(),
+        Some(cm.as_ref()),
+        &force,
+        vec![0, 1],
+        vec![0, 1],
+        h,
+    )
+    .unwrap()
+}
+
+/// One friction element (k_t = 1, k_n = 3 N/m, μ = 0.3, preload n0) reading u_t = q0 and the
+/// normal approach v = q1.
+pub fn tangential_normal_element(n0: f64) -> Result<nlrom::contact::grounded::DofElements> {
+    use nlrom::case::WeightedDofs;
+    use nlrom::contact::grounded::{DofElement, DofElements};
+    let one = |d: usize| WeightedDofs {
+        dofs: vec![d],
+        weights: vec![1.0],
+    };
+    DofElements::new(
+        vec![DofElement {
+            tangential: one(0),
+            normal: Some(one(1)),
+            params: nlrom::contact::law::ContactParams::new(1.0, 3.0, 0.3, n0, "test")?,
+        }],
+        2,
+    )
+}
