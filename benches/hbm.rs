@@ -16,14 +16,15 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use faer::Mat;
-use hbm_support::WeightedFriction;
+use hbm_support::friction_elements;
+use nlrom::contact::grounded::DofElements;
 use nlrom::contact::law::ContactParams;
 use nlrom::continuation::{trace, ContinuationOptions};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::newton::solve_dense;
 use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel, Linearization, ParameterSystem};
 
-fn chain() -> (LinearModel, WeightedFriction, WeightedFriction) {
+fn chain() -> (LinearModel, DofElements) {
     let k = Mat::from_fn(3, 3, |i, j| match (i, j) {
         (0, 0) | (1, 1) => 2.0,
         (2, 2) => 1.0,
@@ -43,14 +44,12 @@ fn chain() -> (LinearModel, WeightedFriction, WeightedFriction) {
     )
     .unwrap();
     let params = ContactParams::new(1.0, 0.0, 1.0, 0.2, "bench").unwrap();
-    let ground = WeightedFriction::new(params, vec![(0, 1.0)], 3);
-    let between = WeightedFriction::new(params, vec![(1, -1.0), (2, 1.0)], 3);
-    (linear, ground, between)
+    let elements = friction_elements(params, vec![vec![(0, 1.0)], vec![(1, -1.0), (2, 1.0)]], 3);
+    (linear, elements)
 }
 
 fn hbm(c: &mut Criterion) {
-    let (linear, a, b) = chain();
-    let pair = hbm_support::Sum(a, b);
+    let (linear, pair) = chain();
     let layout = HarmonicLayout::new(7, 1024).unwrap();
     let system = HbmSystem::new(layout, &linear, &pair).unwrap();
     let fp = FrequencyPath {

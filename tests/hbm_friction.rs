@@ -6,7 +6,8 @@
 mod hbm_support;
 
 use faer::{c64, Mat};
-use hbm_support::{chain4, complex_solve, WeightedFriction};
+use hbm_support::{chain4, complex_solve, friction_elements};
+use nlrom::contact::grounded::DofElements;
 use nlrom::contact::law::ContactParams;
 use nlrom::continuation::{trace, ContinuationOptions, PathEnd};
 use nlrom::harmonics::HarmonicLayout;
@@ -32,10 +33,10 @@ fn sdof(c: f64, f: f64, h: usize) -> LinearModel {
 }
 
 /// A Jenkins element from the DOF to the ground: stiffness k_t, slip force F_s = μ n0.
-fn grounded_jenkins(kt: f64, slip_force: f64) -> WeightedFriction {
-    WeightedFriction::new(
+fn grounded_jenkins(kt: f64, slip_force: f64) -> DofElements {
+    friction_elements(
         ContactParams::new(kt, 0.0, 1.0, slip_force, "test").unwrap(),
-        vec![(0, 1.0)],
+        vec![vec![(0, 1.0)]],
         1,
     )
 }
@@ -181,9 +182,9 @@ fn stuck_limit_equals_the_linear_frf() {
         3,
     )
     .unwrap();
-    let element = WeightedFriction::new(
+    let element = friction_elements(
         ContactParams::new(kt, 0.0, 1.0, 1e9, "test").unwrap(),
-        vec![(0, -1.0), (1, 1.0)],
+        vec![vec![(0, -1.0), (1, 1.0)]],
         2,
     );
     let system = HbmSystem::new(HarmonicLayout::new(3, 64).unwrap(), &model, &element).unwrap();

@@ -12,7 +12,7 @@ use nlrom::case::Case;
 use nlrom::contact::pairs::PairState;
 use nlrom::cyclic::{phase, CyclicGeometry};
 use nlrom::harmonics::HarmonicForce;
-use nlrom::hbm::{solve_fixed, FrequencyPath, NewtonOptions};
+use nlrom::hbm::{solve_fixed, FrequencyPath, HbmSystem, NewtonOptions};
 use nlrom::mesh::Mesh;
 use nlrom::model::{self, StructuralModel};
 use nlrom::reduction::{free_frontier_pairs, reduce};
@@ -114,7 +114,12 @@ fn outputs_h1(p: &SectorProblem, x: &[f64], omega: f64) -> Vec<c64> {
 
 /// The HB solution at ω (rad/s) by Newton from zero.
 fn hb_solve(p: &SectorProblem, omega: f64) -> Vec<f64> {
-    let system = p.system().unwrap();
+    hb_solve_with(p, &p.contact, omega)
+}
+
+/// The HB solution at ω (rad/s) by Newton from zero with the contact force `force`.
+fn hb_solve_with<F: HarmonicForce>(p: &SectorProblem, force: &F, omega: f64) -> Vec<f64> {
+    let system = HbmSystem::new(p.layout, &p.linear, force).unwrap();
     let path = FrequencyPath {
         system: &system,
         level: 1.0,
@@ -474,4 +479,39 @@ fn rigid_rotation_at_k0_gives_no_contact_force() {
             assert!(ratio > 1e-2, "k = 3 should load the contact: {ratio:.3e}");
         }
     }
+}
+
+/// The preload balanced by the static equilibrium (`SectorProblem::contact`, a
+/// [`nlrom::hbm::preload::FromStaticEquilibrium`]): the static solution is the undeformed
+/// interface (Q⁽⁰⁾ = 0 to 1e-9 of the harmonic-1 level) and every pair is closed, while without
+/// the balance (the bare `PairSet`, `contact.inner`) some pairs open under their own preload.
+#[test]
+fn balanced_preload_keeps_every_pair_closed() {
+    let s = setup(3, 1, [1e8, 1e8, 1e6, 1e5]);
+    let k1 = s.problem.harmonic_indices[1];
+    let omega = 2.0 * std::f64::consts::PI * 0.5 * s.rom.harmonic(k1).unwrap().frequencies_hz[0];
+    let geom = geom_of(&s);
+    let unbalanced = hb_solve_with(&s.problem, &s.problem.contact.inner, omega);
+    let before = closed_pairs(&s.problem, &unbalanced, &geom);
+    let x = hb_solve(&s.problem, omega);
+    let after = closed_pairs(&s.problem, &x, &geom);
+    let count = |v: &[bool]| v.iter().filter(|&&c| c).count();
+    println!(
+        "closed pairs: {} of {} unbalanced, {} balanced",
+        count(&before),
+        before.len(),
+        count(&after)
+    );
+    assert!(count(&before) < before.len());
+    assert_eq!(count(&after), after.len());
+    let nd = s.problem.linear.n_condensed();
+    let q0: f64 = (0..nd)
+        .map(|i| x[s.problem.layout.static_index(i)].powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let q1: f64 = x[nd..].iter().map(|v| v * v).sum::<f64>().sqrt();
+    assert!(
+        q0 <= 1e-9 * q1,
+        "static part {q0:.3e} vs harmonic 1 {q1:.3e}"
+    );
 }

@@ -12,7 +12,8 @@
 //!   t · t_prev > 0: the orientation is carried over and folds (where dλ/ds changes sign) are
 //!   passed;
 //! - corrector: Newton on the bordered system r(x, λ) = 0, t · (y − y_pred) = 0 (the
-//!   hyperplane through the predicted point, orthogonal to the tangent);
+//!   hyperplane through the predicted point, orthogonal to the tangent); a corrected point
+//!   farther than one step from the prediction is rejected (a jump to another branch);
 //! - step: s ← s · clamp(n_target / n_iter, ½, 2) after a converged point; on a failed
 //!   corrector, or a tangent turning by more than 60°, the step is halved and the point retried
 //!   (never skipped) — below the minimum step the path stops with a reported failure and the
@@ -181,7 +182,15 @@ pub fn trace<S: ParameterSystem>(
     while path.points.len() < opts.max_points {
         let y = scaled(&current, &scales);
         let predicted: Vec<f64> = y.iter().zip(&tangent).map(|(y, t)| y + step * t).collect();
-        let outcome = correct(system, &current.state, &predicted, &tangent, &scales, opts);
+        let outcome = correct(
+            system,
+            &current.state,
+            &predicted,
+            &tangent,
+            step,
+            &scales,
+            opts,
+        );
         let (sol, new_tangent) = match outcome {
             Ok((sol, Some(t))) if dot(&t, &tangent) >= 0.5 || step <= 2.0 * min_step => (sol, t),
             other => {
@@ -333,11 +342,44 @@ fn tangent_with(lin: &Linearization, s: &Scales, border: &[f64]) -> Option<Vec<f
 
 /// The corrector from the predicted point; returns the solution and the new tangent (oriented
 /// along `tangent`).
+///
+/// The corrected point must lie within one step of the prediction: the hyperplane
+/// t · (y − y_pred) = 0 reaches arbitrarily far, and near a sharp fold (e.g. where contact
+/// separation sets in within a few AFT samples) Newton can converge on it to a point of another
+/// branch — a jump that would skip the segment in between. Such a point is rejected like a failed
+/// corrector (the step is halved).
 #[allow(clippy::type_complexity)]
 fn correct<S: ParameterSystem>(
     system: &S,
     state: &S::State,
     predicted: &[f64],
+    tangent: &[f64],
+    step: f64,
+    s: &Scales,
+    opts: &ContinuationOptions,
+) -> std::result::Result<(NewtonSolution<S::State>, Option<Vec<f64>>), String> {
+    let done = correct_on(system, state, predicted, tangent, tangent, s, opts)?;
+    let mut y: Vec<f64> = done.0.x.iter().map(|x| x / s.x).collect();
+    y.push(done.0.parameter / s.lambda);
+    let off: Vec<f64> = y.iter().zip(predicted).map(|(a, b)| a - b).collect();
+    if norm(&off) <= step {
+        Ok(done)
+    } else {
+        Err(format!(
+            "the corrector moved {:.3e} from the prediction, farther than the step {step:.3e} (towards another branch)",
+            norm(&off)
+        ))
+    }
+}
+
+/// Newton on r(x, λ) = 0, `border` · (y − y_pred) = 0 from the predicted point; the new tangent
+/// is oriented along `tangent`.
+#[allow(clippy::type_complexity)]
+fn correct_on<S: ParameterSystem>(
+    system: &S,
+    state: &S::State,
+    predicted: &[f64],
+    border: &[f64],
     tangent: &[f64],
     s: &Scales,
     opts: &ContinuationOptions,
@@ -350,7 +392,7 @@ fn correct<S: ParameterSystem>(
         let end = system.evaluate(&x, lambda, state, &mut lin)?;
         let mut g: Vec<f64> = lin.residual.iter().map(|r| r / s.residual).collect();
         g.push(dot(
-            tangent,
+            border,
             &z.iter()
                 .zip(predicted)
                 .map(|(a, b)| a - b)
@@ -359,7 +401,7 @@ fn correct<S: ParameterSystem>(
         Ok(Iterate {
             z: z.to_vec(),
             g,
-            matrix: bordered(&lin, s, tangent),
+            matrix: bordered(&lin, s, border),
             extra: (lin, end),
         })
     };

@@ -8,8 +8,9 @@
 //! - [`linear`]: [`LinearModel`] — per harmonic n the dynamic stiffness D⁽ⁿ⁾(ω) of its harmonic
 //!   index, condensed per frequency (eqs. 15–18), with its ω-derivative;
 //! - [`system`]: [`HbmSystem`] — r(Q, ω) = D̄(ω) Q − F̄_e(ω) + F_nl(Q) (eq. 19) and ∂r/∂Q (eq. 21),
-//!   and the [`ParameterSystem`] views [`FrequencyPath`] (λ = ω) and [`LevelPath`]
-//!   (λ = excitation level at fixed ω);
+//!   and the [`ParameterSystem`] views [`FrequencyPath`] (λ = ω), [`LevelPath`]
+//!   (λ = excitation level at fixed ω) and [`PreloadPath`] (λ = the force's parameter, e.g. the
+//!   preload n0, at fixed ω);
 //! - [`newton`]: Newton with step damping, convergence on residual and increment;
 //! - [`response`]: harmonics, amplitude and peak of the output DOFs at a solution;
 //! - [`frf`]: a frequency response (continuation + recovery) and a case's continuation settings;
@@ -33,4 +34,6 @@ pub mod system;
 pub use linear::{Condensed, LinearModel, MatrixBlock, Uncondensed};
 pub use newton::{solve_fixed, NewtonFailure, NewtonOptions, NewtonSolution};
 pub use response::{OutputResponse, ResponseOptions};
-pub use system::{FrequencyPath, HbmSystem, LevelPath, Linearization, ParameterSystem};
+pub use system::{
+    FrequencyPath, HbmSystem, LevelPath, Linearization, ParameterSystem, PreloadPath,
+};

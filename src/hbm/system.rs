@@ -1,7 +1,7 @@
 //! The harmonic balance residual r(Q, ω) = D̄(ω) Q − λ F̄_e(ω) + F_nl(Q) (SAMA paper eq. 19) in
 //! the real layout of `conventions.md` §4, with its Jacobian ∂r/∂Q = D̄ + ∂F_nl/∂Q (eq. 21 with the
 //! sign convention of [`HarmonicForce`]) and its derivative with respect to the continuation
-//! parameter (ω, or the excitation level λ).
+//! parameter (ω, the excitation level λ, or the force's own parameter such as the preload n0).
 
 use faer::{c64, Mat};
 use rayon::prelude::*;
@@ -296,5 +296,60 @@ fn residual_scale(force_norm: f64) -> f64 {
         force_norm
     } else {
         1.0
+    }
+}
+
+/// Response to the nonlinear force's own parameter p (for the contact elements the static
+/// normal load n0) at fixed ω (rad/s) and excitation level: r(Q, p) = D̄(ω) Q − level·F̄_e +
+/// F_nl(Q; p), ∂r/∂p = ∂F_nl/∂p from [`HarmonicForce::parameter_derivative`].
+///
+/// `build(p)` makes the force at parameter p; it must move the force's parameters the way its
+/// `parameter_derivative` assumes (e.g. [`crate::contact::grounded::DofElements`]: every
+/// element's n0 = p; [`crate::contact::pairs::PairSet`]: each pair's n0 = preload_rate · p).
+/// The force is rebuilt at every evaluation (cheap for the contact forces: the AFT plan is made
+/// on first use).
+pub struct PreloadPath<'a, F: HarmonicForce, B: Fn(f64) -> Result<F> + Sync> {
+    /// Real harmonic layout.
+    pub layout: HarmonicLayout,
+    /// The linear part (condensed on the force's DOFs).
+    pub linear: &'a LinearModel,
+    /// The force at parameter p.
+    pub build: B,
+    /// The fixed excitation frequency ω (rad/s).
+    pub omega: f64,
+    /// Factor on the excitation (1 for the case's force).
+    pub level: f64,
+    /// The force memory before the first point.
+    pub initial: F::State,
+}
+
+impl<F: HarmonicForce, B: Fn(f64) -> Result<F> + Sync> ParameterSystem for PreloadPath<'_, F, B> {
+    type State = F::State;
+
+    fn dim(&self) -> usize {
+        self.layout.len(self.linear.n_condensed())
+    }
+
+    fn residual_scale(&self) -> f64 {
+        residual_scale(self.linear.force_norm() * self.level.abs())
+    }
+
+    fn initial_state(&self) -> F::State {
+        self.initial.clone()
+    }
+
+    fn evaluate(
+        &self,
+        x: &[f64],
+        p: f64,
+        state: &F::State,
+        out: &mut Linearization,
+    ) -> Result<F::State> {
+        let force = (self.build)(p)?;
+        let system = HbmSystem::new(self.layout, self.linear, &force)?;
+        let end = system.evaluate(x, self.omega, self.level, state, out, None)?;
+        out.d_parameter.iter_mut().for_each(|v| *v = 0.0);
+        force.parameter_derivative(&self.layout, x, state, &mut out.d_parameter)?;
+        Ok(end)
     }
 }

@@ -193,167 +193,63 @@ pub fn chain4() -> (Mat<f64>, Mat<f64>, Mat<f64>) {
     (k, m, c)
 }
 
-/// A friction element on DOF combinations for the tests, built on `nlrom::contact::element`:
-/// u_t = Σ w_i q[dofs_i] (and optionally v = Σ wn_i q[ndofs_i]), the element's internal forces act
-/// back along the same weights. DOF indices are positions among the force's `n_total` DOFs.
-#[derive(Clone, Debug)]
-pub struct WeightedFriction {
-    pub params: nlrom::contact::law::ContactParams,
-    pub tangential: Vec<(usize, f64)>,
-    pub normal: Vec<(usize, f64)>,
-    pub n_total: usize,
-    /// The AFT plan of the last layout evaluated (planning costs more than one evaluation).
-    aft: std::sync::Arc<std::sync::Mutex<Option<std::sync::Arc<nlrom::contact::aft::Aft>>>>,
-}
-
-impl WeightedFriction {
-    /// An element with tangential weights only (slip limit μ n0).
-    pub fn new(
-        params: nlrom::contact::law::ContactParams,
-        tangential: Vec<(usize, f64)>,
-        n_total: usize,
-    ) -> Self {
-        WeightedFriction {
+/// Friction elements without normal kinematics (slip limit μ n0) on DOF combinations
+/// u_t = Σ w_i q[d_i], one per entry of `tangential`, among `n_total` DOFs
+/// ([`nlrom::contact::grounded::DofElements`]).
+pub fn friction_elements(
+    params: nlrom::contact::law::ContactParams,
+    tangential: Vec<Vec<(usize, f64)>>,
+    n_total: usize,
+) -> nlrom::contact::grounded::DofElements {
+    use nlrom::case::WeightedDofs;
+    use nlrom::contact::grounded::{DofElement, DofElements};
+    let elements = tangential
+        .into_iter()
+        .map(|combination| DofElement {
+            tangential: WeightedDofs {
+                dofs: combination.iter().map(|&(d, _)| d).collect(),
+                weights: combination.iter().map(|&(_, w)| w).collect(),
+            },
+            normal: None,
             params,
-            tangential,
-            normal: vec![],
-            n_total,
-            aft: Default::default(),
-        }
-    }
-
-    /// The AFT plan for `layout` (cached).
-    fn plan(&self, layout: &HarmonicLayout) -> Result<std::sync::Arc<nlrom::contact::aft::Aft>> {
-        let mut cache = self.aft.lock().unwrap();
-        if let Some(a) = cache.as_ref().filter(|a| a.layout() == *layout) {
-            return Ok(a.clone());
-        }
-        let a = std::sync::Arc::new(nlrom::contact::aft::Aft::new(*layout)?);
-        *cache = Some(a.clone());
-        Ok(a)
-    }
+        })
+        .collect();
+    DofElements::new(elements, n_total).unwrap()
 }
 
-/// Two forces on the same DOFs acting together (states side by side).
-#[derive(Clone, Debug)]
-pub struct Sum<A, B>(pub A, pub B);
-
-impl<A: HarmonicForce, B: HarmonicForce> HarmonicForce for Sum<A, B> {
-    type State = (A::State, B::State);
-
-    fn n_dofs(&self) -> usize {
-        self.0.n_dofs()
-    }
-
-    fn initial_state(&self) -> Self::State {
-        (self.0.initial_state(), self.1.initial_state())
-    }
-
-    fn evaluate(
-        &self,
-        layout: &HarmonicLayout,
-        q: &[f64],
-        state: &mut Self::State,
-        force: &mut [f64],
-        jacobian: Option<MatMut<'_, f64>>,
-    ) -> Result<()> {
-        match jacobian {
-            Some(mut j) => {
-                self.0
-                    .evaluate(layout, q, &mut state.0, force, Some(j.as_mut()))?;
-                self.1.evaluate(layout, q, &mut state.1, force, Some(j))
-            }
-            None => {
-                self.0.evaluate(layout, q, &mut state.0, force, None)?;
-                self.1.evaluate(layout, q, &mut state.1, force, None)
-            }
-        }
-    }
+/// Two unit oscillators (m = 1 kg, k = 1 N/m, damping c), DOF 0 tangential and DOF 1 normal at
+/// one friction element ([`tangential_normal_element`]), excited by `force` on harmonic 1, H
+/// harmonics; both DOFs nonlinear and output.
+pub fn two_oscillators(c: f64, force: [f64; 2], h: usize) -> nlrom::hbm::LinearModel {
+    let k = Mat::from_fn(2, 2, |i, j| if i == j { 1.0 } else { 0.0 });
+    let cm = Mat::from_fn(2, 2, |i, j| if i == j { c } else { 0.0 });
+    nlrom::hbm::LinearModel::from_real(
+        k.as_ref(),
+        k.as_ref(),
+        Some(cm.as_ref()),
+        &force,
+        vec![0, 1],
+        vec![0, 1],
+        h,
+    )
+    .unwrap()
 }
 
-impl HarmonicForce for WeightedFriction {
-    type State = [f64; 2];
-
-    fn n_dofs(&self) -> usize {
-        self.n_total
-    }
-
-    fn initial_state(&self) -> [f64; 2] {
-        [0.0; 2]
-    }
-
-    fn evaluate(
-        &self,
-        layout: &HarmonicLayout,
-        q: &[f64],
-        state: &mut [f64; 2],
-        force: &mut [f64],
-        jacobian: Option<MatMut<'_, f64>>,
-    ) -> Result<()> {
-        use nlrom::contact::aft::global_index;
-        use nlrom::contact::element::{evaluate, LocalElement, Workspace};
-        use nlrom::contact::law::Variant;
-        let aft = self.plan(layout)?;
-        let mut ws = Workspace::new(&aft);
-        let m = layout.coefficients();
-        let normal = !self.normal.is_empty();
-        let element = LocalElement {
-            params: self.params,
-            variant: Variant::OneD,
-            tangential: 1,
-            normal,
-        };
-        let signals: Vec<&Vec<(usize, f64)>> = if normal {
-            vec![&self.tangential, &self.normal]
-        } else {
-            vec![&self.tangential]
-        };
-        let nd = self.n_total;
-        let mut x = vec![0.0; signals.len() * m];
-        for (s, weights) in signals.iter().enumerate() {
-            for &(d, w) in weights.iter() {
-                for l in 0..m {
-                    x[s * m + l] += w * q[global_index(layout, l, d, nd)];
-                }
-            }
-        }
-        let mut f = vec![0.0; x.len()];
-        evaluate(
-            &element,
-            &aft,
-            &x,
-            state,
-            &mut f,
-            jacobian.is_some(),
-            &mut ws,
-        )?;
-        for (s, weights) in signals.iter().enumerate() {
-            for &(d, w) in weights.iter() {
-                for l in 0..m {
-                    force[global_index(layout, l, d, nd)] += w * f[s * m + l];
-                }
-            }
-        }
-        if let Some(mut jac) = jacobian {
-            let (entries, cols) = ws.jacobian();
-            for (s, wr) in signals.iter().enumerate() {
-                for (t, wc) in signals.iter().enumerate() {
-                    for l in 0..m {
-                        for lc in 0..m {
-                            let v = entries[(s * m + l) * cols + t * m + lc];
-                            for &(dr, a) in wr.iter() {
-                                for &(dc, b) in wc.iter() {
-                                    jac[(
-                                        global_index(layout, l, dr, nd),
-                                        global_index(layout, lc, dc, nd),
-                                    )] += a * v * b;
-                                }
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        Ok(())
-    }
+/// One friction element (k_t = 1, k_n = 3 N/m, μ = 0.3, preload n0) reading u_t = q0 and the
+/// normal approach v = q1.
+pub fn tangential_normal_element(n0: f64) -> Result<nlrom::contact::grounded::DofElements> {
+    use nlrom::case::WeightedDofs;
+    use nlrom::contact::grounded::{DofElement, DofElements};
+    let one = |d: usize| WeightedDofs {
+        dofs: vec![d],
+        weights: vec![1.0],
+    };
+    DofElements::new(
+        vec![DofElement {
+            tangential: one(0),
+            normal: Some(one(1)),
+            params: nlrom::contact::law::ContactParams::new(1.0, 3.0, 0.3, n0, "test")?,
+        }],
+        2,
+    )
 }
