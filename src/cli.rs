@@ -17,6 +17,7 @@ use crate::matrix_io::{write_dof_map, write_matrix_market_symmetric};
 use crate::mesh::msh::read_msh;
 use crate::mesh::Mesh;
 use crate::model::{self, StructuralModel};
+use crate::pipeline;
 use crate::reduction::{hermitian_modes, Sector};
 use crate::sama;
 
@@ -114,6 +115,23 @@ struct ExportArgs {
     dir: PathBuf,
 }
 
+/// Log and progress options of the pipeline commands.
+#[derive(Debug, Clone, Copy, Args)]
+struct Verbosity {
+    /// No progress bars and no log lines (warnings and errors are still printed).
+    #[arg(short, long)]
+    quiet: bool,
+    /// Also print the stages' logs (model, reduction, contact pairs).
+    #[arg(short, long)]
+    verbose: bool,
+}
+
+impl Verbosity {
+    fn reporter(self) -> crate::pipeline::Reporter {
+        crate::pipeline::Reporter::new(self.quiet, self.verbose)
+    }
+}
+
 #[derive(Debug, Args)]
 struct ReduceArgs {
     /// The case file (TOML).
@@ -121,6 +139,11 @@ struct ReduceArgs {
     /// The ROM file to write (HDF5).
     #[arg(short, long)]
     output: PathBuf,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    verbosity: Verbosity,
 }
 
 #[derive(Debug, Args)]
@@ -136,9 +159,16 @@ struct ContactArgs {
 struct SolveArgs {
     /// The case file (TOML).
     case: PathBuf,
-    /// The result file to write (HDF5).
+    /// The result file to write (HDF5); default: the case's [output] file, else <case stem>.h5
+    /// next to the case.
     #[arg(short, long)]
-    output: PathBuf,
+    output: Option<PathBuf>,
+    /// Print one JSON summary on stdout (per sweep point: points, resonance_hz,
+    /// peak_amplitude, q_factor).
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    verbosity: Verbosity,
 }
 
 /// Time-marching schemes.
@@ -188,29 +218,49 @@ struct MarchArgs {
 struct RunArgs {
     /// The case file (TOML).
     case: PathBuf,
-    /// The result file (default: the case's [output] file).
+    /// The result file (default: the case's [output] file, else <case stem>.h5 next to the
+    /// case). The ROM is kept in the case's [rom] file, else <result stem>.rom.h5 next to it,
+    /// and reused while the mesh, material and reduction settings are unchanged.
     #[arg(short, long)]
     output: Option<PathBuf>,
+    /// Print one JSON summary on stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    verbosity: Verbosity,
 }
 
 #[derive(Debug, Args)]
 struct BatchArgs {
-    /// Case files, or meshes with one template case.
+    /// Case files, or meshes (.msh) with one template case (--case).
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
-    /// Number of cases run at once.
+    /// Number of cases run at once (threads of the pool).
     #[arg(long, default_value_t = 1)]
     jobs: usize,
-    /// Output directory.
+    /// Output directory: <name>.h5 per input, ROM files, summary.csv.
+    #[arg(long, default_value = "batch_out")]
+    out: PathBuf,
+    /// Template case for mesh inputs (its [model] mesh is replaced by each mesh).
+    #[arg(long = "case", value_name = "TEMPLATE")]
+    template: Option<PathBuf>,
+    /// Print one JSON object on stdout instead of the table.
     #[arg(long)]
-    out: Option<PathBuf>,
+    json: bool,
+    #[command(flatten)]
+    verbosity: Verbosity,
 }
 
 #[derive(Debug, Args)]
 struct DemoArgs {
     /// Output directory.
+    #[arg(long, default_value = "demo_out")]
+    out: PathBuf,
+    /// Print one JSON summary on stdout.
     #[arg(long)]
-    out: Option<PathBuf>,
+    json: bool,
+    #[command(flatten)]
+    verbosity: Verbosity,
 }
 
 /// Parses the command line, runs the command and returns the exit status; errors go to stderr.
@@ -230,13 +280,36 @@ fn run(cli: Cli) -> Result<()> {
         Command::Mesh(MeshCommand::Info(a)) => mesh_info(&a.file, a.json),
         Command::Modes(a) => modes(&a),
         Command::Export(a) => export(&a.case, &a.dir),
-        Command::Reduce(_) => Err(Error::NotImplemented("nlrom reduce".into())),
+        Command::Reduce(a) => {
+            pipeline::reduce_command(&a.case, &a.output, &a.verbosity.reporter(), a.json)
+        }
         Command::Contact(a) => contact(&a.case, a.json),
-        Command::Solve(_) => Err(Error::NotImplemented("nlrom solve".into())),
+        Command::Solve(a) => pipeline::solve_command(
+            &a.case,
+            a.output.as_deref(),
+            false,
+            &a.verbosity.reporter(),
+            a.json,
+        ),
         Command::March(a) => march(&a),
-        Command::Run(_) => Err(Error::NotImplemented("nlrom run".into())),
-        Command::Batch(_) => Err(Error::NotImplemented("nlrom batch".into())),
-        Command::Demo(_) => Err(Error::NotImplemented("nlrom demo".into())),
+        Command::Run(a) => pipeline::solve_command(
+            &a.case,
+            a.output.as_deref(),
+            true,
+            &a.verbosity.reporter(),
+            a.json,
+        ),
+        Command::Batch(a) => pipeline::batch::batch_command(
+            &pipeline::batch::BatchOptions {
+                inputs: a.inputs,
+                jobs: a.jobs,
+                out: a.out,
+                template: a.template,
+            },
+            &a.verbosity.reporter(),
+            a.json,
+        ),
+        Command::Demo(a) => pipeline::demo::demo_command(&a.out, &a.verbosity.reporter(), a.json),
     }
 }
 

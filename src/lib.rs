@@ -19,6 +19,7 @@
 //! | 5 output | [`output`] | HDF5 files: the ROM file and the results file (atomic writes, h5py-readable) |
 //! | 4 | [`hbm`] | harmonic balance: per-harmonic dynamic stiffness, condensation on the nonlinear DOFs, residual, Newton |
 //! | 4 | [`continuation`] | pseudo-arc-length continuation in ω (or the excitation level) through folds |
+//! | 4–5 | [`pipeline`] | the commands `reduce`, `solve`, `run`, `batch`, `demo`: ROM reuse, sweeps in parallel, results file, summary (resonance, Q) |
 //! | 4 | [`solve`] | the harmonic balance problem of a reduced sector: ROM per k_n, contact pairs, engine-order excitation |
 //! | — | [`case`] | the TOML case file of `interface.md` |
 //! | — | [`cli`] | the command line |
@@ -42,6 +43,7 @@ pub mod matrix_io;
 pub mod mesh;
 pub mod model;
 pub mod output;
+pub mod pipeline;
 pub mod reduction;
 pub mod rom;
 pub mod sama;

@@ -76,7 +76,7 @@ fn bad_input_exits_2_with_the_file_and_line() {
 }
 
 #[test]
-fn unimplemented_commands_exit_1_and_every_command_has_help() {
+fn every_command_has_help_and_a_missing_case_is_bad_input() {
     for cmd in [
         "modes", "export", "reduce", "contact", "solve", "march", "run", "batch", "demo", "mesh",
     ] {
@@ -93,9 +93,16 @@ fn unimplemented_commands_exit_1_and_every_command_has_help() {
         Some(2),
         "a missing case file is bad input"
     );
-    let out = nlrom(&["solve", "case.toml", "-o", "r.h5"]);
-    assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("not implemented yet"));
+    for cmd in ["solve", "run", "reduce"] {
+        let out = nlrom(&[cmd, "no/such/case.toml", "-o", "r.h5"]);
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "{cmd}: a missing case is bad input"
+        );
+        assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/case.toml"));
+        assert!(!Path::new(env!("CARGO_MANIFEST_DIR")).join("r.h5").exists());
+    }
 }
 
 /// A case for the bundled tetra10 cube (clamped at the bottom unless `clamp` is empty).

@@ -1,0 +1,198 @@
+//! The user-facing pipeline commands (`interface.md` "Commands"; issues 7 and 8): `nlrom reduce`,
+//! `solve`, `run`, `batch` and `demo` joined from the library's stages.
+//!
+//! * [`solve`]: one case end to end — the ROM (read when its key matches, else reduced), the
+//!   contact pairs, the harmonic balance problem and the frequency response of every sweep point
+//!   (in parallel), gathered into a results file; [`solve::RomPolicy`] says whether the ROM is
+//!   cached in a file (`run`) or only read (`solve`).
+//! * [`summary`]: resonance frequency, peak amplitude and half-power Q-factor of a curve.
+//! * [`batch`]: many cases (or many meshes with one template case) in a rayon pool of `--jobs`
+//!   threads, one results file each and a summary table (`summary.csv`).
+//! * [`demo`]: the bundled demo case end to end, then the plots.
+//! * [`progress`]: log lines (`--quiet`, `-v`) and indicatif progress bars on stderr.
+//!
+//! Exit status (`crate::error::Error::exit_code`): 0 success, 1 a failed computation (a
+//! continuation that did not converge: its converged points are written first), 2 bad input.
+
+pub mod batch;
+pub mod demo;
+pub mod progress;
+pub mod solve;
+pub mod summary;
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde_json::{json, Value};
+
+pub use progress::Reporter;
+pub use solve::{
+    default_output, default_rom_file, is_matrix_case, solve_case, solve_to_file, CurveReport,
+    RomOrigin, RomPolicy, SolveOutcome,
+};
+pub use summary::{summarize, CurveSummary};
+
+use crate::case::Case;
+use crate::error::{Error, Result};
+use crate::model;
+use crate::output::write_rom;
+use crate::reduction::reduce;
+
+/// `nlrom reduce CASE -o ROM.h5`: builds the model, reduces it for every harmonic index the case
+/// needs and writes the ROM file (atomically); prints the harmonic indices, their number of
+/// coordinates and lowest frequencies.
+pub fn reduce_command(
+    case_path: &Path,
+    output: &Path,
+    rep: &Reporter,
+    as_json: bool,
+) -> Result<()> {
+    let start = Instant::now();
+    let case = Case::load(case_path)?;
+    if case.model.mesh.is_none() {
+        return Err(Error::input(format!(
+            "{}: `nlrom reduce` needs a mesh case (`[model] mesh` with `[reduction]`); a matrix case is solved directly by `nlrom solve`",
+            case_path.display()
+        )));
+    }
+    let model = model::build(&case, &mut |l| rep.detail(l))?;
+    let rom = reduce(&case, &model, &mut |l| rep.detail(l))?;
+    solve::create_parent(output)?;
+    write_rom(output, &rom, &solve::file_info(&case))?;
+    rep.info(&format!("wrote {} (key {})", output.display(), rom.key));
+    let harmonics: Vec<Value> = rom
+        .harmonics
+        .iter()
+        .map(|h| {
+            json!({
+                "harmonic_index": h.harmonic_index,
+                "coordinates": h.len(),
+                "frequencies_hz": h.frequencies_hz,
+            })
+        })
+        .collect();
+    if as_json {
+        let report = json!({
+            "output": output.display().to_string(),
+            "key": rom.key,
+            "full_dofs": rom.full_dofs,
+            "interface_modes": rom.interface_modes,
+            "harmonics": harmonics,
+            "wall_seconds": start.elapsed().as_secs_f64(),
+        });
+        println!("{report}");
+        return Ok(());
+    }
+    println!(
+        "ROM of {} ({} free DOF, {} interface modes) written to {}",
+        case_path.display(),
+        rom.full_dofs,
+        rom.interface_modes,
+        output.display()
+    );
+    println!("{:>6} {:>12}  lowest frequencies (Hz)", "k", "coordinates");
+    for h in &rom.harmonics {
+        let f: Vec<String> = h
+            .frequencies_hz
+            .iter()
+            .take(5)
+            .map(|f| format!("{f:.3}"))
+            .collect();
+        println!("{:>6} {:>12}  {}", h.harmonic_index, h.len(), f.join(", "));
+    }
+    Ok(())
+}
+
+/// `nlrom solve` (`cache_rom = false`) and `nlrom run` (`cache_rom = true`, the ROM is kept in
+/// [`default_rom_file`] and reused while its key matches): solves the case, writes the results
+/// file and prints the summary (text or `--json`). A failed curve makes the command fail (exit
+/// status 1) after the file with its converged points is written.
+pub fn solve_command(
+    case_path: &Path,
+    output: Option<&Path>,
+    cache_rom: bool,
+    rep: &Reporter,
+    as_json: bool,
+) -> Result<()> {
+    let start = Instant::now();
+    let case = Case::load(case_path)?;
+    let output = default_output(&case, output);
+    let policy = if cache_rom && !is_matrix_case(&case) {
+        RomPolicy::Cache(default_rom_file(&case, &output))
+    } else {
+        RomPolicy::ReadIfMatching
+    };
+    let outcome = solve_to_file(&case, &output, &policy, rep)?;
+    if as_json {
+        println!("{}", outcome_json(&outcome, &output, start));
+    } else {
+        print!("{}", outcome_text(case_path, &outcome, &output));
+    }
+    let failures = outcome.failures();
+    if failures.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::Compute(format!(
+            "{}: {}; {} holds the converged points",
+            case_path.display(),
+            failures.join("; "),
+            output.display()
+        )))
+    }
+}
+
+/// The JSON report of `nlrom solve|run --json`: `frf` (one object per sweep point, see
+/// [`CurveReport::json`]), `output`, `rom` (sector cases: `file`, `reused`), `wall_seconds`.
+pub fn outcome_json(outcome: &SolveOutcome, output: &Path, start: Instant) -> Value {
+    let rom = outcome.rom.as_ref().map(|o| match o {
+        RomOrigin::Reused(p) => json!({"file": p.display().to_string(), "reused": true}),
+        RomOrigin::Reduced(p) => {
+            json!({"file": p.as_ref().map(|p| p.display().to_string()), "reused": false})
+        }
+    });
+    json!({
+        "frf": outcome.curves.iter().map(CurveReport::json).collect::<Vec<_>>(),
+        "output": output.display().to_string(),
+        "rom": rom,
+        "wall_seconds": start.elapsed().as_secs_f64(),
+    })
+}
+
+/// The text report: one line per curve.
+pub fn outcome_text(case_path: &Path, outcome: &SolveOutcome, output: &Path) -> String {
+    let mut s = format!(
+        "frequency response of {} written to {}\n",
+        case_path.display(),
+        output.display()
+    );
+    s += &format!(
+        "{:>5} {:<28} {:>7} {:>15} {:>15} {:>9}  {}\n",
+        "sweep", "parameters", "points", "resonance (Hz)", "peak ampl. (m)", "Q", "end"
+    );
+    for c in &outcome.curves {
+        let params: Vec<String> = c.params.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        let params = if params.is_empty() {
+            "-".to_string()
+        } else {
+            params.join(" ")
+        };
+        let (f, a, q) = summary_cells(c.summary.as_ref());
+        s += &format!(
+            "{:>5} {:<28} {:>7} {:>15} {:>15} {:>9}  {}\n",
+            c.sweep_point, params, c.points, f, a, q, c.end
+        );
+    }
+    s
+}
+
+/// Resonance (Hz), peak amplitude (m) and Q as table cells ("-" when missing).
+pub fn summary_cells(s: Option<&CurveSummary>) -> (String, String, String) {
+    match s {
+        None => ("-".into(), "-".into(), "-".into()),
+        Some(s) => (
+            format!("{:.6}", s.resonance_hz),
+            format!("{:.6e}", s.peak_amplitude),
+            s.q_factor.map_or("-".into(), |q| format!("{q:.2}")),
+        ),
+    }
+}

@@ -1,0 +1,604 @@
+//! Stage 4 of a case, end to end: the frequency response of every sweep point (SAMA paper, seed
+//! 004, §2–3: harmonic balance with condensation on the contact DOFs and arc-length continuation),
+//! traced in parallel (rayon) and gathered into a [`ResultsFile`] (`interface.md` "Results").
+//!
+//! Two kinds of case:
+//! - *matrix cases* (no mesh, or `[[element]]` friction elements on DOF combinations): the dense
+//!   linear part of [`crate::hbm::setup::matrix_setup`] condensed on the rows the elements read,
+//!   and the elements of [`DofElements`] on those rows;
+//! - *sector cases* (a mesh with `[reduction]`): the ROM of every harmonic index (read from a ROM
+//!   file whose key matches [`rom_key`], else reduced — see [`RomPolicy`]), the contact pairs of
+//!   [`build_interfaces`] (SAMA or node-to-node) and [`SectorProblem`]; `/contact/<name>` gets the
+//!   pairs and, per point, the fractions of the period in stick, slip and separation.
+//!
+//! A continuation that stops at its minimum step ([`PathEnd::Failed`]) keeps its converged
+//! points: the curve is written and the failure reported (see [`SolveOutcome::failures`]).
+
+use std::collections::BTreeMap;
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde_json::{json, Value};
+
+use super::progress::Reporter;
+use super::summary::{summarize, CurveSummary};
+use crate::case::{Case, FrictionElement, WeightedDofs};
+use crate::contact::grounded::DofElements;
+use crate::contact::pairs::{PairSet, PairState};
+use crate::continuation::PathEnd;
+use crate::error::{Error, Result};
+use crate::harmonics::{HarmonicForce, HarmonicLayout};
+use crate::hbm::frf::{case_continuation, frequency_response};
+use crate::hbm::setup::{matrix_setup, MatrixSetup};
+use crate::hbm::{HbmSystem, ResponseOptions};
+use crate::mesh::msh::read_msh;
+use crate::mesh::Mesh;
+use crate::model::{self, StructuralModel};
+use crate::output::{
+    read_rom, write_results, write_rom, ContactData, FileInfo, FrfData, FrfPoint, ResponseDof,
+    ResultsFile,
+};
+use crate::reduction::{reduce, rom_key};
+use crate::rom::Rom;
+use crate::sama::{build_interfaces, ContactInterface};
+use crate::solve::SectorProblem;
+
+/// Where the ROM of a sector case comes from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum RomPolicy {
+    /// `nlrom solve`: read the case's `[rom] file` when its stored key equals [`rom_key`] of the
+    /// case, else reduce in memory (nothing is written).
+    ReadIfMatching,
+    /// `nlrom run`, `batch`, `demo`: read this ROM file when its key matches, else reduce and
+    /// write it there.
+    Cache(PathBuf),
+}
+
+/// How the ROM of a sector case was obtained.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum RomOrigin {
+    /// Read from this file (its key matched).
+    Reused(PathBuf),
+    /// Reduced now; written to the file if any.
+    Reduced(Option<PathBuf>),
+}
+
+/// The result of one curve (one sweep point).
+#[derive(Clone, Debug)]
+pub struct CurveReport {
+    /// Sweep point index (the `/frf/<i>` group).
+    pub sweep_point: usize,
+    /// The sweep parameters and their values (empty without a sweep).
+    pub params: BTreeMap<String, f64>,
+    /// Converged points written.
+    pub points: usize,
+    /// Resonance, peak amplitude and Q-factor ([`super::summary`]); `None` without points.
+    pub summary: Option<CurveSummary>,
+    /// How the continuation ended: `reached_end`, `max_points`, `left_range` or `failed`.
+    pub end: &'static str,
+    /// Why the curve failed (no convergence), if it did.
+    pub failure: Option<String>,
+}
+
+impl CurveReport {
+    /// The JSON object of `nlrom solve --json`'s `frf` list.
+    pub fn json(&self) -> Value {
+        let s = self.summary.as_ref();
+        json!({
+            "sweep_point": self.sweep_point,
+            "params": self.params,
+            "points": self.points,
+            "resonance_hz": s.map(|s| s.resonance_hz),
+            "peak_amplitude": s.map(|s| s.peak_amplitude),
+            "q_factor": s.and_then(|s| s.q_factor),
+            "summary_response_dof": s.map(|s| s.response_dof),
+            "end": self.end,
+            "error": self.failure,
+        })
+    }
+}
+
+/// Everything `solve` produced for a case.
+#[derive(Clone, Debug)]
+pub struct SolveOutcome {
+    /// The results file content (written by [`solve_to_file`]).
+    pub results: ResultsFile,
+    /// One report per sweep point, in sweep order.
+    pub curves: Vec<CurveReport>,
+    /// Where the ROM came from (sector cases).
+    pub rom: Option<RomOrigin>,
+}
+
+impl SolveOutcome {
+    /// The failure messages of the curves that did not reach their end by convergence failure.
+    pub fn failures(&self) -> Vec<String> {
+        self.curves
+            .iter()
+            .filter_map(|c| {
+                c.failure
+                    .as_ref()
+                    .map(|m| format!("sweep point {}: {m}", c.sweep_point))
+            })
+            .collect()
+    }
+}
+
+/// The results file of a case: `-o` if given, else `[output] file`, else `<stem>.h5` next to
+/// the case file.
+pub fn default_output(case: &Case, given: Option<&Path>) -> PathBuf {
+    if let Some(p) = given {
+        return p.to_path_buf();
+    }
+    if let Some(o) = &case.output {
+        return o.file.clone();
+    }
+    case.path.with_extension("h5")
+}
+
+/// The ROM file `nlrom run` caches a sector case's ROM in: `[rom] file`, else
+/// `<results stem>.rom.h5` next to the results file.
+pub fn default_rom_file(case: &Case, results: &Path) -> PathBuf {
+    if let Some(r) = &case.rom {
+        return r.file.clone();
+    }
+    let stem = results
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "nlrom".into());
+    results.with_file_name(format!("{stem}.rom.h5"))
+}
+
+/// Solves `case` and writes its results to `output` (atomically; parent directories are
+/// created). A failed curve is written with its converged points and listed in
+/// [`SolveOutcome::failures`]; the caller decides the exit status.
+pub fn solve_to_file(
+    case: &Case,
+    output: &Path,
+    policy: &RomPolicy,
+    rep: &Reporter,
+) -> Result<SolveOutcome> {
+    let outcome = solve_case(case, policy, rep)?;
+    create_parent(output)?;
+    write_results(output, &outcome.results)?;
+    rep.info(&format!("wrote {}", output.display()));
+    Ok(outcome)
+}
+
+/// Creates the parent directory of `path` if it is missing.
+pub fn create_parent(path: &Path) -> Result<()> {
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Solves every sweep point of `case` (in parallel) and gathers the results.
+pub fn solve_case(case: &Case, policy: &RomPolicy, rep: &Reporter) -> Result<SolveOutcome> {
+    if case.damper.is_some() {
+        return Err(Error::input(format!(
+            "{}: a [damper] case is computed by time marching; run `nlrom march {} -o RESULT.h5`",
+            case.path.display(),
+            case.path.display()
+        )));
+    }
+    case_continuation(case)?;
+    let points = case.sweep_points()?;
+    let (curves, contacts, rom) = if is_matrix_case(case) {
+        let (curves, contacts) = solve_matrix(case, &points, rep)?;
+        (curves, contacts, None)
+    } else {
+        let (rom, mesh, origin) = sector_rom(case, policy, rep)?;
+        let (curves, contacts) = solve_sector(&points, &rom, &mesh, rep)?;
+        (curves, contacts, Some(origin))
+    };
+    let (frfs, reports) = curves.into_iter().map(|c| (c.frf, c.report)).unzip();
+    Ok(SolveOutcome {
+        results: ResultsFile {
+            info: FileInfo {
+                title: case.title.clone(),
+                case_text: case.source_text.clone(),
+            },
+            frfs,
+            contacts,
+            march: None,
+        },
+        curves: reports,
+        rom,
+    })
+}
+
+/// A matrix case: no mesh, or friction elements on DOF combinations.
+pub fn is_matrix_case(case: &Case) -> bool {
+    case.model.mesh.is_none() || !case.element.is_empty()
+}
+
+/// One traced curve: its results group and its report.
+struct Curve {
+    frf: FrfData,
+    report: CurveReport,
+}
+
+/// The curves of a matrix case (no contact interfaces).
+fn solve_matrix(
+    case: &Case,
+    points: &[Case],
+    rep: &Reporter,
+) -> Result<(Vec<Curve>, Vec<ContactData>)> {
+    if !case.contact.is_empty() {
+        return Err(Error::input(format!(
+            "{}: [[contact]] interfaces need a mesh case with [reduction]; a matrix case places friction with [[element]]",
+            case.path.display()
+        )));
+    }
+    let model = model::build(case, &mut |l| rep.detail(l))?;
+    let curves = points
+        .par_iter()
+        .map(|pc| matrix_curve(pc, &model, rep))
+        .collect::<Result<Vec<_>>>()?;
+    Ok((curves, Vec::new()))
+}
+
+/// The curve of one sweep point of a matrix case.
+fn matrix_curve(case: &Case, model: &StructuralModel, rep: &Reporter) -> Result<Curve> {
+    let setup = matrix_setup(case, model)?;
+    let elements = matrix_elements(case, model, &setup)?;
+    let layout = HarmonicLayout::new(
+        case.harmonic_balance.harmonics,
+        case.harmonic_balance.samples(),
+    )?;
+    let system = HbmSystem::new(layout, &setup.linear, &elements)?;
+    let dofs = setup
+        .output_case_rows
+        .iter()
+        .map(|&r| ResponseDof::Row(r as u64))
+        .collect();
+    trace_curve(case, &system, dofs, &|_, _| Ok(Vec::new()), rep)
+}
+
+/// The `[[element]]` friction elements of a matrix case on the condensed (nonlinear) rows of
+/// `setup`: every case row is mapped to its free row, then to its position among
+/// `setup.nonlinear_rows`.
+pub fn matrix_elements(
+    case: &Case,
+    model: &StructuralModel,
+    setup: &MatrixSetup,
+) -> Result<DofElements> {
+    let mut free_of = vec![None; model.n_dofs];
+    for (i, &row) in model.free.free_dofs.iter().enumerate() {
+        if let Some(slot) = free_of.get_mut(row) {
+            *slot = Some(i);
+        }
+    }
+    let position = |key: &str, d: usize| -> Result<usize> {
+        free_of
+            .get(d)
+            .copied()
+            .flatten()
+            .and_then(|r| setup.nonlinear_position(r))
+            .ok_or_else(|| {
+                Error::input(format!(
+                    "{}: key '{key}': row {d} is not a free row of the model",
+                    case.path.display()
+                ))
+            })
+    };
+    let remap = |key: String, w: &WeightedDofs| -> Result<WeightedDofs> {
+        Ok(WeightedDofs {
+            dofs: w
+                .dofs
+                .iter()
+                .map(|&d| position(&key, d))
+                .collect::<Result<_>>()?,
+            weights: w.weights.clone(),
+        })
+    };
+    let elements = case
+        .element
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            Ok(FrictionElement {
+                tangential: remap(format!("element[{i}].tangential.dofs"), &e.tangential)?,
+                normal: e
+                    .normal
+                    .as_ref()
+                    .map(|n| remap(format!("element[{i}].normal.dofs"), n))
+                    .transpose()?,
+                ..e.clone()
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    DofElements::from_case(&elements, setup.nonlinear_rows.len())
+}
+
+/// The ROM of a sector case per `policy`, the sector mesh, and where the ROM came from.
+fn sector_rom(case: &Case, policy: &RomPolicy, rep: &Reporter) -> Result<(Rom, Mesh, RomOrigin)> {
+    let key = rom_key(case)?;
+    let (file, cache) = match policy {
+        RomPolicy::ReadIfMatching => (case.rom.as_ref().map(|r| r.file.clone()), false),
+        RomPolicy::Cache(p) => (Some(p.clone()), true),
+    };
+    if let Some(path) = &file {
+        if path.exists() {
+            match read_rom(path) {
+                Ok(rom) if rom.key == key => {
+                    rep.info(&format!(
+                        "reusing the ROM in {} (key {key}: mesh, material, reduction and contact groups unchanged)",
+                        path.display()
+                    ));
+                    let mesh = read_mesh(case)?;
+                    return Ok((rom, mesh, RomOrigin::Reused(path.clone())));
+                }
+                Ok(rom) => rep.info(&format!(
+                    "the ROM in {} was built from other inputs (key {} ≠ {key}); reducing again",
+                    path.display(),
+                    rom.key
+                )),
+                Err(e) => rep.warn(&format!(
+                    "cannot use the ROM file {}: {e}; reducing again",
+                    path.display()
+                )),
+            }
+        } else if !cache {
+            rep.warn(&format!(
+                "[rom] file {} does not exist; reducing (write it with `nlrom reduce`)",
+                path.display()
+            ));
+        }
+    }
+    let t = Instant::now();
+    rep.info("reducing the model (Craig–Bampton, cyclic symmetry, interface reduction)");
+    let mut model = model::build(case, &mut |l| rep.detail(l))?;
+    let rom = reduce(case, &model, &mut |l| rep.detail(l))?;
+    rep.info(&format!(
+        "ROM of harmonic indices {:?} in {:.2} s",
+        rom.harmonics
+            .iter()
+            .map(|h| h.harmonic_index)
+            .collect::<Vec<_>>(),
+        t.elapsed().as_secs_f64()
+    ));
+    let written = if cache { file } else { None };
+    if let Some(path) = &written {
+        create_parent(path)?;
+        write_rom(path, &rom, &file_info(case))?;
+        rep.info(&format!("wrote the ROM to {} (key {key})", path.display()));
+    }
+    let mesh = model.mesh.take().ok_or_else(|| {
+        Error::input(format!(
+            "{}: a sector case needs `[model] mesh`",
+            case.path.display()
+        ))
+    })?;
+    Ok((rom, mesh, RomOrigin::Reduced(written)))
+}
+
+/// The title and text of a case for the files it writes.
+pub fn file_info(case: &Case) -> FileInfo {
+    FileInfo {
+        title: case.title.clone(),
+        case_text: case.source_text.clone(),
+    }
+}
+
+/// The case's mesh, with its groups checked against the case.
+fn read_mesh(case: &Case) -> Result<Mesh> {
+    let path = case.model.mesh.as_ref().ok_or_else(|| {
+        Error::input(format!(
+            "{}: a sector case needs `[model] mesh`",
+            case.path.display()
+        ))
+    })?;
+    let mesh = read_msh(path)?;
+    case.check_groups(&mesh)?;
+    Ok(mesh)
+}
+
+/// The curves of a sector case; `/contact/` holds the interfaces of sweep point 0 (the sweep
+/// values of the others are attributes of their `/frf/<i>`).
+fn solve_sector(
+    points: &[Case],
+    rom: &Rom,
+    mesh: &Mesh,
+    rep: &Reporter,
+) -> Result<(Vec<Curve>, Vec<ContactData>)> {
+    let solved = points
+        .par_iter()
+        .map(|pc| sector_curve(pc, rom, mesh, rep))
+        .collect::<Result<Vec<_>>>()?;
+    let mut contacts = Vec::new();
+    let mut curves = Vec::with_capacity(solved.len());
+    for (i, (curve, interfaces)) in solved.into_iter().enumerate() {
+        if i == 0 {
+            contacts = interfaces.iter().map(ContactData::from_interface).collect();
+        }
+        curves.push(curve);
+    }
+    Ok((curves, contacts))
+}
+
+/// The curve of one sweep point of a sector case and its contact interfaces.
+fn sector_curve(
+    case: &Case,
+    rom: &Rom,
+    mesh: &Mesh,
+    rep: &Reporter,
+) -> Result<(Curve, Vec<ContactInterface>)> {
+    let interfaces = build_interfaces(case, mesh, rom.cyclic.as_ref())?;
+    for iface in &interfaces {
+        rep.detail(&format!(
+            "contact '{}': σ = {}, {} of {} contact nodes projected",
+            iface.name,
+            iface.sigma,
+            iface.pairs.len(),
+            iface.contact_nodes
+        ));
+        if !iface.unprojected.is_empty() {
+            rep.warn(&format!(
+                "contact '{}': {} contact node(s) do not project onto the target (see `nlrom contact`)",
+                iface.name,
+                iface.unprojected.len()
+            ));
+        }
+    }
+    let problem = SectorProblem::build(case, rom, mesh, &interfaces)?;
+    let system = problem.system()?;
+    let sizes: Vec<usize> = interfaces
+        .iter()
+        .map(|i| i.pairs.iter().map(|p| p.targets.len()).sum())
+        .collect();
+    let fractions = |q: &[f64], state: &PairState| {
+        interface_fractions(&problem.contact, &problem.layout, q, state, &sizes)
+    };
+    let dofs = problem
+        .outputs
+        .iter()
+        .map(|o| ResponseDof::Node {
+            tag: o.node_tag,
+            component: o.component,
+        })
+        .collect();
+    let curve = trace_curve(case, &system, dofs, &fractions, rep)?;
+    Ok((curve, interfaces))
+}
+
+/// Per interface (whose elements are consecutive in the pair set, `sizes[i]` of them) the
+/// fractions of the period in stick, slip and separation at the solution `q`, averaged over the
+/// interface's elements.
+fn interface_fractions(
+    contact: &PairSet,
+    layout: &HarmonicLayout,
+    q: &[f64],
+    state: &PairState,
+    sizes: &[usize],
+) -> Result<Vec<[f64; 3]>> {
+    let reports = contact.reports(layout, q, state, false)?;
+    let mut out = Vec::with_capacity(sizes.len());
+    let mut start = 0;
+    for &n in sizes {
+        let mut sum = [0.0; 3];
+        for (r, _) in &reports[start..start + n] {
+            sum[0] += r.stick;
+            sum[1] += r.slip;
+            sum[2] += r.separation;
+        }
+        let scale = if n > 0 { 1.0 / n as f64 } else { 0.0 };
+        out.push(sum.map(|s| s * scale));
+        start += n;
+    }
+    Ok(out)
+}
+
+/// The contact state fractions of a point from its harmonic vector and force memory.
+type Fractions<'a, S> = dyn Fn(&[f64], &S) -> Result<Vec<[f64; 3]>> + Sync + 'a;
+
+/// Traces the frequency response of one sweep point with a progress bar and converts it to the
+/// results layout. A start that does not converge, or a continuation that fails later, gives a
+/// curve with the converged points and a failure message; bad input is an error.
+fn trace_curve<F: HarmonicForce>(
+    case: &Case,
+    system: &HbmSystem<'_, F>,
+    response_dofs: Vec<ResponseDof>,
+    fractions: &Fractions<'_, F::State>,
+    rep: &Reporter,
+) -> Result<Curve> {
+    let opts = case_continuation(case)?;
+    let params: BTreeMap<String, f64> = case
+        .sweep_point
+        .as_ref()
+        .map(|s| s.values.iter().cloned().collect())
+        .unwrap_or_default();
+    let index = case.sweep_point.as_ref().map_or(0, |s| s.index);
+    let label = curve_label(index, &params);
+    let t = Instant::now();
+    let mut bar = rep.curve_bar(&label, opts.start / (2.0 * PI), opts.end / (2.0 * PI));
+    let traced = frequency_response(system, &opts, &ResponseOptions::default(), &mut |p| {
+        bar.point(p.parameter, p.iterations)
+    });
+    bar.finish();
+    let mut frf = FrfData {
+        sweep: params.clone(),
+        harmonics: system.layout().harmonics,
+        response_dofs,
+        points: Vec::new(),
+    };
+    let (end, failure) = match traced {
+        Err(e @ (Error::Input(_) | Error::Io { .. } | Error::Msh(_))) => return Err(e),
+        Err(e) => (
+            "failed",
+            Some(format!(
+                "the start point at {:.6} Hz did not converge: {e}",
+                opts.start / (2.0 * PI)
+            )),
+        ),
+        Ok(traced) => {
+            for p in &traced.points {
+                frf.points.push(FrfPoint {
+                    omega: p.omega,
+                    harmonics: p.response.harmonics.concat(),
+                    peak: p.response.peak.clone(),
+                    arc_length: p.arc_length,
+                    newton_iterations: p.iterations as u64,
+                    stable: None,
+                    contact_fractions: fractions(&p.q, &p.state)?,
+                });
+            }
+            match traced.end {
+                PathEnd::ReachedEnd => ("reached_end", None),
+                PathEnd::MaxPoints => {
+                    rep.warn(&format!(
+                        "{label}: stopped after max_points = {} points before the end frequency (raise `[continuation] max_points`)",
+                        opts.max_points
+                    ));
+                    ("max_points", None)
+                }
+                PathEnd::LeftRange => ("left_range", None),
+                PathEnd::Failed(msg) => {
+                    let last = frf.points.last().map_or(opts.start, |p| p.omega);
+                    (
+                        "failed",
+                        Some(format!(
+                            "the continuation failed after {} converged points (last at {:.6} Hz): {msg}",
+                            frf.points.len(),
+                            last / (2.0 * PI)
+                        )),
+                    )
+                }
+            }
+        }
+    };
+    let hz: Vec<f64> = frf.points.iter().map(|p| p.omega / (2.0 * PI)).collect();
+    let h1 = frf.harmonics + 1;
+    let amplitude: Vec<Vec<f64>> = frf
+        .points
+        .iter()
+        .map(|p| p.harmonics.chunks(h1).map(|hs| hs[1].norm()).collect())
+        .collect();
+    rep.info(&format!(
+        "{label}: {} points in {:.2} s ({end})",
+        frf.points.len(),
+        t.elapsed().as_secs_f64()
+    ));
+    let report = CurveReport {
+        sweep_point: index,
+        params,
+        points: frf.points.len(),
+        summary: summarize(&hz, &amplitude),
+        end,
+        failure,
+    };
+    Ok(Curve { frf, report })
+}
+
+/// "FRF" or "sweep 2 (contact.shroud.n0 = 150)".
+fn curve_label(index: usize, params: &BTreeMap<String, f64>) -> String {
+    if params.is_empty() {
+        return "FRF".into();
+    }
+    let values: Vec<String> = params.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+    format!("sweep {index} ({})", values.join(", "))
+}
