@@ -52,7 +52,11 @@ pub fn demo_command(out: &Path, rep: &Reporter, as_json: bool) -> Result<()> {
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let output = out.join("demo.h5");
     let policy = RomPolicy::Cache(out.join("demo.rom.h5"));
-    rep.info(&format!("demo: {} ({})", case.title, case_path.display()));
+    rep.info(&format!(
+        "demo case: {} ({})",
+        case.title,
+        case_path.display()
+    ));
     let outcome = solve_to_file(&case, &output, &policy, rep)?;
     let plots = plot(&root.join(PLOT_SCRIPT), &output, out, rep);
     if as_json {
