@@ -167,6 +167,9 @@ struct SolveArgs {
     /// peak_amplitude, q_factor).
     #[arg(long)]
     json: bool,
+    /// Also compute the stability of every point (Hill's method; /frf/<i>/stable).
+    #[arg(long)]
+    stability: bool,
     #[command(flatten)]
     verbosity: Verbosity,
 }
@@ -226,6 +229,9 @@ struct RunArgs {
     /// Print one JSON summary on stdout.
     #[arg(long)]
     json: bool,
+    /// Also compute the stability of every point (Hill's method; /frf/<i>/stable).
+    #[arg(long)]
+    stability: bool,
     #[command(flatten)]
     verbosity: Verbosity,
 }
@@ -288,6 +294,7 @@ fn run(cli: Cli) -> Result<()> {
             &a.case,
             a.output.as_deref(),
             false,
+            a.stability,
             &a.verbosity.reporter(),
             a.json,
         ),
@@ -296,6 +303,7 @@ fn run(cli: Cli) -> Result<()> {
             &a.case,
             a.output.as_deref(),
             true,
+            a.stability,
             &a.verbosity.reporter(),
             a.json,
         ),

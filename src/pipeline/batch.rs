@@ -18,6 +18,7 @@ use serde_json::{json, Value};
 use super::progress::Reporter;
 use super::solve::{
     create_parent, default_rom_file, is_matrix_case, solve_to_file, CurveReport, RomPolicy,
+    SolveOptions,
 };
 use super::summary::CurveSummary;
 use super::summary_cells;
@@ -137,7 +138,7 @@ fn run_job(job: &Job, opts: &BatchOptions, rep: &Reporter) -> JobResult {
         } else {
             RomPolicy::Cache(default_rom_file(&case, &output))
         };
-        solve_to_file(&case, &output, &policy, &rep)
+        solve_to_file(&case, &output, &SolveOptions::new(policy), &rep)
     });
     let error = match outcome {
         Ok(o) => {
