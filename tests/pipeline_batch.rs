@@ -2,23 +2,13 @@
 //! its message; the others are written and agree with `nlrom solve`; exit status 1;
 //! summary.csv), and meshes run with a template case.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
+use std::path::{Path, PathBuf};
+
+use common::cli::{nlrom, root};
 use nlrom::output::read_results;
 use serde_json::Value;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn nlrom(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_nlrom"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("runs")
-}
 
 /// The chain of `cases/chain3_jenkins.toml` with H = 3, N_t = 64 and slip force n0 of element 1;
 /// `harmonics` replaces H (0 makes the case invalid).

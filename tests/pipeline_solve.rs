@@ -3,9 +3,11 @@
 //! `frequency_response`, the stuck limit against a direct linear solve, sweeps in order, bad
 //! input (exit 2 naming the key) and a failing continuation (exit 1, converged points written).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
+use std::path::{Path, PathBuf};
+
+use common::cli::{nlrom, root, stderr};
 use faer::linalg::solvers::Solve;
 use faer::{c64, Mat};
 use nlrom::case::Case;
@@ -16,22 +18,6 @@ use nlrom::hbm::setup::matrix_setup;
 use nlrom::hbm::{HbmSystem, ResponseOptions};
 use nlrom::model;
 use nlrom::output::{read_results, ResponseDof, ResultsFile};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn nlrom(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_nlrom"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("runs")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
 
 /// `nlrom solve CASE -o OUT --json -q`: asserts exit status 0, returns the JSON report.
 fn solve_json(case: &Path, out: &Path) -> serde_json::Value {
