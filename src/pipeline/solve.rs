@@ -458,19 +458,9 @@ fn sector_curve(
 ) -> Result<(Curve, Vec<ContactInterface>)> {
     let interfaces = build_interfaces(case, mesh, rom.cyclic.as_ref())?;
     for iface in &interfaces {
-        rep.detail(&format!(
-            "contact '{}': σ = {}, {} of {} contact nodes projected",
-            iface.name,
-            iface.sigma,
-            iface.pairs.len(),
-            iface.contact_nodes
-        ));
-        if !iface.unprojected.is_empty() {
-            rep.warn(&format!(
-                "contact '{}': {} contact node(s) do not project onto the target (see `nlrom contact`)",
-                iface.name,
-                iface.unprojected.len()
-            ));
+        rep.detail(&projection_line(iface));
+        if let Some(w) = unprojected_warning(iface, "see `nlrom contact`") {
+            rep.warn(&w);
         }
     }
     let problem = SectorProblem::build(case, rom, mesh, &interfaces)?;
@@ -492,6 +482,29 @@ fn sector_curve(
         .collect();
     let curve = trace_curve(case, &system, dofs, &fractions, stability, rep)?;
     Ok((curve, interfaces))
+}
+
+/// "contact 'NAME': σ = S, P of C contact nodes projected".
+pub fn projection_line(iface: &ContactInterface) -> String {
+    format!(
+        "contact '{}': σ = {}, {} of {} contact nodes projected",
+        iface.name,
+        iface.sigma,
+        iface.pairs.len(),
+        iface.contact_nodes
+    )
+}
+
+/// The warning for contact nodes that did not project onto the target, if any (`hint` says
+/// where to find them).
+pub fn unprojected_warning(iface: &ContactInterface, hint: &str) -> Option<String> {
+    (!iface.unprojected.is_empty()).then(|| {
+        format!(
+            "contact '{}': {} contact node(s) do not project onto the target surface ({hint})",
+            iface.name,
+            iface.unprojected.len()
+        )
+    })
 }
 
 /// Per interface (whose elements are consecutive in the pair set, `sizes[i]` of them) the
