@@ -167,6 +167,9 @@ struct SolveArgs {
     /// peak_amplitude, q_factor).
     #[arg(long)]
     json: bool,
+    /// Also compute the stability of every point (Hill's method; /frf/<i>/stable).
+    #[arg(long)]
+    stability: bool,
     #[command(flatten)]
     verbosity: Verbosity,
 }
@@ -226,6 +229,9 @@ struct RunArgs {
     /// Print one JSON summary on stdout.
     #[arg(long)]
     json: bool,
+    /// Also compute the stability of every point (Hill's method; /frf/<i>/stable).
+    #[arg(long)]
+    stability: bool,
     #[command(flatten)]
     verbosity: Verbosity,
 }
@@ -288,6 +294,7 @@ fn run(cli: Cli) -> Result<()> {
             &a.case,
             a.output.as_deref(),
             false,
+            a.stability,
             &a.verbosity.reporter(),
             a.json,
         ),
@@ -296,6 +303,7 @@ fn run(cli: Cli) -> Result<()> {
             &a.case,
             a.output.as_deref(),
             true,
+            a.stability,
             &a.verbosity.reporter(),
             a.json,
         ),
@@ -653,19 +661,10 @@ fn contact(case_path: &Path, as_json: bool) -> Result<()> {
         .transpose()?;
     let interfaces = sama::build_interfaces(&case, &mesh, cyclic.as_ref())?;
     for iface in &interfaces {
-        log_stderr(&format!(
-            "contact '{}': σ = {}, {} of {} contact nodes projected",
-            iface.name,
-            iface.sigma,
-            iface.pairs.len(),
-            iface.contact_nodes
-        ));
-        if !iface.unprojected.is_empty() {
-            log_stderr(&format!(
-                "warning: contact '{}': {} contact node(s) do not project onto the target surface (listed under \"unprojected\")",
-                iface.name,
-                iface.unprojected.len()
-            ));
+        log_stderr(&pipeline::solve::projection_line(iface));
+        if let Some(w) = pipeline::solve::unprojected_warning(iface, "listed under \"unprojected\"")
+        {
+            log_stderr(&format!("warning: {w}"));
         }
     }
     if as_json {

@@ -3,23 +3,13 @@
 //! memory), ROM reuse by key (reused while unchanged, rebuilt when the material changes, the
 //! results identical), and the demo end to end.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
+use std::path::{Path, PathBuf};
+
+use common::cli::{nlrom, root};
 use nlrom::output::{read_results, read_rom};
 use serde_json::Value;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn nlrom(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_nlrom"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("runs")
-}
 
 /// Runs nlrom, asserts exit status 0 and returns (stdout JSON, stderr).
 fn ok_json(args: &[&str]) -> (Value, String) {

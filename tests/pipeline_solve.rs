@@ -3,9 +3,11 @@
 //! `frequency_response`, the stuck limit against a direct linear solve, sweeps in order, bad
 //! input (exit 2 naming the key) and a failing continuation (exit 1, converged points written).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
+use std::path::{Path, PathBuf};
+
+use common::cli::{nlrom, root, stderr};
 use faer::linalg::solvers::Solve;
 use faer::{c64, Mat};
 use nlrom::case::Case;
@@ -16,22 +18,6 @@ use nlrom::hbm::setup::matrix_setup;
 use nlrom::hbm::{HbmSystem, ResponseOptions};
 use nlrom::model;
 use nlrom::output::{read_results, ResponseDof, ResultsFile};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn nlrom(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_nlrom"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("runs")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
 
 /// `nlrom solve CASE -o OUT --json -q`: asserts exit status 0, returns the JSON report.
 fn solve_json(case: &Path, out: &Path) -> serde_json::Value {
@@ -170,32 +156,44 @@ fn solve_chain3_equals_the_library_frequency_response() {
     }
     let s = &report["frf"][0];
     assert_eq!(s["points"].as_u64(), Some(frf.points.len() as u64));
-    // serde_json's default float parser is not exactly round-trip: compare to 1e-14.
-    let close = |key: &str, want: f64| {
-        let got = s[key].as_f64().unwrap_or(f64::NAN);
-        assert!(
-            (got - want).abs() <= 1e-14 * want.abs(),
-            "{key}: {got} vs {want}"
-        );
-    };
-    close("peak_amplitude", best);
-    close("resonance_hz", at);
+    // (serde_json parses floats to within an ulp, not always exactly)
+    let close = |v: &serde_json::Value, x: f64| (v.as_f64().unwrap() - x).abs() <= 1e-14 * x;
+    assert!(
+        close(&s["peak_amplitude"], best),
+        "{} vs {best}",
+        s["peak_amplitude"]
+    );
+    assert!(
+        close(&s["resonance_hz"], at),
+        "{} vs {at}",
+        s["resonance_hz"]
+    );
     assert_eq!(s["end"], "reached_end");
     assert!(report["wall_seconds"].as_f64().is_some());
 }
 
 /// μ = 1e9: the elements never slip, and every point's harmonic 1 equals the direct solution
 /// of (K + K_t − ω²M + iωC) X = F with the elements' springs (k_t = 1 at m1–ground and m2–m3),
-/// to 1e-8 of max |X|; the higher harmonics vanish.
+/// to 1e-8 of max |X|; the higher harmonics vanish; `--stability` marks every point stable.
 #[test]
 fn stuck_limit_equals_the_direct_linear_frf() {
     let dir = tempfile::tempdir().unwrap();
     let case = chain_case(dir.path(), "stuck", 0.5, 1e9, 3, 64, RANGE);
     let out = dir.path().join("stuck.h5");
-    solve_json(&case, &out);
+    let o = nlrom(&[
+        "solve",
+        case.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--stability",
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let file = read_results(&out).unwrap();
     let frf = &file.frfs[0];
     assert!(frf.points.len() > 20);
+    // a damped linear system: every point is stable (Hill's method, `--stability`)
+    assert!(frf.points.iter().all(|p| p.stable == Some(true)));
     let k = [[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]];
     let kt = [[1.0, 0.0, 0.0], [0.0, 1.0, -1.0], [0.0, -1.0, 1.0]];
     let mut crossed_resonance = false;

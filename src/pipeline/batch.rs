@@ -18,7 +18,9 @@ use serde_json::{json, Value};
 use super::progress::Reporter;
 use super::solve::{
     create_parent, default_rom_file, is_matrix_case, solve_to_file, CurveReport, RomPolicy,
+    SolveOptions,
 };
+use super::summary::CurveSummary;
 use super::summary_cells;
 use crate::case::Case;
 use crate::error::{Error, Result};
@@ -136,7 +138,7 @@ fn run_job(job: &Job, opts: &BatchOptions, rep: &Reporter) -> JobResult {
         } else {
             RomPolicy::Cache(default_rom_file(&case, &output))
         };
-        solve_to_file(&case, &output, &policy, &rep)
+        solve_to_file(&case, &output, &SolveOptions::new(policy), &rep)
     });
     let error = match outcome {
         Ok(o) => {
@@ -260,9 +262,7 @@ struct Row {
     case: String,
     sweep: String,
     status: &'static str,
-    resonance: String,
-    peak: String,
-    q: String,
+    summary: Option<CurveSummary>,
     points: String,
     message: String,
 }
@@ -276,9 +276,7 @@ fn rows(results: &[JobResult]) -> Vec<(Row, &JobResult)> {
                     case: r.job.name.clone(),
                     sweep: "-".into(),
                     status: "failed",
-                    resonance: "-".into(),
-                    peak: "-".into(),
-                    q: "-".into(),
+                    summary: None,
                     points: "0".into(),
                     message: r.error.clone().unwrap_or_default(),
                 },
@@ -287,16 +285,13 @@ fn rows(results: &[JobResult]) -> Vec<(Row, &JobResult)> {
             continue;
         }
         for c in &r.curves {
-            let (resonance, peak, q) = summary_cells(c.summary.as_ref());
             let message = c.failure.clone().or_else(|| r.error.clone());
             out.push((
                 Row {
                     case: r.job.name.clone(),
                     sweep: c.sweep_point.to_string(),
                     status: if message.is_some() { "failed" } else { "ok" },
-                    resonance,
-                    peak,
-                    q,
+                    summary: c.summary,
                     points: c.points.to_string(),
                     message: message.unwrap_or_default(),
                 },
@@ -321,9 +316,10 @@ pub fn summary_table(results: &[JobResult]) -> String {
         "case", "sweep", "status", "resonance (Hz)", "peak ampl. (m)", "Q", "points"
     );
     for (r, _) in &rows {
+        let (resonance, peak, q) = summary_cells(r.summary.as_ref());
         s += &format!(
             "{:<width$} {:>5} {:>7} {:>16} {:>15} {:>9} {:>7}\n",
-            r.case, r.sweep, r.status, r.resonance, r.peak, r.q, r.points
+            r.case, r.sweep, r.status, resonance, peak, q, r.points
         );
     }
     for (r, _) in rows.iter().filter(|(r, _)| !r.message.is_empty()) {
@@ -333,7 +329,8 @@ pub fn summary_table(results: &[JobResult]) -> String {
 }
 
 /// `summary.csv`: case, input, sweep_point, status, resonance_hz, peak_amplitude_m, q_factor,
-/// points, output, wall_seconds, message (empty cells for missing values).
+/// points, output, wall_seconds, message (numbers in full precision, empty cells for missing
+/// values).
 pub fn summary_csv(results: &[JobResult]) -> String {
     let mut s = String::from(
         "case,input,sweep_point,status,resonance_hz,peak_amplitude_m,q_factor,points,output,wall_seconds,message\n",
@@ -345,15 +342,17 @@ pub fn summary_csv(results: &[JobResult]) -> String {
             v.to_string()
         }
     };
+    let number = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
     for (r, job) in rows(results) {
+        let summary = r.summary.as_ref();
         let cells = [
             r.case.clone(),
             job.job.input.display().to_string(),
             blank(&r.sweep),
             r.status.to_string(),
-            blank(&r.resonance),
-            blank(&r.peak),
-            blank(&r.q),
+            number(summary.map(|x| x.resonance_hz)),
+            number(summary.map(|x| x.peak_amplitude)),
+            number(summary.and_then(|x| x.q_factor)),
             r.points.clone(),
             job.output
                 .as_ref()

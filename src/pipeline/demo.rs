@@ -8,7 +8,7 @@ use std::process::Command;
 use std::time::Instant;
 
 use super::progress::Reporter;
-use super::solve::{solve_to_file, RomPolicy};
+use super::solve::{solve_to_file, RomPolicy, SolveOptions};
 use super::{outcome_json, outcome_text};
 use crate::case::Case;
 use crate::error::{Error, Result};
@@ -51,13 +51,13 @@ pub fn demo_command(out: &Path, rep: &Reporter, as_json: bool) -> Result<()> {
     let case = Case::load(&case_path)?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let output = out.join("demo.h5");
-    let policy = RomPolicy::Cache(out.join("demo.rom.h5"));
+    let opts = SolveOptions::new(RomPolicy::Cache(out.join("demo.rom.h5")));
     rep.info(&format!(
         "demo case: {} ({})",
         case.title,
         case_path.display()
     ));
-    let outcome = solve_to_file(&case, &output, &policy, rep)?;
+    let outcome = solve_to_file(&case, &output, &opts, rep)?;
     let plots = plot(&root.join(PLOT_SCRIPT), &output, out, rep);
     if as_json {
         let mut report = outcome_json(&outcome, &output, start);

@@ -28,7 +28,7 @@ use serde_json::{json, Value};
 pub use progress::Reporter;
 pub use solve::{
     default_output, default_rom_file, is_matrix_case, solve_case, solve_to_file, CurveReport,
-    RomOrigin, RomPolicy, SolveOutcome,
+    RomOrigin, RomPolicy, SolveOptions, SolveOutcome,
 };
 pub use summary::{summarize, CurveSummary};
 
@@ -104,13 +104,15 @@ pub fn reduce_command(
 }
 
 /// `nlrom solve` (`cache_rom = false`) and `nlrom run` (`cache_rom = true`, the ROM is kept in
-/// [`default_rom_file`] and reused while its key matches): solves the case, writes the results
-/// file and prints the summary (text or `--json`). A failed curve makes the command fail (exit
+/// [`default_rom_file`] and reused while its key matches): solves the case (with the `stable`
+/// flag of every point when `stability`), writes the results file and prints the summary (text
+/// or `--json`). A failed curve makes the command fail (exit
 /// status 1) after the file with its converged points is written.
 pub fn solve_command(
     case_path: &Path,
     output: Option<&Path>,
     cache_rom: bool,
+    stability: bool,
     rep: &Reporter,
     as_json: bool,
 ) -> Result<()> {
@@ -122,7 +124,11 @@ pub fn solve_command(
     } else {
         RomPolicy::ReadIfMatching
     };
-    let outcome = solve_to_file(&case, &output, &policy, rep)?;
+    let opts = SolveOptions {
+        rom: policy,
+        stability,
+    };
+    let outcome = solve_to_file(&case, &output, &opts, rep)?;
     if as_json {
         println!("{}", outcome_json(&outcome, &output, start));
     } else {

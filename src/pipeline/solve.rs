@@ -56,6 +56,26 @@ pub enum RomPolicy {
     Cache(PathBuf),
 }
 
+/// How `solve` runs a case.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SolveOptions {
+    /// Where the ROM of a sector case comes from.
+    pub rom: RomPolicy,
+    /// Fill the `stable` flag of every point (Hill's method, [`crate::hbm::stability`]; one
+    /// dense eigenproblem of the uncondensed harmonic system per point).
+    pub stability: bool,
+}
+
+impl SolveOptions {
+    /// `rom` without stability.
+    pub fn new(rom: RomPolicy) -> SolveOptions {
+        SolveOptions {
+            rom,
+            stability: false,
+        }
+    }
+}
+
 /// How the ROM of a sector case was obtained.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum RomOrigin {
@@ -156,10 +176,10 @@ pub fn default_rom_file(case: &Case, results: &Path) -> PathBuf {
 pub fn solve_to_file(
     case: &Case,
     output: &Path,
-    policy: &RomPolicy,
+    opts: &SolveOptions,
     rep: &Reporter,
 ) -> Result<SolveOutcome> {
-    let outcome = solve_case(case, policy, rep)?;
+    let outcome = solve_case(case, opts, rep)?;
     create_parent(output)?;
     write_results(output, &outcome.results)?;
     rep.info(&format!("wrote {}", output.display()));
@@ -177,7 +197,7 @@ pub fn create_parent(path: &Path) -> Result<()> {
 }
 
 /// Solves every sweep point of `case` (in parallel) and gathers the results.
-pub fn solve_case(case: &Case, policy: &RomPolicy, rep: &Reporter) -> Result<SolveOutcome> {
+pub fn solve_case(case: &Case, opts: &SolveOptions, rep: &Reporter) -> Result<SolveOutcome> {
     if case.damper.is_some() {
         return Err(Error::input(format!(
             "{}: a [damper] case is computed by time marching; run `nlrom march {} -o RESULT.h5`",
@@ -188,11 +208,11 @@ pub fn solve_case(case: &Case, policy: &RomPolicy, rep: &Reporter) -> Result<Sol
     case_continuation(case)?;
     let points = case.sweep_points()?;
     let (curves, contacts, rom) = if is_matrix_case(case) {
-        let (curves, contacts) = solve_matrix(case, &points, rep)?;
+        let (curves, contacts) = solve_matrix(case, &points, opts.stability, rep)?;
         (curves, contacts, None)
     } else {
-        let (rom, mesh, origin) = sector_rom(case, policy, rep)?;
-        let (curves, contacts) = solve_sector(&points, &rom, &mesh, rep)?;
+        let (rom, mesh, origin) = sector_rom(case, &opts.rom, rep)?;
+        let (curves, contacts) = solve_sector(&points, &rom, &mesh, opts.stability, rep)?;
         (curves, contacts, Some(origin))
     };
     let (frfs, reports) = curves.into_iter().map(|c| (c.frf, c.report)).unzip();
@@ -226,6 +246,7 @@ struct Curve {
 fn solve_matrix(
     case: &Case,
     points: &[Case],
+    stability: bool,
     rep: &Reporter,
 ) -> Result<(Vec<Curve>, Vec<ContactData>)> {
     if !case.contact.is_empty() {
@@ -237,13 +258,18 @@ fn solve_matrix(
     let model = model::build(case, &mut |l| rep.detail(l))?;
     let curves = points
         .par_iter()
-        .map(|pc| matrix_curve(pc, &model, rep))
+        .map(|pc| matrix_curve(pc, &model, stability, rep))
         .collect::<Result<Vec<_>>>()?;
     Ok((curves, Vec::new()))
 }
 
 /// The curve of one sweep point of a matrix case.
-fn matrix_curve(case: &Case, model: &StructuralModel, rep: &Reporter) -> Result<Curve> {
+fn matrix_curve(
+    case: &Case,
+    model: &StructuralModel,
+    stability: bool,
+    rep: &Reporter,
+) -> Result<Curve> {
     let setup = matrix_setup(case, model)?;
     let elements = matrix_elements(case, model, &setup)?;
     let layout = HarmonicLayout::new(
@@ -256,7 +282,7 @@ fn matrix_curve(case: &Case, model: &StructuralModel, rep: &Reporter) -> Result<
         .iter()
         .map(|&r| ResponseDof::Row(r as u64))
         .collect();
-    trace_curve(case, &system, dofs, &|_, _| Ok(Vec::new()), rep)
+    trace_curve(case, &system, dofs, &|_, _| Ok(Vec::new()), stability, rep)
 }
 
 /// The `[[element]]` friction elements of a matrix case on the condensed (nonlinear) rows of
@@ -404,11 +430,12 @@ fn solve_sector(
     points: &[Case],
     rom: &Rom,
     mesh: &Mesh,
+    stability: bool,
     rep: &Reporter,
 ) -> Result<(Vec<Curve>, Vec<ContactData>)> {
     let solved = points
         .par_iter()
-        .map(|pc| sector_curve(pc, rom, mesh, rep))
+        .map(|pc| sector_curve(pc, rom, mesh, stability, rep))
         .collect::<Result<Vec<_>>>()?;
     let mut contacts = Vec::new();
     let mut curves = Vec::with_capacity(solved.len());
@@ -426,23 +453,14 @@ fn sector_curve(
     case: &Case,
     rom: &Rom,
     mesh: &Mesh,
+    stability: bool,
     rep: &Reporter,
 ) -> Result<(Curve, Vec<ContactInterface>)> {
     let interfaces = build_interfaces(case, mesh, rom.cyclic.as_ref())?;
     for iface in &interfaces {
-        rep.detail(&format!(
-            "contact '{}': σ = {}, {} of {} contact nodes projected",
-            iface.name,
-            iface.sigma,
-            iface.pairs.len(),
-            iface.contact_nodes
-        ));
-        if !iface.unprojected.is_empty() {
-            rep.warn(&format!(
-                "contact '{}': {} contact node(s) do not project onto the target (see `nlrom contact`)",
-                iface.name,
-                iface.unprojected.len()
-            ));
+        rep.detail(&projection_line(iface));
+        if let Some(w) = unprojected_warning(iface, "see `nlrom contact`") {
+            rep.warn(&w);
         }
     }
     let problem = SectorProblem::build(case, rom, mesh, &interfaces)?;
@@ -462,8 +480,31 @@ fn sector_curve(
             component: o.component,
         })
         .collect();
-    let curve = trace_curve(case, &system, dofs, &fractions, rep)?;
+    let curve = trace_curve(case, &system, dofs, &fractions, stability, rep)?;
     Ok((curve, interfaces))
+}
+
+/// "contact 'NAME': σ = S, P of C contact nodes projected".
+pub fn projection_line(iface: &ContactInterface) -> String {
+    format!(
+        "contact '{}': σ = {}, {} of {} contact nodes projected",
+        iface.name,
+        iface.sigma,
+        iface.pairs.len(),
+        iface.contact_nodes
+    )
+}
+
+/// The warning for contact nodes that did not project onto the target, if any (`hint` says
+/// where to find them).
+pub fn unprojected_warning(iface: &ContactInterface, hint: &str) -> Option<String> {
+    (!iface.unprojected.is_empty()).then(|| {
+        format!(
+            "contact '{}': {} contact node(s) do not project onto the target surface ({hint})",
+            iface.name,
+            iface.unprojected.len()
+        )
+    })
 }
 
 /// Per interface (whose elements are consecutive in the pair set, `sizes[i]` of them) the
@@ -504,6 +545,7 @@ fn trace_curve<F: HarmonicForce>(
     system: &HbmSystem<'_, F>,
     response_dofs: Vec<ResponseDof>,
     fractions: &Fractions<'_, F::State>,
+    stability: bool,
     rep: &Reporter,
 ) -> Result<Curve> {
     let opts = case_continuation(case)?;
@@ -516,7 +558,11 @@ fn trace_curve<F: HarmonicForce>(
     let label = curve_label(index, &params);
     let t = Instant::now();
     let mut bar = rep.curve_bar(&label, opts.start / (2.0 * PI), opts.end / (2.0 * PI));
-    let traced = frequency_response(system, &opts, &ResponseOptions::default(), &mut |p| {
+    let response = ResponseOptions {
+        stability,
+        ..ResponseOptions::default()
+    };
+    let traced = frequency_response(system, &opts, &response, &mut |p| {
         bar.point(p.parameter, p.iterations)
     });
     bar.finish();
@@ -543,7 +589,7 @@ fn trace_curve<F: HarmonicForce>(
                     peak: p.response.peak.clone(),
                     arc_length: p.arc_length,
                     newton_iterations: p.iterations as u64,
-                    stable: None,
+                    stable: p.stable,
                     contact_fractions: fractions(&p.q, &p.state)?,
                 });
             }
