@@ -129,7 +129,7 @@ fn hb_solve_with<F: HarmonicForce>(p: &SectorProblem, force: &F, omega: f64) -> 
         ..NewtonOptions::default()
     };
     let x0 = vec![0.0; system.dim()];
-    let state = p.contact.initial_state();
+    let state = force.initial_state();
     solve_fixed(&path, &x0, omega, &state, &opts)
         .expect("HB converges")
         .x
