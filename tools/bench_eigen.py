@@ -11,7 +11,8 @@ DIR holds K.mtx and M.mtx (symmetric Matrix Market, as `nlrom export` writes the
 and reused if present with the same size). Its eigenvalues are known in closed form,
 λ = (k/m) Σ_d 2(1 − cos(i_d π/(n_d + 1))), and every solver is compared with them too.
 
-Solvers, each in a fresh process under `/usr/bin/time -f "%e %M"` (process wall time, peak RSS):
+Solvers, each in a fresh process under `/usr/bin/time -f "%e %U %S %M"` (process wall time, CPU
+time user + sys, peak RSS):
   * nlrom:          `target/release/examples/eigen_mtx DIR N SIGMA` (built first with
                     `cargo build --release --example eigen_mtx`): sparse Cholesky of K − σM (faer) +
                     block Krylov–Schur, residual tolerance 1e-8.
@@ -95,15 +96,17 @@ def write_lattice(d: Path, grid: tuple[int, int, int]) -> None:
     scipy.io.mmwrite(str(d / "M.mtx"), m, symmetry="symmetric", precision=17)
 
 
-def timed_json(cmd: list[str]) -> tuple[dict, float, float]:
-    """JSON printed by cmd, its process wall seconds and peak RSS (MB), via GNU time."""
+def timed_json(cmd: list[str]) -> tuple[dict, tuple[float, float], float]:
+    """JSON printed by cmd, its process (wall s, CPU s = user + sys) and peak RSS (MB), via GNU
+    time."""
     with tempfile.NamedTemporaryFile(mode="r", suffix=".time") as t:
-        full = ["/usr/bin/time", "-f", "%e %M", "-o", t.name] + cmd
+        full = ["/usr/bin/time", "-f", "%e %U %S %M", "-o", t.name] + cmd
         r = subprocess.run(full, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         if r.returncode != 0:
             raise RuntimeError(f"{' '.join(cmd)} failed: {r.stderr[-2000:]}")
-        wall, kb = t.read().split()[-2:]
-        return json.loads(r.stdout.strip().splitlines()[-1]), float(wall), float(kb) / 1024.0
+        wall, user, system, kb = t.read().split()[-4:]
+        return (json.loads(r.stdout.strip().splitlines()[-1]), (float(wall), float(user) + float(system)),
+                float(kb) / 1024.0)
 
 
 def max_rel(a: list[float], b: list[float]) -> float:
@@ -151,14 +154,16 @@ def main() -> int:
 
     base = rows[0]
     print(f"\n{ours['n_dof']} DOF, lowest {args.n} modes, σ = {args.sigma:g}; ARPACK tol = {args.arpack_tol:g}\n")
-    head = "| solver | solve s | process s | peak MB | solve ratio | peak ratio | max rel. diff. to nlrom |"
+    head = ("| solver | solve s | process s | process CPU s (user+sys) | peak MB | solve ratio | CPU ratio | "
+            "peak ratio | max rel. diff. to nlrom |")
     if exact is not None:
         head += " max rel. error vs closed form |"
     print(head)
     print("|" + "---|" * (head.count("|") - 1))
     for name, res, proc, peak in rows:
-        line = (f"| {name} | {res['wall_seconds']:.2f} | {proc:.2f} | {peak:.0f} | "
-                f"{res['wall_seconds'] / base[1]['wall_seconds']:.2f} | {peak / base[3]:.2f} | "
+        line = (f"| {name} | {res['wall_seconds']:.2f} | {proc[0]:.2f} | {proc[1]:.2f} | {peak:.0f} | "
+                f"{res['wall_seconds'] / base[1]['wall_seconds']:.2f} | {proc[1] / base[2][1]:.2f} | "
+                f"{peak / base[3]:.2f} | "
                 f"{max_rel(res['eigenvalues'], ours['eigenvalues']):.1e} |")
         if exact is not None:
             line += f" {max_rel(res['eigenvalues'], exact):.1e} |"

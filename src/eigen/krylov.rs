@@ -8,9 +8,10 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use faer::reborrow::ReborrowMut;
 use faer::sparse::linalg::matmul::sparse_dense_matmul;
 use faer::{Accum, ColRef, Mat, MatMut, MatRef, Par};
+use rayon::prelude::*;
 
 use super::lanczos::{BlockKrylov, BlockSizes};
-use super::shift_invert::{for_each_column_chunk, par};
+use super::shift_invert::for_each_column_chunk;
 use super::{dense, EigenOptions, Modes, ShiftInvert};
 use crate::error::{Error, Result};
 
@@ -121,7 +122,7 @@ impl ShiftInvert<'_> {
         let (b, m) = dimensions(n, opts);
         if m + b >= self.n_dof() {
             let (theta, y) = dense::largest_eigenpairs(&op, n)?;
-            let mut modes = self.modes_from(&theta, y.as_ref())?;
+            let mut modes = self.modes_from(&theta, y)?;
             modes.operator_applications = op.applications();
             check_residuals(&modes, opts.tolerance, self.shift())?;
             return Ok(modes);
@@ -167,7 +168,7 @@ impl ShiftInvert<'_> {
         let mut attempt = 1;
         loop {
             let (theta, y) = krylov.converge(op, tolerance, opts.max_restarts)?;
-            let mut modes = self.modes_from(&theta, y.as_ref())?;
+            let mut modes = self.modes_from(&theta, y)?;
             modes.operator_applications = op.applications();
             let done = max_residual(&modes.residuals) <= opts.tolerance;
             if done || attempt == MAX_ATTEMPTS || tolerance <= MIN_RELATIVE_TOLERANCE {
@@ -181,7 +182,7 @@ impl ShiftInvert<'_> {
 
     /// Mass-normalised modes, Rayleigh-quotient eigenvalues and residuals from the eigenpairs
     /// (θ, y) of A, sorted by ascending λ.
-    pub(super) fn modes_from(&self, theta: &[f64], y: MatRef<'_, f64>) -> Result<Modes> {
+    pub(super) fn modes_from(&self, theta: &[f64], y: Mat<f64>) -> Result<Modes> {
         if let Some((j, t)) = theta
             .iter()
             .enumerate()
@@ -195,27 +196,30 @@ impl ShiftInvert<'_> {
                 theta.len()
             )));
         }
-        let mut phi = y.to_owned();
+        let mut phi = y;
         for_each_column_chunk(phi.as_mut(), &|chunk| self.backward_in_place(chunk))?;
-        let (kphi, mphi) = (
-            self.times(self.k, phi.as_ref()),
-            self.times(self.m, phi.as_ref()),
-        );
         let floor = RESIDUAL_FLOOR * norm_1(self.k);
+        // Kφ and Mφ one column at a time (two N_dof vectors per thread, not two N_dof × n
+        // matrices).
         let stats: Vec<ModeStats> = (0..phi.ncols())
-            .map(|j| mode_stats(phi.col(j), kphi.col(j), mphi.col(j), self.shift(), floor))
+            .into_par_iter()
+            .map(|j| {
+                let col = phi.col(j).as_mat();
+                let (kphi, mphi) = (self.times(self.k, col), self.times(self.m, col));
+                mode_stats(phi.col(j), kphi.col(0), mphi.col(0), self.shift(), floor)
+            })
             .collect();
         Ok(sorted_modes(&phi, &stats))
     }
 
-    /// `a · x` for a sparse `a` (K or M).
+    /// `a · x` for a sparse `a` (K or M), sequential (called in parallel per column).
     fn times(
         &self,
         a: faer::sparse::SparseColMatRef<'_, usize, f64>,
         x: MatRef<'_, f64>,
     ) -> Mat<f64> {
         let mut out = Mat::zeros(x.nrows(), x.ncols());
-        sparse_dense_matmul(out.as_mut(), Accum::Replace, a, x, 1.0, par());
+        sparse_dense_matmul(out.as_mut(), Accum::Replace, a, x, 1.0, Par::Seq);
         out
     }
 }

@@ -20,6 +20,7 @@
 use faer::linalg::matmul::matmul;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Accum, ColMut, ColRef, Mat, MatMut, MatRef};
+use rayon::prelude::*;
 
 use super::dense::self_adjoint_eigen_qr;
 use super::krylov::Operator;
@@ -266,7 +267,9 @@ fn ritz_residuals(coupling: MatRef<'_, f64>, s_last: MatRef<'_, f64>) -> Vec<f64
 }
 
 /// Compresses the basis to the `keep` leading Ritz vectors, moves the pending block
-/// `V[:, active..active+b]` behind them and resets H to `diag(θ_1..θ_keep)`.
+/// `V[:, active..active+b]` behind them and resets H to `diag(θ_1..θ_keep)`. `V[:, ..keep] ←
+/// V[:, ..active] S[:, ..keep]` is computed in row blocks of [`RESTART_ROWS`] rows, so the
+/// temporary holds `RESTART_ROWS × keep` values instead of `N_dof × keep`.
 fn thick_restart(
     mut v: MatMut<'_, f64>,
     mut h: MatMut<'_, f64>,
@@ -276,15 +279,26 @@ fn thick_restart(
     keep: usize,
     b: usize,
 ) {
-    let ritz = v.rb().get(.., ..active) * s.get(.., ..keep);
-    let next = v.rb().get(.., active..active + b).to_owned();
-    v.rb_mut().get_mut(.., ..keep).copy_from(&ritz);
-    v.rb_mut().get_mut(.., keep..keep + b).copy_from(&next);
+    let s_keep = s.get(.., ..keep);
+    v.rb_mut()
+        .par_row_chunks_mut(RESTART_ROWS)
+        .for_each(|mut rows| {
+            let ritz = rows.rb().get(.., ..active) * s_keep;
+            rows.rb_mut().get_mut(.., ..keep).copy_from(&ritz);
+            for c in 0..b {
+                for i in 0..rows.nrows() {
+                    rows[(i, keep + c)] = rows[(i, active + c)];
+                }
+            }
+        });
     h.fill(0.0);
     for (i, &t) in theta.iter().take(keep).enumerate() {
         h[(i, i)] = t;
     }
 }
+
+/// Rows per block of the thick-restart basis compression.
+const RESTART_ROWS: usize = 2048;
 
 /// SplitMix64: a small deterministic generator for start and replacement vectors.
 pub(super) struct SplitMix(pub(super) u64);

@@ -7,7 +7,9 @@
 //! size of K and M.
 //!
 //! # Method: shift-invert block Krylov–Schur with the Cholesky factor of the shifted matrix
-//! 1. Sparse Cholesky (faer; AMD ordering, supernodal or simplicial as faer picks, parallel) of
+//! 1. Sparse Cholesky (faer; supernodal or simplicial as faer picks, parallel; fill-reducing
+//!    ordering: nlrom's nested dissection (`ordering.rs`) or faer's AMD, whichever gives the
+//!    smaller factor — nested dissection on 3-D meshes) of
 //!    the shifted matrix `P (K − σM) Pᵀ = L Lᵀ`; write `F = Pᵀ L`, so `K − σM = F Fᵀ`. It exists
 //!    only if σ lies below every eigenvalue (σ = 0 for a clamped model, σ < 0 for a free–free one
 //!    with rigid-body modes). [`ShiftInvert`] holds it; the same object solves (K − σM) X = B for
@@ -80,10 +82,11 @@ mod dense;
 mod input;
 mod krylov;
 mod lanczos;
+mod ordering;
 mod shift_invert;
 
 pub use dense::self_adjoint_eigen_qr;
-pub use shift_invert::ShiftInvert;
+pub use shift_invert::{FillOrdering, ShiftInvert};
 
 use faer::sparse::SparseColMatRef;
 use faer::Mat;
