@@ -10,11 +10,19 @@
 //! [`law`].
 //!
 //! Periods are marched from the given slider state until the end-of-period state repeats (at most
-//! [`MAX_PERIODS`]); the forces are those of the last period. The Jacobian is the derivative of
-//! this periodic solution: ∂w/∂Q is carried through the samples (`methods.md`), and the
-//! dependence of the starting slider state on Q is closed by the periodicity condition
-//! w_start = w_end. A direction that never slips or separates during the period keeps its given
-//! slider (∂w_start = 0): the stuck solution is not unique and the state comes from the caller.
+//! [`MAX_PERIODS`]); the forces are those of the last period. The Jacobian is the exact
+//! derivative of this map F(Q; w_in), in which the caller's start state w_in is a parameter
+//! (Newton needs ∂F/∂Q of exactly the map it evaluates): ∂w/∂Q is carried through the samples of
+//! the last period (`methods.md`) with two extra columns for ∂w_start, closed per direction:
+//! * a direction that slips or separates in the last period: by periodicity w_start = w_end —
+//!   a perturbed input is marched on to its own periodic state, and the 1-D end state does not
+//!   depend on the start state at all (Φ = 0), so this equals the chain through the periods;
+//! * a direction stuck all the last period (Φ = 1, end state = start state for every input):
+//!   ∂w_start is ∂w carried through the transient periods from ∂w_in = 0
+//!   ([`march_transient_chain`]) — zero when one period was marched (w_in already periodic:
+//!   the fast path), the slip-set slider derivative after a shakedown (a transient slip set
+//!   w = u − μ f_n/k_t; treating the stuck slider as fixed would give the static slope k_t
+//!   where the map's is 0). The chain is marched again only in this case (rare, cheap).
 //!
 //! [`law`]: super::law
 //! [`aft`]: super::aft
@@ -254,7 +262,8 @@ pub fn evaluate(
         .chain(ws.u[1].iter())
         .fold(slider[0].abs().max(slider[1].abs()), |a, b| a.max(b.abs()));
     let tol = STATE_TOLERANCE * scale;
-    let mut w = *slider;
+    let w_in = *slider;
+    let mut w = w_in;
     let mut w_start = w;
     let mut marching = Marching {
         periods: 0,
@@ -296,6 +305,17 @@ pub fn evaluate(
             // The last period again (the same samples), now with the derivative terms.
             let mut w_again = w_start;
             march_period_differentiated(element, aft, ws, &mut w_again);
+        }
+        let shape = Shape::new(element, ws.m);
+        ws.derivative.transient.iter_mut().for_each(|t| {
+            t.clear();
+            t.resize(shape.cols, 0.0);
+        });
+        if marching.periods > 1 && stuck_directions(&shape, &ws.derivative) {
+            let mut w_in = w_in;
+            for _ in 1..marching.periods {
+                march_transient_chain(element, aft, ws, &shape, &mut w_in);
+            }
         }
         finish_jacobian(element, aft, ws);
     }
@@ -360,6 +380,9 @@ struct DerivativeBuffers {
     start_coef: Vec<f64>,
     /// ∂w_start from the periodicity condition (two rows of length cols).
     start: [Vec<f64>; 2],
+    /// ∂w at the start of the last period carried through the transient periods from the
+    /// given start state (∂w_in = 0; two rows of length cols; [`march_transient_chain`]).
+    transient: [Vec<f64>; 2],
 }
 
 impl DerivativeBuffers {
@@ -505,25 +528,96 @@ fn derivative_step(
             }
             b.live[d] = true;
         }
-        let a = t.dslider_dw[d][d];
-        if a == 1.0 && t.dslider_dx[d].iter().all(|&x| x == 0.0) {
+        if keeps_slider(t, d) {
             continue;
         }
         b.flush(d);
-        if a == 0.0 {
-            b.dw[d].fill(0.0);
-        } else if a != 1.0 {
-            for r in b.dw[d].iter_mut() {
-                *r *= a;
+        update_diagonal(&mut b.dw[d], t, d, e, shape);
+    }
+}
+
+/// Whether sample `t` leaves ∂w_d unchanged (A_dd = 1 and C_d = 0: stick).
+#[inline]
+fn keeps_slider(t: &law::SampleTangent, d: usize) -> bool {
+    t.dslider_dw[d][d] == 1.0 && t.dslider_dx[d].iter().all(|&x| x == 0.0)
+}
+
+/// ∂w_d ← A_dd ∂w_d + C_d E_j for a sample with diagonal A (synthesis row `e` = E_j).
+fn update_diagonal(row: &mut [f64], t: &law::SampleTangent, d: usize, e: &[f64], shape: &Shape) {
+    let a = t.dslider_dw[d][d];
+    if a == 0.0 {
+        row.fill(0.0);
+    } else if a != 1.0 {
+        for r in row.iter_mut() {
+            *r *= a;
+        }
+    }
+    add_input_row(row, &t.dslider_dx[d], e, shape.offsets, shape.n0_col);
+}
+
+/// The radial-return direction v of a 2-D slip sample, A = ∂w'/∂w = v vᵀ (rank one); None if
+/// A = 0.
+fn slip_direction(a: [[f64; 2]; 2]) -> Option<[f64; 2]> {
+    let k = if a[0][0] >= a[1][1] { 0 } else { 1 };
+    let pivot = a[k][k];
+    (pivot > 0.0).then(|| {
+        let root = pivot.sqrt();
+        [a[0][k] / root, a[1][k] / root]
+    })
+}
+
+/// Whether the last period (differentiated in `b`) leaves a tangential direction stuck all
+/// period (Φ_dd = 1 of the 1-D law; Φ = I of the 2-D law): the only case in which the
+/// transient periods enter the Jacobian ([`finish_jacobian`]).
+fn stuck_directions(shape: &Shape, b: &DerivativeBuffers) -> bool {
+    let phi = |d: usize, e: usize| b.dw[d][shape.cols + e];
+    match shape.two_d {
+        false => (0..shape.tangential).any(|d| phi(d, d) == 1.0),
+        true => phi(0, 0) == 1.0 && phi(1, 1) == 1.0 && phi(0, 1) == 0.0 && phi(1, 0) == 0.0,
+    }
+}
+
+/// One transient period from the slider state `w` (updated to the end state), carrying only
+/// ∂w (`transient` of the buffers, from ∂w = 0 at the caller's start state) through the
+/// samples: ∂w_j = C_j ∂x_j + A_j ∂w_{j−1}. The workspace's stored samples are not touched.
+fn march_transient_chain(
+    element: &LocalElement,
+    aft: &Aft,
+    ws: &mut Workspace,
+    shape: &Shape,
+    w: &mut [f64; 2],
+) {
+    let p = &element.params;
+    let b = &mut ws.derivative;
+    for j in 0..ws.n_t {
+        let t = law::sample_with_tangent(element.variant, p, [ws.u[0][j], ws.u[1][j]], ws.v[j], *w);
+        *w = t.sample.slider;
+        let e = aft.synthesis_row(j);
+        if shape.two_d && t.sample.regime[0] == Regime::Slip {
+            let [t0, t1] = &mut b.transient;
+            match slip_direction(t.dslider_dw) {
+                Some(v) => {
+                    for (r0, r1) in t0.iter_mut().zip(t1.iter_mut()) {
+                        let s = v[0] * *r0 + v[1] * *r1;
+                        *r0 = v[0] * s;
+                        *r1 = v[1] * s;
+                    }
+                }
+                None => {
+                    t0.fill(0.0);
+                    t1.fill(0.0);
+                }
+            }
+            for (d, row) in b.transient.iter_mut().enumerate() {
+                add_input_row(row, &t.dslider_dx[d], e, shape.offsets, shape.n0_col);
+            }
+            continue;
+        }
+        for d in 0..shape.tangential {
+            if !keeps_slider(&t, d) {
+                update_diagonal(&mut b.transient[d], &t, d, e, shape);
             }
         }
-        add_input_row(
-            &mut b.dw[d],
-            &t.dslider_dx[d],
-            e,
-            shape.offsets,
-            shape.n0_col,
-        );
     }
 }
 
@@ -569,7 +663,14 @@ fn finish_jacobian(element: &LocalElement, aft: &Aft, ws: &mut Workspace) {
         [b.dw[0][cols], b.dw[0][cols + 1]],
         [b.dw[1][cols], b.dw[1][cols + 1]],
     ];
-    periodic_start(element.variant, phi, &b.dw, cols, &mut b.start);
+    periodic_start(
+        element.variant,
+        phi,
+        &b.dw,
+        &b.transient,
+        cols,
+        &mut b.start,
+    );
     // Fixed-w part.
     for f in 0..3 {
         let Some(fb) = offsets.of(f) else { continue };
@@ -618,12 +719,7 @@ fn slip_2d(
 ) {
     b.flush(0);
     b.flush(1);
-    let a = t.dslider_dw;
-    let k = if a[0][0] >= a[1][1] { 0 } else { 1 };
-    let pivot = a[k][k];
-    if pivot > 0.0 {
-        let root = pivot.sqrt();
-        let vv = [a[0][k] / root, a[1][k] / root];
+    if let Some(vv) = slip_direction(t.dslider_dw) {
         for ((s, d0), d1) in b.s.iter_mut().zip(&b.dw[0]).zip(&b.dw[1]) {
             *s = vv[0] * d0 + vv[1] * d1;
         }
@@ -674,12 +770,17 @@ fn add_products(
     );
 }
 
-/// ∂w_start from the periodicity w_start = w_end = Φ w_start + G (per derivative column) into
-/// `start` (two rows of length `cols`); G is the first `cols` entries of the rows of `g`.
+/// ∂w_start of the last period into `start` (two rows of length `cols`). Where the last period
+/// slips or separates, from the periodicity w_start = w_end = Φ w_start + G (per derivative
+/// column; G is the first `cols` entries of the rows of `g`): a perturbed input is marched to
+/// its own periodic state. Where a direction sticks all period (Φ = 1), the end state equals
+/// the start state for every input and the start state is whatever the transient periods left:
+/// `transient` (zero when no transient period was marched: the caller's state is a parameter).
 fn periodic_start(
     variant: Variant,
     phi: [[f64; 2]; 2],
     g: &[Vec<f64>; 2],
+    transient: &[Vec<f64>; 2],
     cols: usize,
     start: &mut [Vec<f64>; 2],
 ) {
@@ -689,7 +790,9 @@ fn periodic_start(
         Variant::OneD => {
             // Φ is diagonal with entries exactly 1 (stuck all period) or 0 (slider reset).
             for d in 0..2 {
-                if phi[d][d] != 1.0 {
+                if phi[d][d] == 1.0 {
+                    start[d].copy_from_slice(&transient[d][..cols]);
+                } else {
                     let s = 1.0 / (1.0 - phi[d][d]);
                     for (o, gv) in start[d].iter_mut().zip(&g[d][..cols]) {
                         *o = s * gv;
@@ -699,6 +802,8 @@ fn periodic_start(
         }
         Variant::TwoD => {
             if phi == [[1.0, 0.0], [0.0, 1.0]] {
+                start[0].copy_from_slice(&transient[0][..cols]);
+                start[1].copy_from_slice(&transient[1][..cols]);
                 return;
             }
             let a = [[1.0 - phi[0][0], -phi[0][1]], [-phi[1][0], 1.0 - phi[1][1]]];

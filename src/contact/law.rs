@@ -115,6 +115,13 @@ pub struct Sample {
     pub regime: [Regime; 2],
 }
 
+/// Relative margin of the stick test |trial| ≤ μ f_n (1 + margin): a slider placed by a slip
+/// (w = u − f/k_t with |f| = μ f_n) lies on the limit up to rounding, and when the same input
+/// comes back (the next period, after a shakedown) it must stick rather than "slip" by one ulp —
+/// that ulp decides the derivative branch (for the 2-D law, a slip with |trial| → μ f_n has the
+/// near-singular memory tangent A → t tᵀ). The force changes by at most this relative amount.
+pub const STICK_MARGIN: f64 = 8.0 * f64::EPSILON;
+
 /// One tangential direction of the 1-D law: returns (f_t, new w, regime) for the limit
 /// `limit` = μ f_n (N), `separated` = (f_n = 0).
 #[inline]
@@ -123,7 +130,7 @@ pub fn tangential_1d(kt: f64, limit: f64, separated: bool, u: f64, w: f64) -> (f
         return (0.0, u, Regime::Separation);
     }
     let trial = kt * (u - w);
-    if trial.abs() <= limit {
+    if trial.abs() <= limit * (1.0 + STICK_MARGIN) {
         (trial, w, Regime::Stick)
     } else {
         let f = limit.copysign(trial);
@@ -146,7 +153,7 @@ pub fn tangential_2d(
     let trial = [kt * (u[0] - w[0]), kt * (u[1] - w[1])];
     // √(a² + b²) rather than `hypot` (several times slower; no overflow risk at contact scales).
     let norm = (trial[0] * trial[0] + trial[1] * trial[1]).sqrt();
-    if norm <= limit {
+    if norm <= limit * (1.0 + STICK_MARGIN) {
         (trial, w, Regime::Stick)
     } else {
         let scale = limit / norm;
