@@ -11,6 +11,7 @@ use faer::{Mat, MatRef, Par, Side};
 
 use super::linear::LinearModel;
 use crate::case::{Case, Damping, ExcitationLoad};
+use crate::eigen::self_adjoint_eigen_qr;
 use crate::error::{Error, Result};
 use crate::matrix_io::read_real_matrix;
 use crate::model::StructuralModel;
@@ -198,7 +199,9 @@ fn damping_matrix(
 }
 
 /// C = M Φ diag(2ζω_j) Φᵀ M with Φ the mass-normalised modes of (K, M): with M = L Lᵀ and
-/// L⁻¹ K L⁻ᵀ = U Λ Uᵀ, C = (L U) diag(2ζ√λ_j) (L U)ᵀ.
+/// L⁻¹ K L⁻ᵀ = U Λ Uᵀ, C = (L U) diag(2ζ√λ_j) (L U)ᵀ. The dense eigenproblem is solved by the
+/// implicit QR algorithm ([`crate::eigen::self_adjoint_eigen_qr`]): faer's default divide and
+/// conquer loses orthogonality on clustered eigenvalues above 128 × 128.
 pub fn modal_damping(k: MatRef<'_, f64>, m: MatRef<'_, f64>, zeta: f64) -> Result<Mat<f64>> {
     let n = k.nrows();
     let llt = m
@@ -210,13 +213,11 @@ pub fn modal_damping(k: MatRef<'_, f64>, m: MatRef<'_, f64>, zeta: f64) -> Resul
     let mut a = x.transpose().to_owned();
     solve_lower_triangular_in_place(l.as_ref(), a.as_mut(), Par::Seq);
     let sym = Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
-    let evd = sym
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|e| Error::Compute(format!("modal damping: eigensolver failed ({e:?})")))?;
-    let lu = &l * evd.U();
-    let s = evd.S();
-    let d: Vec<f64> = (0..n).map(|j| 2.0 * zeta * s[j].max(0.0).sqrt()).collect();
-    Ok(Mat::from_fn(n, n, |i, j| {
-        (0..n).map(|r| lu[(i, r)] * d[r] * lu[(j, r)]).sum()
-    }))
+    let (lambda, u) = self_adjoint_eigen_qr(sym.as_ref())
+        .map_err(|e| Error::Compute(format!("modal damping: {e}")))?;
+    let lu = &l * &u;
+    let scaled = Mat::from_fn(n, n, |i, r| {
+        lu[(i, r)] * 2.0 * zeta * lambda[r].max(0.0).sqrt()
+    });
+    Ok(&scaled * lu.transpose())
 }
