@@ -8,8 +8,8 @@ use std::collections::BTreeMap;
 
 use faer::c64;
 use nlrom::output::{
-    read_results, write_results, ContactData, ContactPairData, FileInfo, FrfData, FrfPoint,
-    MarchData, ResponseDof, ResultsFile,
+    read_results, write_results, ContactCurveDetail, ContactData, ContactPairData, FileInfo,
+    FrfData, FrfPoint, MarchData, PointLoops, ResponseDof, ResultsFile,
 };
 use nlrom::output::{Attr, Data, Dataset, Group};
 use serde_json::{json, Value};
@@ -63,8 +63,38 @@ fn frf(n0: f64, points: usize, harmonics: usize, contacts: usize) -> FrfData {
     }
 }
 
+/// Per-element detail for curves of `points[i]` points; loops (N_t = 5) on the first curve only.
+fn details(elements: usize, points: &[usize]) -> Vec<ContactCurveDetail> {
+    points
+        .iter()
+        .enumerate()
+        .map(|(i, &p)| {
+            let n = p * elements;
+            let loops = (i == 0).then(|| {
+                let m = elements * 5;
+                PointLoops {
+                    point: p - 1,
+                    samples: 5,
+                    u: (0..2 * m).map(|j| (j as f64 * 0.7).sin() * 1e-6).collect(),
+                    force: (0..2 * m).map(|j| (j as f64 * 0.3).cos()).collect(),
+                    approach: (0..m).map(|j| j as f64 * -1e-7).collect(),
+                    normal_force: (0..m).map(|j| 2.5 + j as f64).collect(),
+                }
+            });
+            ContactCurveDetail {
+                fractions: (0..n)
+                    .map(|j| [0.25, 0.75 - 0.01 * (j % 7) as f64, 0.01 * (j % 7) as f64])
+                    .collect(),
+                dissipated_energy: (0..n).map(|j| 1e-7 * j as f64 / 3.0).collect(),
+                loops,
+            }
+        })
+        .collect()
+}
+
 fn contact(name: &str, elements: usize) -> ContactData {
     ContactData {
+        curves: details(elements, &[6, 3]),
         name: name.to_string(),
         model: "sama".to_string(),
         element: "2d".to_string(),
@@ -79,6 +109,7 @@ fn contact(name: &str, elements: usize) -> ContactData {
                 kt: 1e8 * (j + 1) as f64,
                 kn: 2e8,
                 preload: 113.0 / (j + 1) as f64,
+                virtual_point: [0.25, -1e-3 * j as f64, 0.01 / 3.0],
             })
             .collect(),
     }
@@ -200,6 +231,19 @@ fn inconsistent_sizes_are_refused() {
     let msg = write_error(&r);
     assert!(
         msg.contains("/march/contact_state") && msg.contains("E = 2"),
+        "{msg}"
+    );
+
+    let mut r = sample();
+    r.contacts[1].curves[0].dissipated_energy.pop();
+    let msg = write_error(&r);
+    assert!(msg.contains("/contact/shroud/elements/0"), "{msg}");
+
+    let mut r = sample();
+    r.contacts[0].curves[0].loops.as_mut().unwrap().point = 6;
+    let msg = write_error(&r);
+    assert!(
+        msg.contains("/contact/underplatform/elements/0") && msg.contains("loops"),
         "{msg}"
     );
 

@@ -126,7 +126,7 @@ fn meshes_run_with_a_template_case() {
     let text = std::fs::read_to_string(root().join("cases/demo.toml"))
         .unwrap()
         .replace("../meshes/", &format!("{}/meshes/", root().display()))
-        .replace("end_hz = 190.0", "end_hz = 150.0")
+        .replace("end_hz = 175.0", "end_hz = 160.0")
         .replace("step_hz = 2.0", "step_hz = 5.0");
     std::fs::write(&template, text).unwrap();
     let copy = dir.path().join("copy.msh");

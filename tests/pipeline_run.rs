@@ -87,7 +87,7 @@ fn small_case(dir: &Path, name: &str, young: &str, rom: Option<&Path>) -> PathBu
         .unwrap()
         .replace("../meshes/", &format!("{}/meshes/", root().display()))
         .replace("young = 210e9", &format!("young = {young}"))
-        .replace("end_hz = 190.0", "end_hz = 150.0")
+        .replace("end_hz = 175.0", "end_hz = 160.0")
         .replace("step_hz = 2.0", "step_hz = 5.0");
     let text = match rom {
         Some(r) => format!("{text}\n[rom]\nfile = \"{}\"\n", r.display()),

@@ -23,6 +23,11 @@
 //! | `/contact/<name>/weights`, `kt`, `kn`, `preload` | f64 [E] | 1, N/m, N/m, N | w_j, k_tj, k_nj, n0_j of each element (SAMA eq. 29–31) |
 //! | `/contact/<name>/frames` | f64 [E, 3, 3] | 1 | local frame, rows t1, t2, n (global axes) |
 //! | `/contact/<name>/state_fractions/<i>` | f64 [P, 3] | 1 | per point of `/frf/<i>`: fractions of the period in stick, slip, separation, averaged over the elements |
+//! | `/contact/<name>/virtual_points` | f64 [E, 3] | m | virtual node t_v of each element's contact node (on the placed target surface) |
+//! | `/contact/<name>/elements/<i>/fractions` | f64 [P, E, 3] | 1 | per point of `/frf/<i>` and element: stick, slip, separation fractions |
+//! | `/contact/<name>/elements/<i>/dissipated_energy` | f64 [P, E] | J | energy dissipated per cycle by each element |
+//! | `/contact/<name>/elements/<i>/loop_u`, `loop_force` | f64 [E, N_t, 2] | m, N | hysteresis loops at point `loop_point` (attribute; the resonance peak): u1, u2 and f1, f2 over the last period |
+//! | `/contact/<name>/elements/<i>/loop_approach`, `loop_normal_force` | f64 [E, N_t] | m, N | normal approach v and normal force f_n at the same point |
 //! | `/march` attributes | | | `scheme`, `wall_seconds`, `omega` (rad/s), `frequency_hz`, `steps` |
 //! | `/march/time` | f64 [T] | s | instants |
 //! | `/march/response` | f64 [T, R] | m | response DOFs (`/march/response_dofs`) |
@@ -113,6 +118,38 @@ pub struct ContactPairData {
     pub kn: f64,
     /// Static normal preload n0_j (N).
     pub preload: f64,
+    /// The virtual node t_v of the contact node (m): its projection on the placed target
+    /// surface, within the contact distance of the contact node (for maps of the contact face).
+    pub virtual_point: [f64; 3],
+}
+
+/// Per-element detail of one contact interface on one curve (`/frf/<i>`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ContactCurveDetail {
+    /// Fractions of the period in stick, slip, separation, point-major: `[p * E + e]`.
+    pub fractions: Vec<[f64; 3]>,
+    /// Energy dissipated per cycle by each element (J), point-major: `[p * E + e]`.
+    pub dissipated_energy: Vec<f64>,
+    /// The hysteresis loops of every element at one point of the curve (the resonance peak).
+    pub loops: Option<PointLoops>,
+}
+
+/// The hysteresis loops of the E elements of an interface at one FRF point: the last period of
+/// the time-discrete law, N_t samples τ_j = 2πj/N_t (`contact::element::HysteresisLoop`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointLoops {
+    /// Index of the point in `/frf/<i>`.
+    pub point: usize,
+    /// Samples per period N_t.
+    pub samples: usize,
+    /// Tangential relative displacements u1, u2 (m): `[(e * N_t + j) * 2 + d]`.
+    pub u: Vec<f64>,
+    /// Tangential forces f1, f2 (N), laid out as `u`.
+    pub force: Vec<f64>,
+    /// Normal approach v (m): `[e * N_t + j]`.
+    pub approach: Vec<f64>,
+    /// Normal force f_n (N), laid out as `approach`.
+    pub normal_force: Vec<f64>,
 }
 
 /// One contact interface (`[[contact]]`).
@@ -130,6 +167,8 @@ pub struct ContactData {
     pub mu: f64,
     /// The elements.
     pub pairs: Vec<ContactPairData>,
+    /// Per-element detail per curve, in the order of [`ResultsFile::frfs`] (empty: not recorded).
+    pub curves: Vec<ContactCurveDetail>,
 }
 
 impl ContactData {
@@ -148,6 +187,7 @@ impl ContactData {
                     kt: pair.kt[j],
                     kn: pair.kn[j],
                     preload: pair.n0[j],
+                    virtual_point: pair.virtual_point,
                 })
             })
             .collect();
@@ -166,6 +206,7 @@ impl ContactData {
             sigma: i64::from(interface.sigma),
             mu: interface.mu,
             pairs,
+            curves: Vec::new(),
         }
     }
 }
@@ -464,6 +505,29 @@ fn contact_group(parent: &mut Group, contact: &ContactData, frfs: &[FrfData]) ->
             "local frame of each element, rows t1, t2, n (global axes)",
         ),
     );
+    let points = pairs
+        .iter()
+        .flat_map(|p| p.virtual_point.iter().copied())
+        .collect();
+    group.add(
+        "virtual_points",
+        Dataset::new(
+            &[pairs.len(), 3],
+            Data::F64(points),
+            "m",
+            "virtual node t_v of each element's contact node (its projection on the placed target surface)",
+        ),
+    );
+    for (i, detail) in contact.curves.iter().enumerate() {
+        let p = frfs.get(i).map_or(0, |f| f.points.len());
+        check_detail(contact, detail, i, p)?;
+        detail_group(
+            group.group("elements").group(&i.to_string()),
+            detail,
+            p,
+            pairs.len(),
+        );
+    }
     for (i, frf) in frfs.iter().enumerate() {
         let fractions = frf
             .points
@@ -485,6 +549,110 @@ fn contact_group(parent: &mut Group, contact: &ContactData, frfs: &[FrfData]) ->
         );
     }
     Ok(())
+}
+
+fn check_detail(contact: &ContactData, d: &ContactCurveDetail, i: usize, p: usize) -> Result<()> {
+    let e = contact.pairs.len();
+    let what = format!("/contact/{}/elements/{i}", contact.name);
+    if d.fractions.len() != p * e || d.dissipated_energy.len() != p * e {
+        return Err(size_error(format!(
+            "{what}: {} fractions and {} energies, expected P × E = {p} × {e}",
+            d.fractions.len(),
+            d.dissipated_energy.len()
+        )));
+    }
+    if let Some(l) = &d.loops {
+        let n = e * l.samples;
+        if l.point >= p
+            || l.u.len() != 2 * n
+            || l.force.len() != 2 * n
+            || l.approach.len() != n
+            || l.normal_force.len() != n
+        {
+            return Err(size_error(format!(
+                "{what}: loops at point {} of {p} with sizes {}/{}/{}/{}, expected E × N_t = {e} × {}",
+                l.point,
+                l.u.len(),
+                l.force.len(),
+                l.approach.len(),
+                l.normal_force.len(),
+                l.samples
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// `/contact/<name>/elements/<i>`: per-element fractions and energies per point, the loops.
+fn detail_group(group: &mut Group, d: &ContactCurveDetail, p: usize, e: usize) {
+    let fractions = d.fractions.iter().flatten().copied().collect();
+    group.add(
+        "fractions",
+        Dataset::new(
+            &[p, e, 3],
+            Data::F64(fractions),
+            "1",
+            "per point of /frf/<i> and element: fractions of the period in stick, slip, separation",
+        )
+        .with_attr(
+            "columns",
+            Attr::Strs(FRACTION_LABELS.iter().map(|s| s.to_string()).collect()),
+        ),
+    );
+    group.add(
+        "dissipated_energy",
+        Dataset::new(
+            &[p, e],
+            Data::F64(d.dissipated_energy.clone()),
+            "J",
+            "energy dissipated per cycle by each element",
+        ),
+    );
+    let Some(l) = &d.loops else { return };
+    let n_t = l.samples;
+    group.set_attr("loop_point", Attr::U64(l.point as u64));
+    let datasets = [
+        (
+            "loop_u",
+            &l.u,
+            2,
+            "m",
+            "tangential relative displacements u1, u2 over the last period",
+        ),
+        (
+            "loop_force",
+            &l.force,
+            2,
+            "N",
+            "tangential forces f1, f2 over the last period",
+        ),
+        (
+            "loop_approach",
+            &l.approach,
+            1,
+            "m",
+            "normal approach v over the last period",
+        ),
+        (
+            "loop_normal_force",
+            &l.normal_force,
+            1,
+            "N",
+            "normal force f_n over the last period",
+        ),
+    ];
+    for (name, values, dirs, unit, what) in datasets {
+        let shape: Vec<usize> = if dirs == 2 {
+            vec![e, n_t, 2]
+        } else {
+            vec![e, n_t]
+        };
+        group.add(
+            name,
+            Dataset::new(&shape, Data::F64(values.clone()), unit, what)
+                .with_attr("point", Attr::U64(l.point as u64)),
+        );
+    }
 }
 
 /// Dataset and attribute names of `/march` that [`MarchData`]'s typed fields own.
@@ -649,8 +817,9 @@ pub fn read_results(path: &Path) -> Result<ResultsFile> {
         }
     }
     let mut contacts = Vec::new();
+    let frf_points: Vec<usize> = frfs.iter().map(|f| f.points.len()).collect();
     for name in &contact_names {
-        contacts.push(read_contact(&reader, name)?);
+        contacts.push(read_contact(&reader, name, &frf_points)?);
     }
     let march = if reader.has_group("/march") {
         Some(read_march(&reader)?)
@@ -739,7 +908,7 @@ fn read_frf(reader: &H5Reader, i: usize, contact_names: &[String]) -> Result<Frf
     })
 }
 
-fn read_contact(reader: &H5Reader, name: &str) -> Result<ContactData> {
+fn read_contact(reader: &H5Reader, name: &str, frf_points: &[usize]) -> Result<ContactData> {
     let base = format!("/contact/{name}");
     let path = format!("{base}/pairs");
     let records = reader.records(&path, None, &["contact_node", "target_node"])?;
@@ -754,6 +923,7 @@ fn read_contact(reader: &H5Reader, name: &str) -> Result<ContactData> {
         column("preload")?,
     );
     let frames = reader.f64s(&format!("{base}/frames"), &[e, 3, 3])?;
+    let points = reader.f64s(&format!("{base}/virtual_points"), &[e, 3])?;
     let pairs = (0..e)
         .map(|j| {
             let f = &frames[9 * j..9 * j + 9];
@@ -765,9 +935,18 @@ fn read_contact(reader: &H5Reader, name: &str) -> Result<ContactData> {
                 kt: kt[j],
                 kn: kn[j],
                 preload: preload[j],
+                virtual_point: [points[3 * j], points[3 * j + 1], points[3 * j + 2]],
             }
         })
         .collect();
+    let mut curves = Vec::new();
+    for (i, p) in frf_points.iter().enumerate() {
+        let path = format!("{base}/elements/{i}");
+        if !reader.has_group(&path) {
+            break;
+        }
+        curves.push(read_detail(reader, &path, *p, e)?);
+    }
     Ok(ContactData {
         name: name.to_string(),
         model: reader.attr_str(&base, "model")?,
@@ -775,6 +954,36 @@ fn read_contact(reader: &H5Reader, name: &str) -> Result<ContactData> {
         sigma: reader.attr_i64(&base, "sigma")?,
         mu: reader.attr_f64(&base, "mu")?,
         pairs,
+        curves,
+    })
+}
+
+/// `/contact/<name>/elements/<i>` of a curve of `p` points and `e` elements.
+fn read_detail(reader: &H5Reader, path: &str, p: usize, e: usize) -> Result<ContactCurveDetail> {
+    let fractions = reader.f64s(&format!("{path}/fractions"), &[p, e, 3])?;
+    let fractions = fractions.chunks(3).map(|f| [f[0], f[1], f[2]]).collect();
+    let dissipated_energy = reader.f64s(&format!("{path}/dissipated_energy"), &[p, e])?;
+    let loops = if reader.attrs(path)?.contains_key("loop_point") {
+        let point = reader.attr_u64(path, "loop_point")? as usize;
+        let u = reader.dataset(&format!("{path}/loop_u"))?;
+        let samples = u.shape.get(1).copied().unwrap_or(0);
+        let pair = [e, samples, 2];
+        let single = [e, samples];
+        Some(PointLoops {
+            point,
+            samples,
+            u: reader.f64s(&format!("{path}/loop_u"), &pair)?,
+            force: reader.f64s(&format!("{path}/loop_force"), &pair)?,
+            approach: reader.f64s(&format!("{path}/loop_approach"), &single)?,
+            normal_force: reader.f64s(&format!("{path}/loop_normal_force"), &single)?,
+        })
+    } else {
+        None
+    };
+    Ok(ContactCurveDetail {
+        fractions,
+        dissipated_energy,
+        loops,
     })
 }
 

@@ -1,7 +1,9 @@
 //! `nlrom demo [--out DIR]`: the bundled demo case (`cases/demo.toml`) end to end — reduction
 //! (cached in `DIR/demo.rom.h5`), contact pairs, harmonic balance with continuation — written to
-//! `DIR/demo.h5`, then `python3 tools/plot_frf.py DIR/demo.h5 --out DIR` when python3 and that
-//! script exist (skipped with a note otherwise); prints where the results and plots are.
+//! `DIR/demo.h5`, then `python3 tools/plot_frf.py DIR/demo.h5 --out DIR` (the FRF) and
+//! `python3 tools/plot_contact.py DIR/demo.h5 --out DIR` (hysteresis loops and the shroud's
+//! contact-state map at the resonance) when python3 and the scripts exist (skipped with a note
+//! otherwise); prints where the results and plots are.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -15,8 +17,8 @@ use crate::error::{Error, Result};
 
 /// The demo case, relative to the crate root.
 pub const DEMO_CASE: &str = "cases/demo.toml";
-/// The plotting script, relative to the crate root.
-pub const PLOT_SCRIPT: &str = "tools/plot_frf.py";
+/// The plotting scripts, relative to the crate root, each run as `python3 SCRIPT RESULT --out DIR`.
+pub const PLOT_SCRIPTS: [&str; 2] = ["tools/plot_frf.py", "tools/plot_contact.py"];
 
 /// The crate root (where `cases/` and `tools/` are): the current directory when it holds the
 /// demo case (a clone run with `cargo run`), else the directory the binary was built from.
@@ -58,7 +60,11 @@ pub fn demo_command(out: &Path, rep: &Reporter, as_json: bool) -> Result<()> {
         case_path.display()
     ));
     let outcome = solve_to_file(&case, &output, &opts, rep)?;
-    let plots = plot(&root.join(PLOT_SCRIPT), &output, out, rep);
+    let plots = PLOT_SCRIPTS
+        .iter()
+        .map(|script| plot(&root.join(script), &output, out, rep))
+        .find(|p| matches!(p, Plots::Skipped(_)))
+        .unwrap_or_else(|| Plots::Written(out.to_path_buf()));
     if as_json {
         let mut report = outcome_json(&outcome, &output, start);
         report["plots"] = match &plots {
@@ -90,7 +96,8 @@ pub fn demo_command(out: &Path, rep: &Reporter, as_json: bool) -> Result<()> {
     }
 }
 
-/// Runs `python3 SCRIPT RESULT --out DIR` when the script exists and python3 runs.
+/// Runs `python3 SCRIPT RESULT --out DIR` when the script exists and python3 runs; the script's
+/// output goes to stderr (stdout carries the demo's report, JSON with `--json`).
 fn plot(script: &Path, result: &Path, dir: &Path, rep: &Reporter) -> Plots {
     if !script.is_file() {
         return Plots::Skipped(format!("{} is not there", script.display()));
@@ -100,6 +107,7 @@ fn plot(script: &Path, result: &Path, dir: &Path, rep: &Reporter) -> Plots {
         .arg(result)
         .arg("--out")
         .arg(dir)
+        .stdout(std::process::Stdio::from(std::io::stderr()))
         .status();
     match status {
         Ok(s) if s.success() => Plots::Written(dir.to_path_buf()),

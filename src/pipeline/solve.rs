@@ -25,8 +25,9 @@ use serde_json::{json, Value};
 use super::progress::Reporter;
 use super::summary::{summarize, CurveSummary};
 use crate::case::{Case, FrictionElement, WeightedDofs};
+use crate::contact::element::{ElementReport, HysteresisLoop};
 use crate::contact::grounded::DofElements;
-use crate::contact::pairs::{PairSet, PairState};
+use crate::contact::pairs::PairState;
 use crate::continuation::PathEnd;
 use crate::error::{Error, Result};
 use crate::harmonics::{HarmonicForce, HarmonicLayout};
@@ -37,8 +38,8 @@ use crate::mesh::msh::read_msh;
 use crate::mesh::Mesh;
 use crate::model::{self, StructuralModel};
 use crate::output::{
-    read_rom, write_results, write_rom, ContactData, FileInfo, FrfData, FrfPoint, ResponseDof,
-    ResultsFile,
+    read_rom, write_results, write_rom, ContactCurveDetail, ContactData, FileInfo, FrfData,
+    FrfPoint, PointLoops, ResponseDof, ResultsFile,
 };
 use crate::reduction::{reduce, rom_key};
 use crate::rom::Rom;
@@ -240,6 +241,8 @@ pub fn is_matrix_case(case: &Case) -> bool {
 struct Curve {
     frf: FrfData,
     report: CurveReport,
+    /// Per contact interface: the per-element detail of this curve (empty for matrix cases).
+    details: Vec<ContactCurveDetail>,
 }
 
 /// The curves of a matrix case (no contact interfaces).
@@ -282,7 +285,11 @@ fn matrix_curve(
         .iter()
         .map(|&r| ResponseDof::Row(r as u64))
         .collect();
-    trace_curve(case, &system, dofs, &|_, _| Ok(Vec::new()), stability, rep)
+    let probe = ContactProbe {
+        sizes: Vec::new(),
+        evaluate: &|_: &[f64], _: &_, _| Ok(Vec::new()),
+    };
+    trace_curve(case, &system, dofs, &probe, stability, rep)
 }
 
 /// The `[[element]]` friction elements of a matrix case on the condensed (nonlinear) rows of
@@ -439,9 +446,12 @@ fn solve_sector(
         .collect::<Result<Vec<_>>>()?;
     let mut contacts = Vec::new();
     let mut curves = Vec::with_capacity(solved.len());
-    for (i, (curve, interfaces)) in solved.into_iter().enumerate() {
+    for (i, (mut curve, interfaces)) in solved.into_iter().enumerate() {
         if i == 0 {
             contacts = interfaces.iter().map(ContactData::from_interface).collect();
+        }
+        for (contact, detail) in contacts.iter_mut().zip(std::mem::take(&mut curve.details)) {
+            contact.curves.push(detail);
         }
         curves.push(curve);
     }
@@ -469,8 +479,15 @@ fn sector_curve(
         .iter()
         .map(|i| i.pairs.iter().map(|p| p.targets.len()).sum())
         .collect();
-    let fractions = |q: &[f64], state: &PairState| {
-        interface_fractions(&problem.contact.inner, &problem.layout, q, state, &sizes)
+    let evaluate = |q: &[f64], state: &PairState, loops: bool| {
+        problem
+            .contact
+            .inner
+            .reports(&problem.layout, q, state, loops)
+    };
+    let probe = ContactProbe {
+        sizes,
+        evaluate: &evaluate,
     };
     let dofs = problem
         .outputs
@@ -480,7 +497,7 @@ fn sector_curve(
             component: o.component,
         })
         .collect();
-    let curve = trace_curve(case, &system, dofs, &fractions, stability, rep)?;
+    let curve = trace_curve(case, &system, dofs, &probe, stability, rep)?;
     Ok((curve, interfaces))
 }
 
@@ -507,35 +524,75 @@ pub fn unprojected_warning(iface: &ContactInterface, hint: &str) -> Option<Strin
     })
 }
 
-/// Per interface (whose elements are consecutive in the pair set, `sizes[i]` of them) the
-/// fractions of the period in stick, slip and separation at the solution `q`, averaged over the
-/// interface's elements.
-fn interface_fractions(
-    contact: &PairSet,
-    layout: &HarmonicLayout,
-    q: &[f64],
-    state: &PairState,
-    sizes: &[usize],
-) -> Result<Vec<[f64; 3]>> {
-    let reports = contact.reports(layout, q, state, false)?;
-    let mut out = Vec::with_capacity(sizes.len());
-    let mut start = 0;
-    for &n in sizes {
-        let mut sum = [0.0; 3];
-        for (r, _) in &reports[start..start + n] {
-            sum[0] += r.stick;
-            sum[1] += r.slip;
-            sum[2] += r.separation;
-        }
-        let scale = if n > 0 { 1.0 / n as f64 } else { 0.0 };
-        out.push(sum.map(|s| s * scale));
-        start += n;
-    }
-    Ok(out)
+/// The per-element state of the contact elements at a solution (harmonic vector `q`, force
+/// memory `state`): [`crate::contact::pairs::PairSet::reports`] with the hysteresis loops when asked.
+type ElementReports<'a, S> =
+    dyn Fn(&[f64], &S, bool) -> Result<Vec<(ElementReport, Option<HysteresisLoop>)>> + Sync + 'a;
+
+/// How the contact state of a curve's points is recorded: the element reports, and the number of
+/// elements of each interface (consecutive in the pair set; empty without contact interfaces).
+struct ContactProbe<'a, S> {
+    sizes: Vec<usize>,
+    evaluate: &'a ElementReports<'a, S>,
 }
 
-/// The contact state fractions of a point from its harmonic vector and force memory.
-type Fractions<'a, S> = dyn Fn(&[f64], &S) -> Result<Vec<[f64; 3]>> + Sync + 'a;
+impl<S> ContactProbe<'_, S> {
+    /// Per interface: the fractions of the period in stick, slip and separation averaged over
+    /// its elements, and each element's fractions and dissipated energy appended to `details`.
+    fn record_point(
+        &self,
+        q: &[f64],
+        state: &S,
+        details: &mut [ContactCurveDetail],
+    ) -> Result<Vec<[f64; 3]>> {
+        let reports = (self.evaluate)(q, state, false)?;
+        let mut averages = Vec::with_capacity(self.sizes.len());
+        let mut start = 0;
+        for (&n, detail) in self.sizes.iter().zip(details.iter_mut()) {
+            let mut sum = [0.0; 3];
+            for (r, _) in &reports[start..start + n] {
+                let f = [r.stick, r.slip, r.separation];
+                sum.iter_mut().zip(f).for_each(|(s, v)| *s += v);
+                detail.fractions.push(f);
+                detail.dissipated_energy.push(r.dissipated_energy);
+            }
+            let scale = if n > 0 { 1.0 / n as f64 } else { 0.0 };
+            averages.push(sum.map(|s| s * scale));
+            start += n;
+        }
+        Ok(averages)
+    }
+
+    /// The hysteresis loops of every element at point `point` (harmonics `q`, memory `state`),
+    /// stored in each interface's detail.
+    fn record_loops(
+        &self,
+        point: usize,
+        q: &[f64],
+        state: &S,
+        details: &mut [ContactCurveDetail],
+    ) -> Result<()> {
+        let reports = (self.evaluate)(q, state, true)?;
+        let mut elements = reports.into_iter().filter_map(|(_, l)| l);
+        for (&n, detail) in self.sizes.iter().zip(details.iter_mut()) {
+            let mut loops = PointLoops {
+                point,
+                ..PointLoops::default()
+            };
+            for l in elements.by_ref().take(n) {
+                loops.samples = l.v.len();
+                for j in 0..l.v.len() {
+                    loops.u.extend([l.u[0][j], l.u[1][j]]);
+                    loops.force.extend([l.ft[0][j], l.ft[1][j]]);
+                }
+                loops.approach.extend_from_slice(&l.v);
+                loops.normal_force.extend_from_slice(&l.fnormal);
+            }
+            detail.loops = Some(loops);
+        }
+        Ok(())
+    }
+}
 
 /// Traces the frequency response of one sweep point with a progress bar and converts it to the
 /// results layout. A start that does not converge, or a continuation that fails later, gives a
@@ -544,7 +601,7 @@ fn trace_curve<F: HarmonicForce>(
     case: &Case,
     system: &HbmSystem<'_, F>,
     response_dofs: Vec<ResponseDof>,
-    fractions: &Fractions<'_, F::State>,
+    contact: &ContactProbe<'_, F::State>,
     stability: bool,
     rep: &Reporter,
 ) -> Result<Curve> {
@@ -572,6 +629,7 @@ fn trace_curve<F: HarmonicForce>(
         response_dofs,
         points: Vec::new(),
     };
+    let mut details = vec![ContactCurveDetail::default(); contact.sizes.len()];
     let (end, failure) = match traced {
         Err(e @ (Error::Input(_) | Error::Io { .. } | Error::Msh(_))) => return Err(e),
         Err(e) => (
@@ -590,8 +648,15 @@ fn trace_curve<F: HarmonicForce>(
                     arc_length: p.arc_length,
                     newton_iterations: p.iterations as u64,
                     stable: p.stable,
-                    contact_fractions: fractions(&p.q, &p.state)?,
+                    contact_fractions: contact.record_point(&p.q, &p.state, &mut details)?,
                 });
+            }
+            if !contact.sizes.is_empty() {
+                let (hz, amplitude) = curve_amplitudes(&frf);
+                if let Some(peak) = summarize(&hz, &amplitude) {
+                    let p = &traced.points[peak.peak_point];
+                    contact.record_loops(peak.peak_point, &p.q, &p.state, &mut details)?;
+                }
             }
             match traced.end {
                 PathEnd::ReachedEnd => ("reached_end", None),
@@ -617,13 +682,7 @@ fn trace_curve<F: HarmonicForce>(
             }
         }
     };
-    let hz: Vec<f64> = frf.points.iter().map(|p| p.omega / (2.0 * PI)).collect();
-    let h1 = frf.harmonics + 1;
-    let amplitude: Vec<Vec<f64>> = frf
-        .points
-        .iter()
-        .map(|p| p.harmonics.chunks(h1).map(|hs| hs[1].norm()).collect())
-        .collect();
+    let (hz, amplitude) = curve_amplitudes(&frf);
     rep.info(&format!(
         "{label}: {} points in {:.2} s ({end})",
         frf.points.len(),
@@ -637,7 +696,29 @@ fn trace_curve<F: HarmonicForce>(
         end,
         failure,
     };
-    Ok(Curve { frf, report })
+    Ok(Curve {
+        frf,
+        report,
+        details,
+    })
+}
+
+/// The frequencies (Hz) of a curve's points and the first-harmonic amplitudes abs(Q⁽¹⁾) of its
+/// response DOFs, `amplitude[p][r]` (0 when H = 0).
+fn curve_amplitudes(frf: &FrfData) -> (Vec<f64>, Vec<Vec<f64>>) {
+    let hz = frf.points.iter().map(|p| p.omega / (2.0 * PI)).collect();
+    let h1 = frf.harmonics + 1;
+    let amplitude = frf
+        .points
+        .iter()
+        .map(|p| {
+            p.harmonics
+                .chunks(h1)
+                .map(|hs| hs.get(1).map_or(0.0, |h| h.norm()))
+                .collect()
+        })
+        .collect();
+    (hz, amplitude)
 }
 
 /// "FRF" or "sweep 2 (contact.shroud.n0 = 150)".

@@ -24,6 +24,8 @@ pub struct CurveSummary {
     pub peak_amplitude: f64,
     /// Index of the response DOF the summary refers to.
     pub response_dof: usize,
+    /// Index of the peak point in the curve (path order).
+    pub peak_point: usize,
     /// Half-power Q-factor f_r/(f₂ − f₁); `None` when the curve does not drop below A_r/√2 on
     /// both sides of the peak.
     pub q_factor: Option<f64>,
@@ -47,6 +49,7 @@ pub fn summarize(frequency_hz: &[f64], amplitude: &[Vec<f64>]) -> Option<CurveSu
         resonance_hz: frequency_hz[peak_point],
         peak_amplitude: peak,
         response_dof: r,
+        peak_point,
         q_factor: half_power_q(frequency_hz, &curve, peak_point),
     })
 }
