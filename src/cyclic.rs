@@ -594,6 +594,12 @@ impl CyclicTransform {
         self.kept.len()
     }
 
+    /// The nonzero entries (reduced column j, value T_k[r, j]) of row `r` of T_k: q[r] =
+    /// Σ value · q_k[j] (one unit entry for a kept row, e^{iφ_k} R_α[c][d] for a high row).
+    pub fn row(&self, r: usize) -> &[(usize, c64)] {
+        &self.rows[r]
+    }
+
     /// T_kᴴ A T_k for a dense real symmetric `a` (n_full²): Hermitian, n_reduced².
     pub fn project(&self, a: MatRef<'_, f64>) -> Mat<c64> {
         let (n, m) = (self.n_full(), self.n_reduced());

@@ -10,7 +10,7 @@ use faer::sparse::{SparseColMat, Triplet};
 use faer::{c64, Mat};
 use nlrom::case::Case;
 use nlrom::contact::pairs::PairState;
-use nlrom::cyclic::{phase, CyclicGeometry};
+use nlrom::cyclic::{phase, CyclicGeometry, CyclicTransform};
 use nlrom::harmonics::HarmonicForce;
 use nlrom::hbm::{solve_fixed, FrequencyPath, HbmSystem, NewtonOptions};
 use nlrom::mesh::Mesh;
@@ -136,42 +136,13 @@ fn hb_solve_with<F: HarmonicForce>(p: &SectorProblem, force: &F, omega: f64) -> 
 }
 
 /// The full (unreduced) sector's harmonic 1 at the output DOFs: T_kᴴ (K − ω²M + iωC) T_k q_k =
-/// T_kᴴ f with the sparse T_k of `conventions.md` §2 built here from the frontier pairs
-/// (u_high = e^{iφ_k} R_α u_low), solved by faer's sparse LU; u = T_k q_k.
+/// T_kᴴ f with the library's sparse T_k (`nlrom::cyclic::CyclicTransform`, `conventions.md` §2:
+/// u_high = e^{iφ_k} R_α u_low) of the frontier pairs, solved by faer's sparse LU; u = T_k q_k.
 fn full_frf(s: &Setup, k: usize, omega: f64) -> Vec<c64> {
     let (geom, pairs) = free_frontier_pairs(&s.case, &s.model).unwrap();
-    let n = s.model.free.n_free();
-    // T_k row by row: (column, value).
-    let mut high = vec![false; n];
-    for p in &pairs {
-        for &r in &p.high {
-            high[r] = true;
-        }
-    }
-    let mut column = vec![usize::MAX; n];
-    let mut nk = 0;
-    for r in 0..n {
-        if !high[r] {
-            column[r] = nk;
-            nk += 1;
-        }
-    }
-    let mut t: Vec<Vec<(usize, c64)>> = (0..n)
-        .map(|r| {
-            if high[r] {
-                Vec::new()
-            } else {
-                vec![(column[r], c64::new(1.0, 0.0))]
-            }
-        })
-        .collect();
-    let e = c64::from_polar(1.0, phase(k, geom.sectors));
-    let rot = geom.rotation(1);
-    for p in &pairs {
-        for c in 0..3 {
-            t[p.high[c]] = (0..3).map(|d| (column[p.low[d]], e * rot[c][d])).collect();
-        }
-    }
+    let tk = CyclicTransform::new(&geom, k, s.model.free.n_free(), &pairs).unwrap();
+    let nk = tk.n_reduced();
+    let t = |r: usize| tk.row(r);
     // D = (1 + iωβ) K + (iωα − ω²) M, projected.
     let (a, b) = (RAYLEIGH[0], RAYLEIGH[1]);
     let fk = c64::new(1.0, omega * b);
@@ -180,8 +151,8 @@ fn full_frf(s: &Setup, k: usize, omega: f64) -> Vec<c64> {
     for (mat, factor) in [(&s.model.free.k, fk), (&s.model.free.m, fm)] {
         for tr in mat.triplet_iter() {
             let v = factor * *tr.val;
-            for &(ci, ti) in &t[tr.row] {
-                for &(cj, tj) in &t[tr.col] {
+            for &(ci, ti) in t(tr.row) {
+                for &(cj, tj) in t(tr.col) {
                     trip.push(Triplet::new(ci, cj, ti.conj() * v * tj));
                 }
             }
@@ -197,7 +168,7 @@ fn full_frf(s: &Setup, k: usize, omega: f64) -> Vec<c64> {
         let tag = mesh.node_tags[node as usize];
         for (c, &fc) in force.iter().enumerate() {
             let r = rows[&(tag, c as u8)];
-            for &(cj, tj) in &t[r] {
+            for &(cj, tj) in t(r) {
                 f[(cj, 0)] += tj.conj() * fc;
             }
         }
@@ -209,7 +180,7 @@ fn full_frf(s: &Setup, k: usize, omega: f64) -> Vec<c64> {
         .iter()
         .map(|o| {
             let r = rows[&(o.node_tag, o.component)];
-            t[r].iter().map(|&(c, v)| v * f[(c, 0)]).sum()
+            t(r).iter().map(|&(c, v)| v * f[(c, 0)]).sum()
         })
         .collect()
 }

@@ -13,7 +13,11 @@
 //!   passed;
 //! - corrector: Newton on the bordered system r(x, λ) = 0, t · (y − y_pred) = 0 (the
 //!   hyperplane through the predicted point, orthogonal to the tangent); a corrected point
-//!   farther than one step from the prediction is rejected (a jump to another branch);
+//!   farther than one step from the prediction is rejected (a jump to another branch) — except
+//!   at the minimum step, where up to one initial step is accepted: the offset of the corrected
+//!   point is step · tan θ at a corner turning by θ, independent of the step, so smaller steps
+//!   cannot help there (a non-smooth point of contact: stick, slip or separation setting in
+//!   within one AFT sample), and a segment shorter than the initial step is not skipped;
 //! - step: s ← s · clamp(n_target / n_iter, ½, 2) after a converged point; on a failed
 //!   corrector, or a tangent turning by more than 60°, the step is halved and the point retried
 //!   (never skipped) — below the minimum step the path stops with a reported failure and the
@@ -171,6 +175,7 @@ pub fn trace<S: ParameterSystem>(
         .map_or((step).max(1.0 / 20.0), |m| m / range)
         .max(min_step);
     step = step.clamp(min_step, max_step);
+    let initial_step = step;
     let mut path = Path {
         points: vec![],
         end: PathEnd::MaxPoints,
@@ -182,12 +187,19 @@ pub fn trace<S: ParameterSystem>(
     while path.points.len() < opts.max_points {
         let y = scaled(&current, &scales);
         let predicted: Vec<f64> = y.iter().zip(&tangent).map(|(y, t)| y + step * t).collect();
+        // the corrector's largest offset from the prediction in steps: one, or at the minimum
+        // step (a corner) one initial step
+        let allowance = if step <= 2.0 * min_step {
+            (initial_step / step).max(1.0)
+        } else {
+            1.0
+        };
         let outcome = correct(
             system,
             &current.state,
             &predicted,
             &tangent,
-            step,
+            (step, allowance),
             &scales,
             opts,
         );
@@ -343,7 +355,8 @@ fn tangent_with(lin: &Linearization, s: &Scales, border: &[f64]) -> Option<Vec<f
 /// The corrector from the predicted point; returns the solution and the new tangent (oriented
 /// along `tangent`).
 ///
-/// The corrected point must lie within one step of the prediction: the hyperplane
+/// The corrected point must lie within `allowance` steps of the prediction (`(step,
+/// allowance)`; see the module documentation): the hyperplane
 /// t · (y − y_pred) = 0 reaches arbitrarily far, and near a sharp fold (e.g. where contact
 /// separation sets in within a few AFT samples) Newton can converge on it to a point of another
 /// branch — a jump that would skip the segment in between. Such a point is rejected like a failed
@@ -354,7 +367,7 @@ fn correct<S: ParameterSystem>(
     state: &S::State,
     predicted: &[f64],
     tangent: &[f64],
-    step: f64,
+    (step, allowance): (f64, f64),
     s: &Scales,
     opts: &ContinuationOptions,
 ) -> std::result::Result<(NewtonSolution<S::State>, Option<Vec<f64>>), String> {
@@ -362,12 +375,13 @@ fn correct<S: ParameterSystem>(
     let mut y: Vec<f64> = done.0.x.iter().map(|x| x / s.x).collect();
     y.push(done.0.parameter / s.lambda);
     let off: Vec<f64> = y.iter().zip(predicted).map(|(a, b)| a - b).collect();
-    if norm(&off) <= step {
+    if norm(&off) <= allowance * step {
         Ok(done)
     } else {
         Err(format!(
-            "the corrector moved {:.3e} from the prediction, farther than the step {step:.3e} (towards another branch)",
-            norm(&off)
+            "the corrector moved {:.3e} from the prediction, farther than {:.3e} (towards another branch)",
+            norm(&off),
+            allowance * step
         ))
     }
 }
