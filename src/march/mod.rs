@@ -17,7 +17,8 @@
 //! | [`integrate`] | the time loop, adaptive step, records, counts |
 //! | [`periodic`] | steady-state detection and harmonics of the last period |
 //! | [`damper`] | the underplatform-damper demonstrator (§2, §6) |
-//! | [`from_case`] | a case file (`[damper]` or a matrix model with `[[element]]`) as a march |
+//! | [`sector`] | the real ROM of a sector (no cyclic symmetry, k = 0, k = N/2) with its `[[contact]]` pairs |
+//! | [`from_case`] | a case file (`[damper]`, a matrix model with `[[element]]`, a sector) as a march |
 //! | [`output`] | the `/march/` group of the results file |
 //! | [`dense`] | small dense linear algebra |
 
@@ -30,6 +31,7 @@ pub mod law;
 pub mod output;
 pub mod periodic;
 pub mod schemes;
+pub mod sector;
 pub mod signal;
 pub mod system;
 

@@ -44,6 +44,11 @@ pub struct StepOutcome {
     pub iterations: u32,
 }
 
+/// Most memory (bytes) the inverses of one step size's contact states may take: a model with many
+/// elements (a sector's shroud pairs) meets many state combinations during a transient; beyond
+/// this the cached inverses of that step are dropped and rebuilt as the states recur.
+pub const MAX_CACHED_BYTES: usize = 256 << 20;
+
 /// Inverses of the step matrices, kept while the step and the contact states repeat.
 #[derive(Default)]
 pub struct Cache {
@@ -53,6 +58,31 @@ pub struct Cache {
     piecewise: HashMap<u64, HashMap<Vec<u8>, Vec<f64>>>,
     /// Number of factorisations made.
     pub factorisations: usize,
+}
+
+impl Cache {
+    /// The inverse of the piecewise-linear step matrix of the contact states `codes` at the step
+    /// key `dt_key` (Δτ bits, 0 for the quasi-static method): cached, else `matrix()` inverted
+    /// (`singular()` when it cannot be) and kept, within [`MAX_CACHED_BYTES`] per step key.
+    fn inverse(
+        &mut self,
+        dt_key: u64,
+        codes: &[u8],
+        n: usize,
+        matrix: impl FnOnce() -> Vec<f64>,
+        singular: impl FnOnce() -> Error,
+    ) -> Result<&Vec<f64>> {
+        let per = self.piecewise.entry(dt_key).or_default();
+        if !per.contains_key(codes) {
+            if (per.len() + 1) * n * n * std::mem::size_of::<f64>() > MAX_CACHED_BYTES {
+                per.clear();
+            }
+            let inv = dense::inverse(&matrix(), n).ok_or_else(singular)?;
+            per.insert(codes.to_vec(), inv);
+            self.factorisations += 1;
+        }
+        Ok(&per[codes])
+    }
 }
 
 /// Where and when a step is taken.
@@ -254,23 +284,24 @@ fn state_iteration(
     let mut law_codes = Vec::with_capacity(states.len());
     for it in 1..=ctx.max_iterations {
         sys.linear_piece(&states, sliders, ctx.omega, ctx.t1, &mut k, &mut rc);
-        let per_dt = cache.piecewise.entry(dt_key).or_default();
-        if !per_dt.contains_key(&codes) {
-            let a = if dynamic {
-                dynamic_matrix(sys, ctx.dt, &k)
-            } else {
-                k.clone()
-            };
-            let what = if dynamic {
-                "piecewise-linear Newmark"
-            } else {
-                "quasi-static (K + K_c)"
-            };
-            let inv = dense::inverse(&a, n).ok_or_else(|| singular(sys, what, ctx.t1, &codes))?;
-            per_dt.insert(codes.clone(), inv);
-            cache.factorisations += 1;
-        }
-        let ainv = &per_dt[&codes];
+        let what = if dynamic {
+            "piecewise-linear Newmark"
+        } else {
+            "quasi-static (K + K_c)"
+        };
+        let ainv = cache.inverse(
+            dt_key,
+            &codes,
+            n,
+            || {
+                if dynamic {
+                    dynamic_matrix(sys, ctx.dt, &k)
+                } else {
+                    k.clone()
+                }
+            },
+            || singular(sys, what, ctx.t1, &codes),
+        )?;
         if dynamic {
             sys.dynamic_force(ctx.omega, ctx.t1, &mut f);
         } else {
@@ -298,8 +329,9 @@ fn state_iteration(
 /// Piecewise-linear Newmark step (paper §4.3, Appendix A.4, eqs A12–A16): the contact states at
 /// τ_{n+1} are predicted equal to those at τ_n, the linear Newmark step of eq. A13/A15 is solved, the
 /// states are verified by the law and the step re-solved only at a transition. If the state
-/// iteration cycles (a rare tie at a stick/slip boundary) the step falls back to the standard
-/// corrector, and the iterations of both are counted.
+/// iteration cycles (a tie at a stick/slip boundary; frequent with many elements) the step falls
+/// back to damped Newton on the same piecewise-linear equation (unlike the standard corrector it
+/// needs no step limit), and the iterations of both are counted.
 pub fn piecewise_linear_step(
     ctx: &StepContext,
     start: &Kinematics,
@@ -332,9 +364,17 @@ pub fn piecewise_linear_step(
             })
         }
         Err(tried) => {
-            let mut out = standard_step(ctx, start, sliders, cache)?;
-            out.iterations += tried;
-            Ok(out)
+            let (q1, samples, its) = damped_newton(ctx, true, &start.q, sliders, &extra, cache)?;
+            let (a1, v1) = newmark_rates(&q1, &qs, &vs, dt);
+            Ok(StepOutcome {
+                kin: Kinematics {
+                    q: q1,
+                    v: v1,
+                    a: a1,
+                },
+                samples,
+                iterations: tried + its,
+            })
         }
     }
 }
@@ -353,7 +393,7 @@ pub fn quasi_static_step(
         match state_iteration(ctx, false, states, sliders, &extra, cache)? {
             Ok(found) => found,
             Err(tried) => {
-                let (q, s, its) = damped_newton(ctx, start, sliders, cache)?;
+                let (q, s, its) = damped_newton(ctx, false, &start.q, sliders, &extra, cache)?;
                 (q, s, tried + its)
             }
         };
@@ -373,63 +413,115 @@ pub fn quasi_static_step(
     })
 }
 
-/// ‖f_e + f_c(q) − K q‖_∞ with the law's forces from the sliders `w` (quasi-static residual).
-fn static_residual(
+/// ‖f + b_extra + f_c(q) − A q‖_∞ with the law's forces from the sliders `w`: the residual of
+/// the piecewise-linear step, A = M/(βΔτ²) + γC/(βΔτ) + K and f the dynamic force when
+/// `dynamic` (Newmark, eq. A13 with q̈₁, q̇₁ from q₁), else A = K and f = f_e (quasi-static).
+#[allow(clippy::too_many_arguments)]
+fn step_residual(
     ctx: &StepContext,
+    dynamic: bool,
     q: &[f64],
     w: &[f64],
+    b_extra: &[f64],
     r: &mut [f64],
+    aq: &mut [f64],
     samples: &mut Vec<LawSample>,
 ) -> f64 {
     let sys = ctx.sys;
     evaluate_law(sys, ctx.omega, ctx.t1, q, w, samples);
-    sys.external_force(ctx.omega, ctx.t1, r);
+    if dynamic {
+        sys.dynamic_force(ctx.omega, ctx.t1, r);
+        let cm = 1.0 / (BETA * ctx.dt * ctx.dt);
+        let cc = GAMMA / (BETA * ctx.dt);
+        dense::matvec(&sys.mass, q, aq);
+        aq.iter_mut().for_each(|x| *x *= cm);
+        let mut cq = vec![0.0; sys.n];
+        dense::matvec(&sys.damping, q, &mut cq);
+        aq.iter_mut().zip(&cq).for_each(|(a, c)| *a += cc * c);
+        dense::matvec_add(&sys.stiffness, q, aq);
+    } else {
+        sys.external_force(ctx.omega, ctx.t1, r);
+        dense::matvec(&sys.stiffness, q, aq);
+    }
     add_contact_force(sys, samples, r);
-    let mut kq = vec![0.0; sys.n];
-    dense::matvec(&sys.stiffness, q, &mut kq);
-    r.iter_mut().zip(&kq).for_each(|(ri, k)| *ri -= k);
+    r.iter_mut()
+        .zip(aq.iter().zip(b_extra))
+        .for_each(|(ri, (a, b))| *ri += b - a);
     dense::norm_inf(r)
 }
 
-/// Fallback of the quasi-static step when the state iteration cycles (the solution sits on a
-/// stick/slip or slip-sign boundary): Newton on the continuous piecewise-linear residual
-/// r(q) = f_e + f_c(q) − K q with the state's tangent K + K_c and a backtracking line search on
-/// ‖r‖_∞, from q_n, until the update is below the tolerance (or 1e-9 of the displacement scale).
+/// Fallback of the piecewise-linear and quasi-static steps when the state iteration cycles (the
+/// solution sits on a stick/slip or slip-sign boundary, frequent with many elements): Newton on
+/// the continuous piecewise-linear residual of [`step_residual`] with the state's tangent
+/// A + K_c and a backtracking line search on ‖r‖_∞, from `q0`, until the update is below the
+/// tolerance (or 1e-9 of the displacement scale).
 fn damped_newton(
     ctx: &StepContext,
-    start: &Kinematics,
+    dynamic: bool,
+    q0: &[f64],
     sliders: &[f64],
+    b_extra: &[f64],
     cache: &mut Cache,
 ) -> Result<(Vec<f64>, Vec<LawSample>, u32)> {
     let sys = ctx.sys;
     let n = sys.n;
     let tol = ctx.tolerance.max(1e-9 * sys.displacement_scale);
-    let mut q = start.q.clone();
+    let mut q = q0.to_vec();
     let mut samples = Vec::new();
     let mut trial_samples = Vec::new();
     let mut r = vec![0.0; n];
     let mut r_trial = vec![0.0; n];
+    let mut aq = vec![0.0; n];
     let mut k = vec![0.0; n * n];
     let mut rc = vec![0.0; n];
     let mut codes = Vec::new();
-    let mut norm = static_residual(ctx, &q, sliders, &mut r, &mut samples);
+    let (dt_key, what) = if dynamic {
+        (ctx.dt.to_bits(), "piecewise-linear Newmark")
+    } else {
+        (0, "quasi-static (K + K_c)")
+    };
+    let mut norm = step_residual(
+        ctx,
+        dynamic,
+        &q,
+        sliders,
+        b_extra,
+        &mut r,
+        &mut aq,
+        &mut samples,
+    );
     for it in 1..=ctx.max_iterations {
         let states: Vec<ContactState> = samples.iter().map(|s| s.state).collect();
         state_codes(&samples, &mut codes);
         sys.linear_piece(&states, sliders, ctx.omega, ctx.t1, &mut k, &mut rc);
-        let per_state = cache.piecewise.entry(0).or_default();
-        if !per_state.contains_key(&codes) {
-            let inv = dense::inverse(&k, n)
-                .ok_or_else(|| singular(sys, "quasi-static (K + K_c)", ctx.t1, &codes))?;
-            per_state.insert(codes.clone(), inv);
-            cache.factorisations += 1;
-        }
+        let kinv = cache.inverse(
+            dt_key,
+            &codes,
+            n,
+            || {
+                if dynamic {
+                    dynamic_matrix(sys, ctx.dt, &k)
+                } else {
+                    k.clone()
+                }
+            },
+            || singular(sys, what, ctx.t1, &codes),
+        )?;
         let mut dq = vec![0.0; n];
-        dense::matvec(&per_state[&codes], &r, &mut dq);
+        dense::matvec(kinv, &r, &mut dq);
         let mut lambda = 1.0;
         loop {
             let qt: Vec<f64> = q.iter().zip(&dq).map(|(a, d)| a + lambda * d).collect();
-            let nt = static_residual(ctx, &qt, sliders, &mut r_trial, &mut trial_samples);
+            let nt = step_residual(
+                ctx,
+                dynamic,
+                &qt,
+                sliders,
+                b_extra,
+                &mut r_trial,
+                &mut aq,
+                &mut trial_samples,
+            );
             if nt < (1.0 - 1e-4 * lambda) * norm || lambda < 1e-6 {
                 q = qt;
                 norm = nt;
@@ -444,7 +536,7 @@ fn damped_newton(
         }
     }
     Err(Error::Compute(format!(
-        "quasi-static method: no equilibrium found at t = {:.6e} s in {} Newton iterations (the contact states cycle); try another number of steps per period",
+        "{what}: no solution of the step found at t = {:.6e} s in {} Newton iterations (the contact states cycle); try another number of steps per period",
         ctx.t1, ctx.max_iterations
     )))
 }
