@@ -14,6 +14,7 @@
 //! | [`element`] | friction elements on DOF combinations and their piecewise-linear form (Table 1) |
 //! | [`system`] | the marched model (dense M, C, K, forces, elements), shortest period (eq. 8) |
 //! | [`schemes`] | one step of each scheme |
+//! | [`lowrank`] | a state's step matrix as a low-rank change of the all-stick one |
 //! | [`integrate`] | the time loop, adaptive step, records, counts |
 //! | [`periodic`] | steady-state detection and harmonics of the last period |
 //! | [`damper`] | the underplatform-damper demonstrator (§2, §6) |
@@ -28,6 +29,7 @@ pub mod element;
 pub mod from_case;
 pub mod integrate;
 pub mod law;
+pub mod lowrank;
 pub mod output;
 pub mod periodic;
 pub mod schemes;

@@ -14,6 +14,7 @@ use std::collections::HashMap;
 
 use super::dense;
 use super::law::{ContactState, LawSample};
+use super::lowrank::{self, LowRank};
 use super::system::MarchSystem;
 use crate::error::{Error, Result};
 
@@ -44,44 +45,114 @@ pub struct StepOutcome {
     pub iterations: u32,
 }
 
-/// Most memory (bytes) the inverses of one step size's contact states may take: a model with many
+/// Most memory (bytes) the factors of one step size's contact states may take: a model with many
 /// elements (a sector's shroud pairs) meets many state combinations during a transient; beyond
-/// this the cached inverses of that step are dropped and rebuilt as the states recur.
+/// this the cached factors of that step are dropped and rebuilt as the states recur.
 pub const MAX_CACHED_BYTES: usize = 256 << 20;
 
-/// Inverses of the step matrices, kept while the step and the contact states repeat.
+/// How the step matrix of one contact state is solved.
+enum StepFactor {
+    /// Its inverse (n × n).
+    Full(Vec<f64>),
+    /// A low-rank change of the all-stick step matrix ([`LowRank`]), when the rank is below n/2.
+    LowRank(LowRank),
+}
+
+impl StepFactor {
+    fn entries(&self) -> usize {
+        match self {
+            StepFactor::Full(a) => a.len(),
+            StepFactor::LowRank(l) => l.len(),
+        }
+    }
+}
+
+/// Factors of the step matrices, kept while the step and the contact states repeat.
 #[derive(Default)]
 pub struct Cache {
     /// Δτ bits → (M/(βΔτ²) + γC/(βΔτ) + K)⁻¹ for the standard corrector.
     structural: HashMap<u64, Vec<f64>>,
-    /// Δτ bits (0 for the quasi-static method) → state codes → inverse of the step matrix.
-    piecewise: HashMap<u64, HashMap<Vec<u8>, Vec<f64>>>,
+    /// Δτ bits (0 for the quasi-static method) → state codes → factor of the step matrix, with
+    /// the f64 entries held.
+    piecewise: HashMap<u64, (HashMap<Vec<u8>, StepFactor>, usize)>,
+    /// Δτ bits (0 for the quasi-static method) → inverse of the all-stick step matrix.
+    stick: HashMap<u64, Vec<f64>>,
     /// Number of factorisations made.
     pub factorisations: usize,
 }
 
 impl Cache {
-    /// The inverse of the piecewise-linear step matrix of the contact states `codes` at the step
-    /// key `dt_key` (Δτ bits, 0 for the quasi-static method): cached, else `matrix()` inverted
-    /// (`singular()` when it cannot be) and kept, within [`MAX_CACHED_BYTES`] per step key.
-    fn inverse(
+    /// x = A⁻¹ b for the piecewise-linear step matrix A of the contact `states` (codes `codes`;
+    /// `k` = K + K_c(states); A adds M/(βΔτ²) + γC/(βΔτ) when `dynamic`): its factor is cached per
+    /// step size (key Δτ bits, 0 for the quasi-static method) within [`MAX_CACHED_BYTES`], as
+    /// the inverse, or as a low-rank change of the all-stick inverse when the states differ from
+    /// full stick by a rank below n/2 ([`super::lowrank`]).
+    #[allow(clippy::too_many_arguments)]
+    fn step_solve(
         &mut self,
-        dt_key: u64,
+        ctx: &StepContext,
+        dynamic: bool,
+        states: &[ContactState],
         codes: &[u8],
-        n: usize,
-        matrix: impl FnOnce() -> Vec<f64>,
-        singular: impl FnOnce() -> Error,
-    ) -> Result<&Vec<f64>> {
-        let per = self.piecewise.entry(dt_key).or_default();
-        if !per.contains_key(codes) {
-            if (per.len() + 1) * n * n * std::mem::size_of::<f64>() > MAX_CACHED_BYTES {
-                per.clear();
+        k: &[f64],
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<()> {
+        let (sys, n) = (ctx.sys, ctx.sys.n);
+        let dt_key = if dynamic { ctx.dt.to_bits() } else { 0 };
+        let step_matrix = |k: &[f64]| {
+            if dynamic {
+                dynamic_matrix(sys, ctx.dt, k)
+            } else {
+                k.to_vec()
             }
-            let inv = dense::inverse(&matrix(), n).ok_or_else(singular)?;
-            per.insert(codes.to_vec(), inv);
+        };
+        let (per, held) = self.piecewise.entry(dt_key).or_default();
+        if !per.contains_key(codes) {
+            let cols = lowrank::columns(&sys.elements, states);
+            let mut factor = None;
+            if 2 * cols.len() < n {
+                if let std::collections::hash_map::Entry::Vacant(e) = self.stick.entry(dt_key) {
+                    let a = step_matrix(&sys.effective_stiffness(&sys.stick_states()));
+                    if let Some(inv) = dense::inverse(&a, n) {
+                        e.insert(inv);
+                        self.factorisations += 1;
+                    }
+                }
+                factor = self
+                    .stick
+                    .get(&dt_key)
+                    .and_then(|inv| LowRank::new(inv, n, cols).map(StepFactor::LowRank));
+            }
+            let factor = match factor {
+                Some(f) => f,
+                None => StepFactor::Full(
+                    dense::inverse(&step_matrix(k), n)
+                        .ok_or_else(|| singular(sys, step_name(dynamic), ctx.t1, codes))?,
+                ),
+            };
+            if (*held + factor.entries()) * std::mem::size_of::<f64>() > MAX_CACHED_BYTES {
+                per.clear();
+                *held = 0;
+            }
+            *held += factor.entries();
+            per.insert(codes.to_vec(), factor);
             self.factorisations += 1;
         }
-        Ok(&per[codes])
+        match &per[codes] {
+            StepFactor::Full(inv) => dense::matvec(inv, b, x),
+            StepFactor::LowRank(l) => l.solve(&self.stick[&dt_key], b, x),
+        }
+        Ok(())
+    }
+}
+
+/// The name of the piecewise-linear step in messages.
+fn step_name(dynamic: bool) -> &'static str {
+    if dynamic {
+        "piecewise-linear Newmark"
+    } else {
+        "quasi-static (K + K_c)"
     }
 }
 
@@ -272,7 +343,6 @@ fn state_iteration(
 ) -> Result<std::result::Result<(Vec<f64>, Vec<LawSample>, u32), u32>> {
     let sys = ctx.sys;
     let n = sys.n;
-    let dt_key = if dynamic { ctx.dt.to_bits() } else { 0 };
     let mut states: Vec<ContactState> = states0.to_vec();
     let mut codes: Vec<u8> = states.iter().map(|s| s.code()).collect();
     let mut seen: Vec<Vec<u8>> = Vec::new();
@@ -284,24 +354,6 @@ fn state_iteration(
     let mut law_codes = Vec::with_capacity(states.len());
     for it in 1..=ctx.max_iterations {
         sys.linear_piece(&states, sliders, ctx.omega, ctx.t1, &mut k, &mut rc);
-        let what = if dynamic {
-            "piecewise-linear Newmark"
-        } else {
-            "quasi-static (K + K_c)"
-        };
-        let ainv = cache.inverse(
-            dt_key,
-            &codes,
-            n,
-            || {
-                if dynamic {
-                    dynamic_matrix(sys, ctx.dt, &k)
-                } else {
-                    k.clone()
-                }
-            },
-            || singular(sys, what, ctx.t1, &codes),
-        )?;
         if dynamic {
             sys.dynamic_force(ctx.omega, ctx.t1, &mut f);
         } else {
@@ -310,7 +362,7 @@ fn state_iteration(
         for i in 0..n {
             f[i] += rc[i] + b_extra[i];
         }
-        dense::matvec(ainv, &f, &mut q1);
+        cache.step_solve(ctx, dynamic, &states, &codes, &k, &f, &mut q1)?;
         evaluate_law(sys, ctx.omega, ctx.t1, &q1, sliders, &mut samples);
         state_codes(&samples, &mut law_codes);
         if law_codes == codes {
@@ -475,11 +527,6 @@ fn damped_newton(
     let mut k = vec![0.0; n * n];
     let mut rc = vec![0.0; n];
     let mut codes = Vec::new();
-    let (dt_key, what) = if dynamic {
-        (ctx.dt.to_bits(), "piecewise-linear Newmark")
-    } else {
-        (0, "quasi-static (K + K_c)")
-    };
     let mut norm = step_residual(
         ctx,
         dynamic,
@@ -494,21 +541,8 @@ fn damped_newton(
         let states: Vec<ContactState> = samples.iter().map(|s| s.state).collect();
         state_codes(&samples, &mut codes);
         sys.linear_piece(&states, sliders, ctx.omega, ctx.t1, &mut k, &mut rc);
-        let kinv = cache.inverse(
-            dt_key,
-            &codes,
-            n,
-            || {
-                if dynamic {
-                    dynamic_matrix(sys, ctx.dt, &k)
-                } else {
-                    k.clone()
-                }
-            },
-            || singular(sys, what, ctx.t1, &codes),
-        )?;
         let mut dq = vec![0.0; n];
-        dense::matvec(kinv, &r, &mut dq);
+        cache.step_solve(ctx, dynamic, &states, &codes, &k, &r, &mut dq)?;
         let mut lambda = 1.0;
         loop {
             let qt: Vec<f64> = q.iter().zip(&dq).map(|(a, d)| a + lambda * d).collect();
@@ -536,7 +570,9 @@ fn damped_newton(
         }
     }
     Err(Error::Compute(format!(
-        "{what}: no solution of the step found at t = {:.6e} s in {} Newton iterations (the contact states cycle); try another number of steps per period",
-        ctx.t1, ctx.max_iterations
+        "{}: no solution of the step found at t = {:.6e} s in {} Newton iterations (the contact states cycle); try another number of steps per period",
+        step_name(dynamic),
+        ctx.t1,
+        ctx.max_iterations
     )))
 }
