@@ -72,24 +72,7 @@ pub fn sector_march(case: &Case, log: &mut dyn FnMut(&str)) -> Result<SectorMarc
     let elements = contact_elements(h, &interfaces, phase)?;
     let (force, outputs) = excitation(case, h, &mesh)?;
     let response = rows_of(h, &outputs, "response")?;
-    let mut system = MarchSystem {
-        n: h.len(),
-        mass: real_dense(&h.mass, "mass")?,
-        damping: match &h.damping {
-            Some(c) => real_dense(c, "damping")?,
-            None => vec![0.0; h.len() * h.len()],
-        },
-        stiffness: real_dense(&h.stiffness, "stiffness")?,
-        force,
-        damping_force: Vec::new(),
-        elements,
-        dof_names: h.dofs.iter().map(dof_name).collect(),
-        initial: InitialCondition::Rest,
-        displacement_scale: 1.0,
-    };
-    subtract_force_at_rest(&mut system);
-    system.displacement_scale = system.default_displacement_scale();
-    system.validate(&case.path.display().to_string())?;
+    let system = rom_system(h, elements, force, &case.path.display().to_string())?;
     log(&format!(
         "sector ROM of harmonic index k = {k}: {} coordinates, {} friction elements on {} contact pairs{}",
         system.n,
@@ -113,6 +96,36 @@ pub fn sector_march(case: &Case, log: &mut dyn FnMut(&str)) -> Result<SectorMarc
             .collect(),
         harmonic_index: k,
     })
+}
+
+/// The march system on the real matrices of `h` with the contact `elements` and the external
+/// `force`, its contact force measured from the static equilibrium, starting at rest; `what`
+/// names the case in messages.
+fn rom_system(
+    h: &HarmonicRom,
+    elements: Vec<Element>,
+    force: Vec<Harmonic>,
+    what: &str,
+) -> Result<MarchSystem> {
+    let mut system = MarchSystem {
+        n: h.len(),
+        mass: real_dense(&h.mass, "mass")?,
+        damping: match &h.damping {
+            Some(c) => real_dense(c, "damping")?,
+            None => vec![0.0; h.len() * h.len()],
+        },
+        stiffness: real_dense(&h.stiffness, "stiffness")?,
+        force,
+        damping_force: Vec::new(),
+        elements,
+        dof_names: h.dofs.iter().map(dof_name).collect(),
+        initial: InitialCondition::Rest,
+        displacement_scale: 1.0,
+    };
+    subtract_force_at_rest(&mut system);
+    system.displacement_scale = system.default_displacement_scale();
+    system.validate(what)?;
+    Ok(system)
 }
 
 /// The harmonic index k of the march: 0 without cyclic symmetry, else m mod N of the
