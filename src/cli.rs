@@ -683,7 +683,7 @@ fn contact(case_path: &Path, as_json: bool) -> Result<()> {
     Ok(())
 }
 
-/// `nlrom march`: time marching of a `[damper]` or matrix-defined case; writes `/march/` and
+/// `nlrom march`: time marching of a `[damper]`, matrix-defined or sector ROM case; writes `/march/` and
 /// reports the counts (steps, iterations per step, state changes, wall time).
 fn march(a: &MarchArgs) -> Result<()> {
     use crate::march::{

@@ -286,7 +286,8 @@ fn march_command_writes_the_results_file() {
     }
 
     // bad input: a march case whose scheme needs mass it does not have is refused by the library;
-    // a case without [march] and a sector (mesh, cyclic) model are clear input errors (exit 2)
+    // a case without [march] and a sector (mesh, cyclic) model excited as a travelling wave (k = 3
+    // of N = 8) are clear input errors (exit 2)
     let bad = dir.path().join("bad.toml");
     std::fs::write(&bad, "[damper]\nmass = 0.01\ninertia = 1e-7\ncentrifugal_force = 10.0\nplatform = []\ncontact = []\n").unwrap();
     let res = Command::new(env!("CARGO_BIN_EXE_nlrom"))
@@ -358,8 +359,8 @@ steps_per_period = 100
     assert_eq!(res.status.code(), Some(2), "{err}");
     assert!(
         err.contains("sector.toml")
-            && err.contains("not supported yet")
-            && err.contains("matrix case"),
+            && err.contains("engine_order = 3")
+            && err.contains("travelling wave"),
         "{err}"
     );
     assert!(!dir.path().join("y.h5").exists());

@@ -36,6 +36,7 @@ fn sdof(m: f64, c: f64, k: f64, f: f64, kt: f64, fs: f64) -> MarchSystem {
                 mu: 1.0,
                 n0: fs,
             },
+            applies_normal: true,
         }],
         dof_names: vec!["q".into()],
         initial: InitialCondition::Rest,

@@ -62,6 +62,7 @@ pub fn damper_system(d: &Damper, omega: f64) -> Result<MarchSystem> {
                 c.n0,
                 &format!("[[damper.contact]] '{}'", c.name),
             )?,
+            applies_normal: true,
         });
     }
     let mut sys = MarchSystem {

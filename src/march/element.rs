@@ -58,6 +58,12 @@ pub struct Element {
     pub normal: Option<Direction>,
     /// k_t (N/m), k_n (N/m), μ, n0 (N).
     pub params: FrictionParams,
+    /// Whether the element applies its normal force −g_n f_n to the structure. `false` for the
+    /// second tangential direction of a 3-D node-to-node pair under the 1-D law (SAMA paper §3:
+    /// t1 and t2 each with its own slider and the limit μ f_n of the pair's one normal force):
+    /// its normal direction then only sets the friction limit, and the pair's first element
+    /// applies f_n.
+    pub applies_normal: bool,
 }
 
 /// The local kinematics of an element at one instant: (u_t, v) in m; v = 0 without a normal.
@@ -87,7 +93,7 @@ impl Element {
     /// Adds the generalized force −g_t f_t − g_n f_n of the element (N) to `f`.
     pub fn add_force(&self, f_t: f64, f_n: f64, f: &mut [f64]) {
         self.tangential.axpy(-f_t, f);
-        if let Some(n) = &self.normal {
+        if let Some(n) = self.normal.as_ref().filter(|_| self.applies_normal) {
             n.axpy(-f_n, f);
         }
     }
@@ -97,7 +103,8 @@ impl Element {
     /// the slider at `w` from the previous step.
     ///
     /// Stick: f_t = k_t (u_t − w), f_n = n0 + k_n v. Slip with sign s: f_t = s μ f_n.
-    /// Separation: no force. Without a normal direction f_n = n0.
+    /// Separation: no force. Without a normal direction f_n = n0. The normal force's own terms
+    /// only when the element [applies](Element::applies_normal) it.
     pub fn add_linear_piece(
         &self,
         state: ContactState,
@@ -116,25 +123,28 @@ impl Element {
             Some(d) => (p.n0 + p.kn * d.prescribed.at(omega, t), Some(d)),
             None => (p.n0, None),
         };
+        // −g_n f_n = −g_n (a_n + k_n g_n·q), when this element applies the normal force.
+        let add_normal = |k: &mut [f64], r: &mut [f64]| {
+            if let Some(gn) = gn.filter(|_| self.applies_normal) {
+                outer_add(k, n, p.kn, gn, gn);
+                gn.axpy(-an, r);
+            }
+        };
         match state {
             ContactState::Separated => {}
             ContactState::Stick => {
                 // −g_t k_t (g_t·q + p_t − w)
                 outer_add(k, n, p.kt, gt, gt);
                 gt.axpy(-p.kt * (pt - w), r);
-                if let Some(gn) = gn {
-                    outer_add(k, n, p.kn, gn, gn);
-                    gn.axpy(-an, r);
-                }
+                add_normal(k, r);
             }
             ContactState::Slip(s) => {
                 let sm = s.value() * p.mu;
                 gt.axpy(-sm * an, r);
                 if let Some(gn) = gn {
                     outer_add(k, n, sm * p.kn, gt, gn);
-                    outer_add(k, n, p.kn, gn, gn);
-                    gn.axpy(-an, r);
                 }
+                add_normal(k, r);
             }
         }
     }
@@ -177,6 +187,7 @@ mod tests {
                 mu: 0.4,
                 n0: 0.5,
             },
+            applies_normal: true,
         }
     }
 
@@ -184,7 +195,20 @@ mod tests {
     /// state (paper §3: "the same ultimate result").
     #[test]
     fn linear_piece_equals_the_law_in_its_state() {
-        let e = element();
+        check_linear_piece(&element());
+    }
+
+    /// The same for an element whose normal force another element applies.
+    #[test]
+    fn linear_piece_equals_the_law_without_its_normal_force() {
+        let e = Element {
+            applies_normal: false,
+            ..element()
+        };
+        check_linear_piece(&e);
+    }
+
+    fn check_linear_piece(e: &Element) {
         let (omega, w) = (2.0, 0.07);
         let mut seen = Vec::new();
         for i in 0..400 {

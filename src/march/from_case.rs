@@ -1,5 +1,6 @@
-//! A case file as a march: the [`MarchSystem`] of a `[damper]` table or of a matrix-defined model
-//! (`[model]` stiffness/mass, damping, `[excitation]` rows, `[[element]]` friction elements), the
+//! A case file as a march: the [`MarchSystem`] of a `[damper]` table, of a matrix-defined model
+//! (`[model]` stiffness/mass, damping, `[excitation]` rows, `[[element]]` friction elements) or of
+//! a sector's reduced model ([`super::sector`]), the
 //! [`MarchSettings`] of its `[march]` table, and the reported DOF.
 
 use std::collections::HashMap;
@@ -10,6 +11,7 @@ use super::damper::damper_system;
 use super::element::{Direction, Element};
 use super::integrate::MarchSettings;
 use super::law::FrictionParams;
+use super::sector::sector_march;
 use super::signal::Harmonic;
 use super::system::{InitialCondition, MarchSystem};
 use crate::case::{Case, Damping, ExcitationLoad, MarchScheme, WeightedDofs};
@@ -75,10 +77,13 @@ pub fn case_march(
         });
     }
     if case.model.mesh.is_some() || case.rom.is_some() || case.cyclic.is_some() {
-        return Err(Error::input(format!(
-            "{}: nlrom march integrates a [damper] or a matrix-defined model ([model] stiffness/mass with [[element]] friction elements); marching a mesh model, its reduced-order model ([rom]) or a cyclic sector ([cyclic]) is not supported yet (a sector's ROM is complex for harmonic index k ≠ 0) — export the matrices of a real model (k = 0 or a non-cyclic reduction) and march them as a matrix case",
-            case.path.display()
-        )));
+        let sm = sector_march(case, log)?;
+        return Ok(CaseMarch {
+            system: sm.system,
+            response: sm.response,
+            response_dofs: sm.response_dofs,
+            settings,
+        });
     }
     let structural = model::build(case, log)?;
     let (system, response) = matrix_system(case, &structural)?;
@@ -179,6 +184,7 @@ fn matrix_system(case: &Case, sm: &StructuralModel) -> Result<(MarchSystem, Vec<
                 .transpose()?,
             params: FrictionParams::new(e.kt, e.kn, e.mu, e.n0, &format!("{file}: {name}"))?,
             name,
+            applies_normal: true,
         });
     }
     if response.is_empty() {

@@ -14,10 +14,12 @@
 //! | [`element`] | friction elements on DOF combinations and their piecewise-linear form (Table 1) |
 //! | [`system`] | the marched model (dense M, C, K, forces, elements), shortest period (eq. 8) |
 //! | [`schemes`] | one step of each scheme |
+//! | [`lowrank`] | a state's step matrix as a low-rank change of the all-stick one |
 //! | [`integrate`] | the time loop, adaptive step, records, counts |
 //! | [`periodic`] | steady-state detection and harmonics of the last period |
 //! | [`damper`] | the underplatform-damper demonstrator (§2, §6) |
-//! | [`from_case`] | a case file (`[damper]` or a matrix model with `[[element]]`) as a march |
+//! | [`sector`] | the real ROM of a sector (no cyclic symmetry, k = 0, k = N/2) with its `[[contact]]` pairs |
+//! | [`from_case`] | a case file (`[damper]`, a matrix model with `[[element]]`, a sector) as a march |
 //! | [`output`] | the `/march/` group of the results file |
 //! | [`dense`] | small dense linear algebra |
 
@@ -27,9 +29,11 @@ pub mod element;
 pub mod from_case;
 pub mod integrate;
 pub mod law;
+pub mod lowrank;
 pub mod output;
 pub mod periodic;
 pub mod schemes;
+pub mod sector;
 pub mod signal;
 pub mod system;
 

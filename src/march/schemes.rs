@@ -14,6 +14,7 @@ use std::collections::HashMap;
 
 use super::dense;
 use super::law::{ContactState, LawSample};
+use super::lowrank::{self, LowRank};
 use super::system::MarchSystem;
 use crate::error::{Error, Result};
 
@@ -44,15 +45,115 @@ pub struct StepOutcome {
     pub iterations: u32,
 }
 
-/// Inverses of the step matrices, kept while the step and the contact states repeat.
+/// Most memory (bytes) the factors of one step size's contact states may take: a model with many
+/// elements (a sector's shroud pairs) meets many state combinations during a transient; beyond
+/// this the cached factors of that step are dropped and rebuilt as the states recur.
+pub const MAX_CACHED_BYTES: usize = 256 << 20;
+
+/// How the step matrix of one contact state is solved.
+enum StepFactor {
+    /// Its inverse (n × n).
+    Full(Vec<f64>),
+    /// A low-rank change of the all-stick step matrix ([`LowRank`]), when the rank is below n/2.
+    LowRank(LowRank),
+}
+
+impl StepFactor {
+    fn entries(&self) -> usize {
+        match self {
+            StepFactor::Full(a) => a.len(),
+            StepFactor::LowRank(l) => l.len(),
+        }
+    }
+}
+
+/// Factors of the step matrices, kept while the step and the contact states repeat.
 #[derive(Default)]
 pub struct Cache {
     /// Δτ bits → (M/(βΔτ²) + γC/(βΔτ) + K)⁻¹ for the standard corrector.
     structural: HashMap<u64, Vec<f64>>,
-    /// Δτ bits (0 for the quasi-static method) → state codes → inverse of the step matrix.
-    piecewise: HashMap<u64, HashMap<Vec<u8>, Vec<f64>>>,
+    /// Δτ bits (0 for the quasi-static method) → state codes → factor of the step matrix, with
+    /// the f64 entries held.
+    piecewise: HashMap<u64, (HashMap<Vec<u8>, StepFactor>, usize)>,
+    /// Δτ bits (0 for the quasi-static method) → inverse of the all-stick step matrix.
+    stick: HashMap<u64, Vec<f64>>,
     /// Number of factorisations made.
     pub factorisations: usize,
+}
+
+impl Cache {
+    /// x = A⁻¹ b for the piecewise-linear step matrix A of the contact `states` (codes `codes`;
+    /// `k` = K + K_c(states); A adds M/(βΔτ²) + γC/(βΔτ) when `dynamic`): its factor is cached per
+    /// step size (key Δτ bits, 0 for the quasi-static method) within [`MAX_CACHED_BYTES`], as
+    /// the inverse, or as a low-rank change of the all-stick inverse when the states differ from
+    /// full stick by a rank below n/2 ([`super::lowrank`]).
+    #[allow(clippy::too_many_arguments)]
+    fn step_solve(
+        &mut self,
+        ctx: &StepContext,
+        dynamic: bool,
+        states: &[ContactState],
+        codes: &[u8],
+        k: &[f64],
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<()> {
+        let (sys, n) = (ctx.sys, ctx.sys.n);
+        let dt_key = if dynamic { ctx.dt.to_bits() } else { 0 };
+        let step_matrix = |k: &[f64]| {
+            if dynamic {
+                dynamic_matrix(sys, ctx.dt, k)
+            } else {
+                k.to_vec()
+            }
+        };
+        let (per, held) = self.piecewise.entry(dt_key).or_default();
+        if !per.contains_key(codes) {
+            let cols = lowrank::columns(&sys.elements, states);
+            let mut factor = None;
+            if 2 * cols.len() < n {
+                if let std::collections::hash_map::Entry::Vacant(e) = self.stick.entry(dt_key) {
+                    let a = step_matrix(&sys.effective_stiffness(&sys.stick_states()));
+                    if let Some(inv) = dense::inverse(&a, n) {
+                        e.insert(inv);
+                        self.factorisations += 1;
+                    }
+                }
+                factor = self
+                    .stick
+                    .get(&dt_key)
+                    .and_then(|inv| LowRank::new(inv, n, cols).map(StepFactor::LowRank));
+            }
+            let factor = match factor {
+                Some(f) => f,
+                None => StepFactor::Full(
+                    dense::inverse(&step_matrix(k), n)
+                        .ok_or_else(|| singular(sys, step_name(dynamic), ctx.t1, codes))?,
+                ),
+            };
+            if (*held + factor.entries()) * std::mem::size_of::<f64>() > MAX_CACHED_BYTES {
+                per.clear();
+                *held = 0;
+            }
+            *held += factor.entries();
+            per.insert(codes.to_vec(), factor);
+            self.factorisations += 1;
+        }
+        match &per[codes] {
+            StepFactor::Full(inv) => dense::matvec(inv, b, x),
+            StepFactor::LowRank(l) => l.solve(&self.stick[&dt_key], b, x),
+        }
+        Ok(())
+    }
+}
+
+/// The name of the piecewise-linear step in messages.
+fn step_name(dynamic: bool) -> &'static str {
+    if dynamic {
+        "piecewise-linear Newmark"
+    } else {
+        "quasi-static (K + K_c)"
+    }
 }
 
 /// Where and when a step is taken.
@@ -242,7 +343,6 @@ fn state_iteration(
 ) -> Result<std::result::Result<(Vec<f64>, Vec<LawSample>, u32), u32>> {
     let sys = ctx.sys;
     let n = sys.n;
-    let dt_key = if dynamic { ctx.dt.to_bits() } else { 0 };
     let mut states: Vec<ContactState> = states0.to_vec();
     let mut codes: Vec<u8> = states.iter().map(|s| s.code()).collect();
     let mut seen: Vec<Vec<u8>> = Vec::new();
@@ -254,23 +354,6 @@ fn state_iteration(
     let mut law_codes = Vec::with_capacity(states.len());
     for it in 1..=ctx.max_iterations {
         sys.linear_piece(&states, sliders, ctx.omega, ctx.t1, &mut k, &mut rc);
-        let per_dt = cache.piecewise.entry(dt_key).or_default();
-        if !per_dt.contains_key(&codes) {
-            let a = if dynamic {
-                dynamic_matrix(sys, ctx.dt, &k)
-            } else {
-                k.clone()
-            };
-            let what = if dynamic {
-                "piecewise-linear Newmark"
-            } else {
-                "quasi-static (K + K_c)"
-            };
-            let inv = dense::inverse(&a, n).ok_or_else(|| singular(sys, what, ctx.t1, &codes))?;
-            per_dt.insert(codes.clone(), inv);
-            cache.factorisations += 1;
-        }
-        let ainv = &per_dt[&codes];
         if dynamic {
             sys.dynamic_force(ctx.omega, ctx.t1, &mut f);
         } else {
@@ -279,7 +362,7 @@ fn state_iteration(
         for i in 0..n {
             f[i] += rc[i] + b_extra[i];
         }
-        dense::matvec(ainv, &f, &mut q1);
+        cache.step_solve(ctx, dynamic, &states, &codes, &k, &f, &mut q1)?;
         evaluate_law(sys, ctx.omega, ctx.t1, &q1, sliders, &mut samples);
         state_codes(&samples, &mut law_codes);
         if law_codes == codes {
@@ -298,8 +381,9 @@ fn state_iteration(
 /// Piecewise-linear Newmark step (paper §4.3, Appendix A.4, eqs A12–A16): the contact states at
 /// τ_{n+1} are predicted equal to those at τ_n, the linear Newmark step of eq. A13/A15 is solved, the
 /// states are verified by the law and the step re-solved only at a transition. If the state
-/// iteration cycles (a rare tie at a stick/slip boundary) the step falls back to the standard
-/// corrector, and the iterations of both are counted.
+/// iteration cycles (a tie at a stick/slip boundary; frequent with many elements) the step falls
+/// back to damped Newton on the same piecewise-linear equation (unlike the standard corrector it
+/// needs no step limit), and the iterations of both are counted.
 pub fn piecewise_linear_step(
     ctx: &StepContext,
     start: &Kinematics,
@@ -332,9 +416,17 @@ pub fn piecewise_linear_step(
             })
         }
         Err(tried) => {
-            let mut out = standard_step(ctx, start, sliders, cache)?;
-            out.iterations += tried;
-            Ok(out)
+            let (q1, samples, its) = damped_newton(ctx, true, &start.q, sliders, &extra, cache)?;
+            let (a1, v1) = newmark_rates(&q1, &qs, &vs, dt);
+            Ok(StepOutcome {
+                kin: Kinematics {
+                    q: q1,
+                    v: v1,
+                    a: a1,
+                },
+                samples,
+                iterations: tried + its,
+            })
         }
     }
 }
@@ -353,7 +445,7 @@ pub fn quasi_static_step(
         match state_iteration(ctx, false, states, sliders, &extra, cache)? {
             Ok(found) => found,
             Err(tried) => {
-                let (q, s, its) = damped_newton(ctx, start, sliders, cache)?;
+                let (q, s, its) = damped_newton(ctx, false, &start.q, sliders, &extra, cache)?;
                 (q, s, tried + its)
             }
         };
@@ -373,63 +465,97 @@ pub fn quasi_static_step(
     })
 }
 
-/// ‖f_e + f_c(q) − K q‖_∞ with the law's forces from the sliders `w` (quasi-static residual).
-fn static_residual(
+/// ‖f + b_extra + f_c(q) − A q‖_∞ with the law's forces from the sliders `w`: the residual of
+/// the piecewise-linear step, A = M/(βΔτ²) + γC/(βΔτ) + K and f the dynamic force when
+/// `dynamic` (Newmark, eq. A13 with q̈₁, q̇₁ from q₁), else A = K and f = f_e (quasi-static).
+#[allow(clippy::too_many_arguments)]
+fn step_residual(
     ctx: &StepContext,
+    dynamic: bool,
     q: &[f64],
     w: &[f64],
+    b_extra: &[f64],
     r: &mut [f64],
+    aq: &mut [f64],
     samples: &mut Vec<LawSample>,
 ) -> f64 {
     let sys = ctx.sys;
     evaluate_law(sys, ctx.omega, ctx.t1, q, w, samples);
-    sys.external_force(ctx.omega, ctx.t1, r);
+    if dynamic {
+        sys.dynamic_force(ctx.omega, ctx.t1, r);
+        let cm = 1.0 / (BETA * ctx.dt * ctx.dt);
+        let cc = GAMMA / (BETA * ctx.dt);
+        dense::matvec(&sys.mass, q, aq);
+        aq.iter_mut().for_each(|x| *x *= cm);
+        let mut cq = vec![0.0; sys.n];
+        dense::matvec(&sys.damping, q, &mut cq);
+        aq.iter_mut().zip(&cq).for_each(|(a, c)| *a += cc * c);
+        dense::matvec_add(&sys.stiffness, q, aq);
+    } else {
+        sys.external_force(ctx.omega, ctx.t1, r);
+        dense::matvec(&sys.stiffness, q, aq);
+    }
     add_contact_force(sys, samples, r);
-    let mut kq = vec![0.0; sys.n];
-    dense::matvec(&sys.stiffness, q, &mut kq);
-    r.iter_mut().zip(&kq).for_each(|(ri, k)| *ri -= k);
+    r.iter_mut()
+        .zip(aq.iter().zip(b_extra))
+        .for_each(|(ri, (a, b))| *ri += b - a);
     dense::norm_inf(r)
 }
 
-/// Fallback of the quasi-static step when the state iteration cycles (the solution sits on a
-/// stick/slip or slip-sign boundary): Newton on the continuous piecewise-linear residual
-/// r(q) = f_e + f_c(q) − K q with the state's tangent K + K_c and a backtracking line search on
-/// ‖r‖_∞, from q_n, until the update is below the tolerance (or 1e-9 of the displacement scale).
+/// Fallback of the piecewise-linear and quasi-static steps when the state iteration cycles (the
+/// solution sits on a stick/slip or slip-sign boundary, frequent with many elements): Newton on
+/// the continuous piecewise-linear residual of [`step_residual`] with the state's tangent
+/// A + K_c and a backtracking line search on ‖r‖_∞, from `q0`, until the update is below the
+/// tolerance (or 1e-9 of the displacement scale).
 fn damped_newton(
     ctx: &StepContext,
-    start: &Kinematics,
+    dynamic: bool,
+    q0: &[f64],
     sliders: &[f64],
+    b_extra: &[f64],
     cache: &mut Cache,
 ) -> Result<(Vec<f64>, Vec<LawSample>, u32)> {
     let sys = ctx.sys;
     let n = sys.n;
     let tol = ctx.tolerance.max(1e-9 * sys.displacement_scale);
-    let mut q = start.q.clone();
+    let mut q = q0.to_vec();
     let mut samples = Vec::new();
     let mut trial_samples = Vec::new();
     let mut r = vec![0.0; n];
     let mut r_trial = vec![0.0; n];
+    let mut aq = vec![0.0; n];
     let mut k = vec![0.0; n * n];
     let mut rc = vec![0.0; n];
     let mut codes = Vec::new();
-    let mut norm = static_residual(ctx, &q, sliders, &mut r, &mut samples);
+    let mut norm = step_residual(
+        ctx,
+        dynamic,
+        &q,
+        sliders,
+        b_extra,
+        &mut r,
+        &mut aq,
+        &mut samples,
+    );
     for it in 1..=ctx.max_iterations {
         let states: Vec<ContactState> = samples.iter().map(|s| s.state).collect();
         state_codes(&samples, &mut codes);
         sys.linear_piece(&states, sliders, ctx.omega, ctx.t1, &mut k, &mut rc);
-        let per_state = cache.piecewise.entry(0).or_default();
-        if !per_state.contains_key(&codes) {
-            let inv = dense::inverse(&k, n)
-                .ok_or_else(|| singular(sys, "quasi-static (K + K_c)", ctx.t1, &codes))?;
-            per_state.insert(codes.clone(), inv);
-            cache.factorisations += 1;
-        }
         let mut dq = vec![0.0; n];
-        dense::matvec(&per_state[&codes], &r, &mut dq);
+        cache.step_solve(ctx, dynamic, &states, &codes, &k, &r, &mut dq)?;
         let mut lambda = 1.0;
         loop {
             let qt: Vec<f64> = q.iter().zip(&dq).map(|(a, d)| a + lambda * d).collect();
-            let nt = static_residual(ctx, &qt, sliders, &mut r_trial, &mut trial_samples);
+            let nt = step_residual(
+                ctx,
+                dynamic,
+                &qt,
+                sliders,
+                b_extra,
+                &mut r_trial,
+                &mut aq,
+                &mut trial_samples,
+            );
             if nt < (1.0 - 1e-4 * lambda) * norm || lambda < 1e-6 {
                 q = qt;
                 norm = nt;
@@ -444,7 +570,9 @@ fn damped_newton(
         }
     }
     Err(Error::Compute(format!(
-        "quasi-static method: no equilibrium found at t = {:.6e} s in {} Newton iterations (the contact states cycle); try another number of steps per period",
-        ctx.t1, ctx.max_iterations
+        "{}: no solution of the step found at t = {:.6e} s in {} Newton iterations (the contact states cycle); try another number of steps per period",
+        step_name(dynamic),
+        ctx.t1,
+        ctx.max_iterations
     )))
 }

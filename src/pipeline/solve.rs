@@ -349,7 +349,11 @@ pub fn matrix_elements(
 }
 
 /// The ROM of a sector case per `policy`, the sector mesh, and where the ROM came from.
-fn sector_rom(case: &Case, policy: &RomPolicy, rep: &Reporter) -> Result<(Rom, Mesh, RomOrigin)> {
+pub(crate) fn sector_rom(
+    case: &Case,
+    policy: &RomPolicy,
+    rep: &Reporter,
+) -> Result<(Rom, Mesh, RomOrigin)> {
     let key = rom_key(case)?;
     let (file, cache) = match policy {
         RomPolicy::ReadIfMatching => (case.rom.as_ref().map(|r| r.file.clone()), false),

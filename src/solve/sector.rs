@@ -15,7 +15,7 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use faer::c64;
 
-use crate::case::{Case, ContactElement, ExcitationLoad};
+use crate::case::{Case, ContactElement, Excitation, ExcitationLoad};
 use crate::contact::law::Variant;
 use crate::contact::pairs::{PairSet, SectorCoupling};
 use crate::cyclic::harmonic_indices;
@@ -73,21 +73,7 @@ impl SectorProblem {
         mesh: &Mesh,
         interfaces: &[ContactInterface],
     ) -> Result<SectorProblem> {
-        let excitation = case.excitation.as_ref().ok_or_else(|| {
-            Error::input(format!(
-                "{}: the case has no [excitation]; add `[excitation] engine_order = .., group = .., force = [..]`",
-                case.path.display()
-            ))
-        })?;
-        let (group, force) = match &excitation.load {
-            ExcitationLoad::Group { group, force } => (group.clone(), *force),
-            ExcitationLoad::Dofs { .. } => {
-                return Err(Error::input(format!(
-                    "{}: [excitation] gives matrix rows (`dofs`), but a mesh case needs `group` and `force` (N per node, x y z)",
-                    case.path.display()
-                )))
-            }
-        };
+        let (excitation, group, force) = group_excitation(case)?;
         let harmonics = case.harmonic_balance.harmonics;
         let layout = HarmonicLayout::new(harmonics, case.harmonic_balance.samples())?;
         let (engine_order, k_n) = match &rom.cyclic {
@@ -133,8 +119,7 @@ impl SectorProblem {
             let h = rom.harmonic(k_n[1]).ok_or_else(|| {
                 Error::input(format!("the ROM has no harmonic index k = {}", k_n[1]))
             })?;
-            let scaled = force.map(|f| f * excitation.force_scale);
-            forcing[1] = excitation_vector(h, &excitation_nodes, scaled, &group)?;
+            forcing[1] = excitation_vector(h, &excitation_nodes, force, &group)?;
         }
         let linear = LinearModel::new(blocks, harmonic_block, forcing)?;
         Ok(SectorProblem {
@@ -154,6 +139,28 @@ impl SectorProblem {
     }
 }
 
+/// The `[excitation]` of a mesh case: the table, its group and the force per node (N, x y z,
+/// already multiplied by `force_scale`).
+pub(crate) fn group_excitation(case: &Case) -> Result<(&Excitation, String, [f64; 3])> {
+    let excitation = case.excitation.as_ref().ok_or_else(|| {
+        Error::input(format!(
+            "{}: the case has no [excitation]; add `[excitation] engine_order = .., group = .., force = [..]`",
+            case.path.display()
+        ))
+    })?;
+    match &excitation.load {
+        ExcitationLoad::Group { group, force } => Ok((
+            excitation,
+            group.clone(),
+            force.map(|f| f * excitation.force_scale),
+        )),
+        ExcitationLoad::Dofs { .. } => Err(Error::input(format!(
+            "{}: [excitation] gives matrix rows (`dofs`), but a mesh case needs `group` and `force` (N per node, x y z)",
+            case.path.display()
+        ))),
+    }
+}
+
 /// Every contact and target node of the pairs, ascending tag, × x, y, z.
 fn contact_dofs(interfaces: &[ContactInterface]) -> Vec<DofLabel> {
     let mut tags = BTreeSet::new();
@@ -167,7 +174,7 @@ fn contact_dofs(interfaces: &[ContactInterface]) -> Vec<DofLabel> {
 }
 
 /// The x, y, z DOFs of a node.
-fn node_dofs(tag: u64) -> [DofLabel; 3] {
+pub(crate) fn node_dofs(tag: u64) -> [DofLabel; 3] {
     [0u8, 1, 2].map(|component| DofLabel {
         node_tag: tag,
         component,
@@ -205,7 +212,7 @@ fn pair_set(
 }
 
 /// The one friction element variant of all interfaces (the PairSet has one).
-fn friction_variant(interfaces: &[ContactInterface]) -> Result<Variant> {
+pub(crate) fn friction_variant(interfaces: &[ContactInterface]) -> Result<Variant> {
     let variant_of = |e: ContactElement| match e {
         ContactElement::OneD => Variant::OneD,
         ContactElement::TwoD => Variant::TwoD,
@@ -224,7 +231,7 @@ fn friction_variant(interfaces: &[ContactInterface]) -> Result<Variant> {
 }
 
 /// Gmsh tags of the nodes of a group.
-fn tags_of(mesh: &Mesh, group: &str) -> Result<Vec<u64>> {
+pub(crate) fn tags_of(mesh: &Mesh, group: &str) -> Result<Vec<u64>> {
     Ok(mesh
         .nodes_of(group)?
         .into_iter()
@@ -234,7 +241,11 @@ fn tags_of(mesh: &Mesh, group: &str) -> Result<Vec<u64>> {
 
 /// Output DOFs: the nodes of the `[response]` groups (else the excitation nodes) × x, y, z, in
 /// group order, each node once.
-fn output_dofs(case: &Case, mesh: &Mesh, excitation_nodes: &[u64]) -> Result<Vec<DofLabel>> {
+pub(crate) fn output_dofs(
+    case: &Case,
+    mesh: &Mesh,
+    excitation_nodes: &[u64],
+) -> Result<Vec<DofLabel>> {
     let groups: &[String] = case
         .response
         .as_ref()
@@ -253,7 +264,7 @@ fn output_dofs(case: &Case, mesh: &Mesh, excitation_nodes: &[u64]) -> Result<Vec
 }
 
 /// The ROM row of every DOF, or an error naming the first one that is not a physical master.
-fn rows_of(h: &HarmonicRom, dofs: &[DofLabel], what: &str) -> Result<Vec<usize>> {
+pub(crate) fn rows_of(h: &HarmonicRom, dofs: &[DofLabel], what: &str) -> Result<Vec<usize>> {
     dofs.iter()
         .map(|d| {
             h.row_of(d.node_tag, d.component)
@@ -285,7 +296,7 @@ fn block(h: &HarmonicRom, nonlinear: &[DofLabel], outputs: &[DofLabel]) -> Resul
 
 /// F_e⁽¹⁾ in the ROM coordinates of k_1: `force` (N, x y z) at the physical rows of every
 /// excitation node of the reference sector (f_k = T_kᴴ f = f there, `conventions.md` §2).
-fn excitation_vector(
+pub(crate) fn excitation_vector(
     h: &HarmonicRom,
     nodes: &[u64],
     force: [f64; 3],

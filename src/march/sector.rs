@@ -1,0 +1,324 @@
+//! The reduced model of a sector as a march: the real ROM of a mesh case (`[reduction]`, optional
+//! `[cyclic]`) with its `[[contact]]` interfaces as friction elements of [`super::element`].
+//!
+//! The pipeline pieces are those of the harmonic balance ([`crate::solve::SectorProblem`]): the
+//! ROM of [`crate::pipeline::solve`] (read from `[rom] file` when its key matches, else reduced),
+//! the contact pairs of [`crate::sama::build_interfaces`] on the ROM's physical master rows, the
+//! excitation and response groups. A time-domain model of the reference sector is real when its
+//! ROM is (`conventions.md` §2):
+//! - no `[cyclic]`: the Craig–Bampton structure, frontiers as they are;
+//! - harmonic index k = 0 (engine order m ≡ 0 mod N, all sectors in phase): the target of a pair
+//!   with σ ≠ 0 moves as R_α^σ u_t;
+//! - k = N/2 (N even, m ≡ N/2 mod N): neighbours in antiphase, the target moves as −R_α^σ u_t. The
+//!   march imposes this on the whole response, whereas the harmonic balance puts the static part
+//!   and the even temporal harmonics on k = 0 (k_n = n·m mod N): the two agree while the response
+//!   has no even harmonics (e.g. a stuck or symmetric contact), and differ by the even harmonics
+//!   otherwise.
+//!
+//! A travelling wave (k ≠ 0, N/2) has a complex ROM and is an input error.
+//!
+//! Contact (SAMA paper, Battiato 2021, §3 and eq. 33; `methods.md`): each node-to-node pair
+//! (u1, u2, v) = P (u_c − e^{iσφ_k} R_α^σ u_t), P = [t1; t2; −n], becomes two 1-D elements of the
+//! time-discrete law of [`crate::contact::law`] (t1 and t2, each with its own slider and the limit
+//! μ f_n of the pair's normal force, which the first applies). The forces are measured from the
+//! preloaded static equilibrium as in the harmonic balance ([`crate::hbm::preload`]):
+//! f̃_c(q) = f_c(q) − f_c(0), i.e. the constant −f_c(0) joins the external force, q = 0 is the
+//! static equilibrium and the march starts there at rest.
+
+use super::element::{Direction, Element};
+use super::schemes::{add_contact_force, evaluate_law};
+use super::signal::Harmonic;
+use super::system::{InitialCondition, MarchSystem};
+use crate::case::{Case, ContactElement};
+use crate::contact::pairs::ContactPair;
+use crate::error::{Error, Result};
+use crate::mesh::Mesh;
+use crate::output::ResponseDof;
+use crate::pipeline::solve::{sector_rom, RomPolicy};
+use crate::pipeline::Reporter;
+use crate::rom::{HarmonicRom, ReducedDof, Rom};
+use crate::sama::{build_interfaces, ContactInterface};
+use crate::solve::sector::{excitation_vector, group_excitation, output_dofs, rows_of, tags_of};
+
+/// The marched sector model, its reported rows and their node labels.
+pub struct SectorMarch {
+    /// The model on the real ROM coordinates of one harmonic index.
+    pub system: MarchSystem,
+    /// Reported rows (output DOFs: `[response]` groups, else the excitation group, × x y z).
+    pub response: Vec<usize>,
+    /// The reported rows as node DOFs.
+    pub response_dofs: Vec<ResponseDof>,
+    /// The harmonic index k of the marched ROM.
+    pub harmonic_index: usize,
+}
+
+/// Builds the march of the sector case `case` (module documentation). `log` receives progress.
+///
+/// Errors ([`Error::Input`]): a travelling wave (k ≠ 0, N/2), the 2-D friction element, a missing
+/// or matrix-row excitation, nodes that are not physical ROM coordinates, and the errors of the
+/// reduction and of the contact interfaces.
+pub fn sector_march(case: &Case, log: &mut dyn FnMut(&str)) -> Result<SectorMarch> {
+    let k = harmonic_index(case)?;
+    check_friction_elements(case)?;
+    let (rom, mesh, _) = sector_rom(case, &RomPolicy::ReadIfMatching, &Reporter::silent())?;
+    let h = rom.harmonic(k).ok_or_else(|| {
+        Error::input(format!(
+            "{}: the ROM has no harmonic index k = {k}; rebuild it with `nlrom reduce`",
+            case.path.display()
+        ))
+    })?;
+    let phase = neighbour_phase(&rom, k);
+    let interfaces = build_interfaces(case, &mesh, rom.cyclic.as_ref())?;
+    let elements = contact_elements(h, &interfaces, phase)?;
+    let (force, outputs) = excitation(case, h, &mesh)?;
+    let response = rows_of(h, &outputs, "response")?;
+    let system = rom_system(h, elements, force, &case.path.display().to_string())?;
+    log(&format!(
+        "sector ROM of harmonic index k = {k}: {} coordinates, {} friction elements on {} contact pairs{}",
+        system.n,
+        system.elements.len(),
+        system.elements.len() / 2,
+        match phase {
+            Some(p) if p < 0.0 => ", neighbours in antiphase",
+            Some(_) => ", neighbours in phase",
+            None => "",
+        }
+    ));
+    Ok(SectorMarch {
+        system,
+        response,
+        response_dofs: outputs
+            .iter()
+            .map(|d| ResponseDof::Node {
+                tag: d.node_tag,
+                component: d.component,
+            })
+            .collect(),
+        harmonic_index: k,
+    })
+}
+
+/// The march system on the real matrices of `h` with the contact `elements` and the external
+/// `force`, its contact force measured from the static equilibrium, starting at rest; `what`
+/// names the case in messages.
+fn rom_system(
+    h: &HarmonicRom,
+    elements: Vec<Element>,
+    force: Vec<Harmonic>,
+    what: &str,
+) -> Result<MarchSystem> {
+    let mut system = MarchSystem {
+        n: h.len(),
+        mass: real_dense(&h.mass, "mass")?,
+        damping: match &h.damping {
+            Some(c) => real_dense(c, "damping")?,
+            None => vec![0.0; h.len() * h.len()],
+        },
+        stiffness: real_dense(&h.stiffness, "stiffness")?,
+        force,
+        damping_force: Vec::new(),
+        elements,
+        dof_names: h.dofs.iter().map(dof_name).collect(),
+        initial: InitialCondition::Rest,
+        displacement_scale: 1.0,
+    };
+    subtract_force_at_rest(&mut system);
+    system.displacement_scale = system.default_displacement_scale();
+    system.validate(what)?;
+    Ok(system)
+}
+
+/// The harmonic index k of the march: 0 without cyclic symmetry, else m mod N of the
+/// excitation's engine order m, which must be 0 or N/2.
+fn harmonic_index(case: &Case) -> Result<usize> {
+    let Some(g) = &case.cyclic else { return Ok(0) };
+    let n = g.sectors;
+    let m = case
+        .excitation
+        .as_ref()
+        .and_then(|e| e.engine_order)
+        .ok_or_else(|| {
+            Error::input(format!(
+                "{}: [excitation] needs `engine_order` for a cyclic model",
+                case.path.display()
+            ))
+        })?;
+    let k = m % n;
+    if k == 0 || 2 * k == n {
+        return Ok(k);
+    }
+    Err(Error::input(format!(
+        "{}: [excitation] engine_order = {m} excites harmonic index k = {k} of the N = {n} sectors: a travelling wave, whose ROM is complex (e^{{iφ_k}} between neighbours) and has no real time-domain model; `nlrom march` integrates k = 0 (engine_order a multiple of {n}) or k = N/2 (engine_order ≡ {} mod {n}, N even) — use `nlrom solve` (harmonic balance) for k = {k}",
+        case.path.display(),
+        n / 2
+    )))
+}
+
+/// Every `[[contact]]` must use the 1-D friction element (the march's elements have one
+/// tangential direction each; the 2-D Coulomb disc couples two).
+fn check_friction_elements(case: &Case) -> Result<()> {
+    match case.contact.iter().find(|c| c.element != ContactElement::OneD) {
+        Some(c) => Err(Error::input(format!(
+            "{}: [[contact]] '{}' has element = \"2d\" (Coulomb disc); `nlrom march` integrates the 1-D law (t1 and t2 independent, each with its own slider): set `element = \"1d\"`",
+            case.path.display(),
+            c.name
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// e^{iσφ_k} for σ = 1 (real: +1 for k = 0, −1 for k = N/2); `None` without cyclic symmetry.
+fn neighbour_phase(rom: &Rom, k: usize) -> Option<f64> {
+    rom.cyclic.as_ref().map(|_| if k == 0 { 1.0 } else { -1.0 })
+}
+
+/// The real part of a ROM matrix, row-major; errors if it is not real.
+fn real_dense(a: &faer::Mat<faer::c64>, name: &str) -> Result<Vec<f64>> {
+    let n = a.nrows();
+    let mut out = Vec::with_capacity(n * n);
+    for i in 0..n {
+        for j in 0..n {
+            let v = a[(i, j)];
+            if v.im != 0.0 {
+                return Err(Error::Compute(format!(
+                    "the ROM's {name} matrix has an imaginary entry ({i}, {j}) = {:e}: not a real model",
+                    v.im
+                )));
+            }
+            out.push(v.re);
+        }
+    }
+    Ok(out)
+}
+
+/// A name per ROM coordinate: `node 12 x`, `interface 3`, `mode 5`.
+fn dof_name(d: &ReducedDof) -> String {
+    match d {
+        ReducedDof::Physical {
+            node_tag,
+            component,
+            ..
+        } => format!(
+            "node {node_tag} {}",
+            ["x", "y", "z"][*component as usize % 3]
+        ),
+        ReducedDof::Interface { index } => format!("interface {index}"),
+        ReducedDof::Modal { mode } => format!("mode {mode}"),
+    }
+}
+
+/// The friction elements of every pair of the interfaces on the ROM rows of `h` (two per pair).
+fn contact_elements(
+    h: &HarmonicRom,
+    interfaces: &[ContactInterface],
+    phase: Option<f64>,
+) -> Result<Vec<Element>> {
+    let mut out = Vec::new();
+    for iface in interfaces {
+        let rows = |tag: u64| -> Option<[usize; 3]> {
+            Some([h.row_of(tag, 0)?, h.row_of(tag, 1)?, h.row_of(tag, 2)?])
+        };
+        for pair in iface.elements(rows)? {
+            let c = if pair.sigma == 0 {
+                1.0
+            } else {
+                phase.unwrap_or(1.0)
+            };
+            let tag = |row: usize| match h.dofs[row] {
+                ReducedDof::Physical { node_tag, .. } => node_tag,
+                _ => 0,
+            };
+            let label = match pair.target {
+                Some(t) => format!("{} {}-{}", iface.name, tag(pair.contact[0]), tag(t[0])),
+                None => format!("{} {}", iface.name, tag(pair.contact[0])),
+            };
+            out.extend(pair_elements(&pair, &iface.rotation, c, &label));
+        }
+    }
+    Ok(out)
+}
+
+/// The two 1-D elements (t1, t2) of a pair: local a = P_a·u_c − c (P R^σ)_a·u_t with
+/// P = [t1; t2; −n], R^σ the target's rotation and c the neighbour phase.
+/// `label` names the pair in messages and results.
+fn pair_elements(
+    pair: &ContactPair,
+    rotation: &[[f64; 3]; 3],
+    c: f64,
+    label: &str,
+) -> [Element; 2] {
+    let f = pair.frame;
+    let p = [f[0], f[1], [-f[2][0], -f[2][1], -f[2][2]]];
+    let direction = |a: usize| -> Direction {
+        let mut weights: Vec<(usize, f64)> = Vec::with_capacity(6);
+        let mut add = |row: usize, w: f64| match weights.iter_mut().find(|(r, _)| *r == row) {
+            Some(e) => e.1 += w,
+            None => weights.push((row, w)),
+        };
+        for (&row, &w) in pair.contact.iter().zip(&p[a]) {
+            add(row, w);
+        }
+        if let Some(t) = pair.target {
+            for (j, &row) in t.iter().enumerate() {
+                let pr: f64 = (0..3).map(|i| p[a][i] * rotation[i][j]).sum();
+                add(row, -c * pr);
+            }
+        }
+        weights.retain(|&(_, w)| w != 0.0);
+        Direction {
+            weights,
+            prescribed: Harmonic::default(),
+        }
+    };
+    let element = |a: usize| Element {
+        name: format!("{label} t{}", a + 1),
+        tangential: direction(a),
+        normal: Some(direction(2)),
+        params: pair.params,
+        applies_normal: a == 0,
+    };
+    [element(0), element(1)]
+}
+
+/// The excitation of engine order m on the ROM coordinates (f = Re(F e^{iωt}) with F = T_kᴴ f,
+/// [`excitation_vector`]) and the output DOFs.
+fn excitation(
+    case: &Case,
+    h: &HarmonicRom,
+    mesh: &Mesh,
+) -> Result<(Vec<Harmonic>, Vec<crate::solve::DofLabel>)> {
+    let (_, group, force) = group_excitation(case)?;
+    let nodes = tags_of(mesh, &group)?;
+    let f = excitation_vector(h, &nodes, force, &group)?;
+    let outputs = output_dofs(case, mesh, &nodes)?;
+    let harmonics = f
+        .iter()
+        .map(|z| Harmonic {
+            mean: 0.0,
+            cos: z.re,
+            sin: -z.im,
+        })
+        .collect();
+    Ok((harmonics, outputs))
+}
+
+/// Adds −f_c(0) (the contact force at rest, sliders at zero) to the static part of the external
+/// force: the march then integrates f_c(q) − f_c(0), the contact force about the preloaded static
+/// equilibrium of [`crate::hbm::preload::FromStaticEquilibrium`].
+fn subtract_force_at_rest(sys: &mut MarchSystem) {
+    let n = sys.n;
+    let mut samples = Vec::new();
+    evaluate_law(
+        sys,
+        1.0,
+        0.0,
+        &vec![0.0; n],
+        &vec![0.0; sys.elements.len()],
+        &mut samples,
+    );
+    let mut f0 = vec![0.0; n];
+    add_contact_force(sys, &samples, &mut f0);
+    for (h, f) in sys.force.iter_mut().zip(&f0) {
+        h.mean -= f;
+    }
+}
