@@ -1059,7 +1059,7 @@ fn periodic_start(
 /// M_κν = [[c_{κ−ν} + c_{κ+ν}, −(s_{κ+ν} + s_{ν−κ})], [−(s_{κ+ν} + s_{κ−ν}), c_{κ−ν} − c_{κ+ν}]]
 /// (2×2 blocks of (Re, Im) rows and columns; c_{−p} = c_p, s_{−p} = −s_p). `signed` is scratch
 /// for the sums of orders q = −2H..=2H, (c_q, s_q) at index q + 2H, so that a block row reads
-/// contiguous runs of orders.
+/// contiguous runs of orders. A constant weight (s_p = c_p = 0 for p ≥ 1) adds c_0 I.
 fn add_multiplication_block(
     h: usize,
     sums: &[f64],
@@ -1070,10 +1070,20 @@ fn add_multiplication_block(
     col0: usize,
 ) {
     let m = 2 * h + 1;
-    signed.clear();
-    signed.extend((1..=2 * h).rev().map(|p| [sums[2 * p], -sums[2 * p + 1]]));
-    signed.extend((0..=2 * h).map(|p| [sums[2 * p], sums[2 * p + 1]]));
+    if sums[2..2 * m].iter().all(|&x| x == 0.0) {
+        // A constant weight (e.g. stuck or in contact all period): M = c_0 I.
+        for k in 0..m {
+            jac[(row0 + k) * cols + col0 + k] += sums[0];
+        }
+        return;
+    }
     let zero = 2 * h;
+    signed.resize(4 * h + 1, [0.0; 2]);
+    for p in 0..=2 * h {
+        let (c, s) = (sums[2 * p], sums[2 * p + 1]);
+        signed[zero + p] = [c, s];
+        signed[zero - p] = [c, -s];
+    }
     {
         let row = &mut jac[row0 * cols + col0..row0 * cols + col0 + m];
         row[0] += sums[0];
@@ -1088,23 +1098,19 @@ fn add_multiplication_block(
     for ka in 1..=h {
         let two = &mut jac[(row0 + 2 * ka - 1) * cols..(row0 + 2 * ka + 1) * cols];
         let (re, im) = two.split_at_mut(cols);
-        let re = &mut re[col0..col0 + m];
-        let im = &mut im[col0..col0 + m];
-        re[0] += 2.0 * sums[2 * ka];
-        im[0] -= 2.0 * sums[2 * ka + 1];
+        re[col0] += 2.0 * sums[2 * ka];
+        im[col0] -= 2.0 * sums[2 * ka + 1];
+        let re = &mut re[col0 + 1..col0 + m];
+        let im = &mut im[col0 + 1..col0 + m];
         // Orders κ + ν (ν = 1..H, increasing) and κ − ν (decreasing).
-        let plus = &signed[zero + ka + 1..=zero + ka + h];
+        let plus = &signed[zero + ka + 1..zero + ka + 1 + h];
         let minus = &signed[zero + ka - h..zero + ka];
-        for (((r, i), p), n) in re[1..]
-            .chunks_exact_mut(2)
-            .zip(im[1..].chunks_exact_mut(2))
-            .zip(plus)
-            .zip(minus.iter().rev())
-        {
-            r[0] += n[0] + p[0];
-            r[1] -= p[1] - n[1];
-            i[0] -= p[1] + n[1];
-            i[1] += n[0] - p[0];
+        for nu in 0..h {
+            let (p, n) = (plus[nu], minus[h - 1 - nu]);
+            re[2 * nu] += n[0] + p[0];
+            re[2 * nu + 1] -= p[1] - n[1];
+            im[2 * nu] -= p[1] + n[1];
+            im[2 * nu + 1] += n[0] - p[0];
         }
     }
 }
