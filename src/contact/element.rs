@@ -377,36 +377,49 @@ fn jacobian_1d(element: &LocalElement, aft: &Aft, ws: &mut Workspace) {
     jacobian.resize(element.signals() * m * cols, 0.0);
     *jacobian_cols = cols;
     b.sequence.resize(regime.len(), 0.0);
+    b.slip_sequence.resize(regime.len(), 0.0);
     b.sums.resize(2 * m, 0.0);
     b.beta[0].resize(m, 0.0);
     let normal = shape.offsets.of(2);
     if let Some(vo) = normal {
-        for (s, &f) in b.sequence.iter_mut().zip(fnormal.iter()) {
-            *s = if f > 0.0 { 1.0 } else { 0.0 };
-        }
-        if aft.step_fourier_sums(&b.sequence, &mut b.sums) {
-            add_first_column(h, &b.sums, 1.0, jacobian, cols, vo, n0_col);
-            scale_sums(&mut b.sums, p.kn);
-            add_multiplication_block(h, &b.sums, &mut b.signed, jacobian, cols, vo, vo);
+        if fnormal.iter().all(|&f| f > 0.0) {
+            // In contact all period: M(1) = I, so k_n I and the n0 column e_0.
+            for k in 0..m {
+                jacobian[(vo + k) * cols + vo + k] += p.kn;
+            }
+            jacobian[vo * cols + n0_col] += 1.0;
+        } else {
+            for (s, &f) in b.sequence.iter_mut().zip(fnormal.iter()) {
+                *s = if f > 0.0 { 1.0 } else { 0.0 };
+            }
+            if aft.step_fourier_sums(&b.sequence, &mut b.sums) {
+                add_first_column(h, &b.sums, 1.0, jacobian, cols, vo, n0_col);
+                scale_sums(&mut b.sums, p.kn);
+                add_multiplication_block(h, &b.sums, &mut b.signed, jacobian, cols, vo, vo);
+            }
         }
     }
     for d in 0..element.tangential {
         let row0 = d * m;
-        for (s, r) in b.sequence.iter_mut().zip(regime.iter()) {
-            *s = if r[d] == Regime::Stick { 1.0 } else { 0.0 };
+        // Stick indicator and slip sign σ = sgn f_d.
+        for (((st, sl), r), f) in b
+            .sequence
+            .iter_mut()
+            .zip(b.slip_sequence.iter_mut())
+            .zip(regime.iter())
+            .zip(&ft[d])
+        {
+            (*st, *sl) = match r[d] {
+                Regime::Stick => (1.0, 0.0),
+                Regime::Slip => (0.0, f.signum()),
+                Regime::Separation => (0.0, 0.0),
+            };
         }
         if aft.step_fourier_sums(&b.sequence, &mut b.sums) {
             scale_sums(&mut b.sums, p.kt);
             add_multiplication_block(h, &b.sums, &mut b.signed, jacobian, cols, row0, row0);
         }
-        for ((s, r), f) in b.sequence.iter_mut().zip(regime.iter()).zip(&ft[d]) {
-            *s = if r[d] == Regime::Slip {
-                f.signum()
-            } else {
-                0.0
-            };
-        }
-        if aft.step_fourier_sums(&b.sequence, &mut b.sums) {
+        if aft.step_fourier_sums(&b.slip_sequence, &mut b.sums) {
             add_first_column(h, &b.sums, p.mu, jacobian, cols, row0, n0_col);
             if let Some(vo) = normal {
                 scale_sums(&mut b.sums, p.mu * p.kn);
@@ -603,6 +616,8 @@ struct DerivativeBuffers {
     sequence: Vec<f64>,
     /// Fourier sums of one weight sequence (2(2H+1)).
     sums: Vec<f64>,
+    /// The slip-sign sequence of a direction of the 1-D law ([`jacobian_1d`]; N_t).
+    slip_sequence: Vec<f64>,
     /// Scratch of [`add_multiplication_block`] (4H+1).
     signed: Vec<[f64; 2]>,
     /// Harmonics of one n0 weight sequence (m).
