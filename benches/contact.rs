@@ -13,26 +13,13 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+#[path = "common/contact_input.rs"]
+mod contact_input;
+use contact_input::{input, pair_set};
 use nlrom::contact::aft::Aft;
 use nlrom::contact::element::{evaluate, LocalElement, Workspace};
 use nlrom::contact::law::{ContactParams, Variant};
-use nlrom::contact::pairs::{ContactPair, PairSet, SectorCoupling};
-use nlrom::cyclic::{harmonic_indices, CyclicGeometry};
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
-
-/// Local input of a 3-D element: u1, u2 of amplitude ~0.1 (stick limit 0.05), v of 0.01.
-fn input(h: usize) -> Vec<f64> {
-    let m = 2 * h + 1;
-    let mut x = vec![0.0; 3 * m];
-    for (c, a) in [0.1, 0.08, 0.01].into_iter().enumerate() {
-        x[c * m + 1] = a;
-        x[c * m + 2] = 0.3 * a * (c as f64 - 1.0);
-        for n in 2..=h {
-            x[c * m + 2 * n - 1] = 0.1 * a / n as f64;
-        }
-    }
-    x
-}
 
 fn element(c: &mut Criterion) {
     let mut g = c.benchmark_group("element");
@@ -79,29 +66,8 @@ fn pairs(c: &mut Criterion) {
         .warm_up_time(Duration::from_millis(300))
         .measurement_time(Duration::from_secs(2))
         .throughput(Throughput::Elements(PAIRS as u64));
-    let geo = CyclicGeometry::new(24, [0.0; 3], [0.0, 0.0, 1.0]).unwrap();
-    let h = 3;
-    let layout = HarmonicLayout::with_default_samples(h);
-    let list: Vec<ContactPair> = (0..PAIRS)
-        .map(|i| ContactPair {
-            contact: [0, 1, 2].map(|c| 3 * (i % 32) + c),
-            target: Some([0, 1, 2].map(|c| 3 * (32 + (7 * i) % 32) + c)),
-            frame: [[0.0, 0.0, 1.0], [0.6, -0.8, 0.0], [0.8, 0.6, 0.0]],
-            sigma: 1,
-            params: ContactParams::new(10.0, 20.0, 0.5, 1.0, "bench").unwrap(),
-            preload_rate: 1.0,
-        })
-        .collect();
-    let coupling = SectorCoupling {
-        sectors: 24,
-        rotation: geo.rotation(1),
-        harmonic_indices: harmonic_indices(24, 3, h),
-    };
-    let set = PairSet::new(192, Variant::OneD, list, Some(coupling)).unwrap();
-    let n = layout.len(192);
-    let q: Vec<f64> = (0..n)
-        .map(|i| 0.05 * ((i * 7919 % 1000) as f64 / 500.0 - 1.0))
-        .collect();
+    let (set, layout, q) = pair_set(PAIRS);
+    let n = q.len();
     let mut state = set.initial_state();
     let mut f = vec![0.0; n];
     set.evaluate(&layout, &q, &mut state, &mut f, None).unwrap();

@@ -31,6 +31,11 @@ pub struct Aft {
     analysis_columns: Vec<f64>,
     /// cos(2πq/N_t), sin(2πq/N_t) for q = 0..N_t−1.
     unit_circle: (Vec<f64>, Vec<f64>),
+    /// 1/(1 − z_p) as (Re, Im) for z_p = e^{−2πip/N_t}, p = 0..=2H (entry 0 unused), for
+    /// [`Aft::step_fourier_sums`].
+    step_factors: Vec<(f64, f64)>,
+    /// Row j (length 4H): z_p^j = (cos pτ_j, −sin pτ_j) for p = 1..=2H.
+    step_table: Vec<f64>,
 }
 
 impl std::fmt::Debug for Aft {
@@ -81,6 +86,29 @@ impl Aft {
                 (c, s)
             })
             .unzip();
+        let step_factors = (0..=2 * layout.harmonics)
+            .map(|p| {
+                // 1 − z_p = (1 − cos θ) + i sin θ, θ = 2πp/N_t (nonzero: 0 < p ≤ 2H < N_t).
+                let (s, c) = (2.0 * std::f64::consts::PI * p as f64 / n as f64).sin_cos();
+                let (a, b) = (1.0 - c, s);
+                let norm = a * a + b * b;
+                if p == 0 {
+                    (0.0, 0.0)
+                } else {
+                    (a / norm, -b / norm)
+                }
+            })
+            .collect();
+        let h2 = 2 * layout.harmonics;
+        let mut step_table = vec![0.0; n * 2 * h2];
+        for j in 0..n {
+            for p in 1..=h2 {
+                let (s, c) =
+                    (2.0 * std::f64::consts::PI * ((p * j) % n) as f64 / n as f64).sin_cos();
+                step_table[j * 2 * h2 + 2 * (p - 1)] = c;
+                step_table[j * 2 * h2 + 2 * (p - 1) + 1] = -s;
+            }
+        }
         Ok(Aft {
             layout,
             forward,
@@ -89,6 +117,8 @@ impl Aft {
             analysis,
             analysis_columns,
             unit_circle,
+            step_factors,
+            step_table,
         })
     }
 
@@ -191,6 +221,47 @@ impl Aft {
         }
     }
 
+    /// The Fourier sums of [`Aft::fourier_sums`] (same layout, same values up to rounding) from
+    /// the jumps of the cyclic sequence `a` (summation by parts): with z_p = e^{−2πip/N_t} and
+    /// Δ_j = a_j − a_{j−1} (a_{−1} = a_{N_t−1}), X_p (1 − z_p) = Σ_j Δ_j z_p^j for p = 1..=2H
+    /// (2H < N_t, so z_p ≠ 1) and X_0 = Σ_j a_j. Costs O(N_t + J·H) for J jumps: cheaper than
+    /// the FFT for the piecewise-constant weight sequences of the 1-D law (stick, slip and
+    /// contact indicators, a few runs per period). Returns false if `a` is all zero (`sums`
+    /// then zero).
+    pub fn step_fourier_sums(&self, a: &[f64], sums: &mut [f64]) -> bool {
+        let h2 = 2 * self.layout.harmonics;
+        let n = self.layout.time_samples;
+        debug_assert_eq!(a.len(), n);
+        sums[..2 * h2 + 2].fill(0.0);
+        let mut total = 0.0;
+        let mut jumps = false;
+        let mut prev = a[n - 1];
+        // Y_p = Σ_j Δ_j z_p^j accumulated in sums[2p], sums[2p + 1] (Re, Im).
+        let y = &mut sums[2..2 * h2 + 2];
+        for (j, &aj) in a.iter().enumerate() {
+            total += aj;
+            let delta = aj - prev;
+            prev = aj;
+            if delta != 0.0 {
+                jumps = true;
+                let row = &self.step_table[j * 2 * h2..(j + 1) * 2 * h2];
+                for (yp, z) in y.iter_mut().zip(row) {
+                    *yp += delta * z;
+                }
+            }
+        }
+        let scale = 1.0 / n as f64;
+        sums[0] = total * scale;
+        for p in 1..=h2 {
+            let (yr, yi) = (sums[2 * p], sums[2 * p + 1]);
+            let (rr, ri) = self.step_factors[p];
+            // X_p = Y_p/(1 − z_p); c_p = Re X_p/N_t, s_p = −Im X_p/N_t.
+            sums[2 * p] = (yr * rr - yi * ri) * scale;
+            sums[2 * p + 1] = -(yr * ri + yi * rr) * scale;
+        }
+        jumps || total != 0.0
+    }
+
     /// cos(2πq/N_t) and sin(2πq/N_t) for q = 0..N_t−1.
     pub fn unit_circle(&self) -> (&[f64], &[f64]) {
         (&self.unit_circle.0, &self.unit_circle.1)
@@ -264,6 +335,44 @@ impl AftCache {
                 let a = Arc::new(Aft::new(*layout)?);
                 *cache = Some(a.clone());
                 Ok(a)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The summation-by-parts Fourier sums equal the FFT ones for a piecewise-constant sequence
+    /// (the weights of the 1-D law), a constant, a zero and an arbitrary sequence.
+    #[test]
+    fn step_fourier_sums_equal_fft_sums() {
+        for (h, n) in [(0, 2), (1, 4), (3, 16), (3, 32), (7, 32), (7, 33)] {
+            let aft = Aft::new(HarmonicLayout::new(h, n).unwrap()).unwrap();
+            let mut scratch = aft.scratch();
+            let runs: Vec<f64> = (0..n)
+                .map(|j| match (5 * j / n) % 3 {
+                    0 => 1.0,
+                    1 => 0.0,
+                    _ => -2.5,
+                })
+                .collect();
+            let arbitrary: Vec<f64> = (0..n)
+                .map(|j| ((j * j * 7 + 3) % 11) as f64 - 4.2)
+                .collect();
+            for a in [runs, vec![3.0; n], vec![0.0; n], arbitrary] {
+                let mut fft = vec![0.0; 2 * (2 * h + 1)];
+                let mut steps = vec![f64::NAN; 2 * (2 * h + 1)];
+                aft.fourier_sums(&a, &mut fft, &mut scratch);
+                let nonzero = aft.step_fourier_sums(&a, &mut steps);
+                assert_eq!(nonzero, a.iter().any(|&x| x != 0.0));
+                for (p, (x, y)) in fft.iter().zip(&steps).enumerate() {
+                    assert!(
+                        (x - y).abs() <= 1e-13,
+                        "H={h} N_t={n} entry {p}: FFT {x} vs steps {y}"
+                    );
+                }
             }
         }
     }

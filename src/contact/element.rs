@@ -133,6 +133,9 @@ pub struct Workspace {
     jacobian_cols: usize,
     /// Buffers of the Jacobian ([`march_period_differentiated`], [`finish_jacobian`]).
     derivative: DerivativeBuffers,
+    /// Whether the 1-D Jacobian may come from the stored samples ([`jacobian_1d`]) where it
+    /// applies (false only in the test that it equals the general differentiated march).
+    samples_path: bool,
 }
 
 impl Workspace {
@@ -159,6 +162,7 @@ impl Workspace {
             jacobian: Vec::new(),
             jacobian_cols: 0,
             derivative: DerivativeBuffers::default(),
+            samples_path: true,
         }
     }
 
@@ -272,9 +276,12 @@ pub fn evaluate(
     let mut differentiated = false;
     while marching.periods < MAX_PERIODS {
         w_start = w;
-        // With a Jacobian the first period also carries the derivative terms: from a converged
-        // state (every Newton call after the first) it is the last period.
-        differentiated = jacobian && marching.periods == 0;
+        // With a Jacobian of the 2-D law the first period also carries the derivative terms:
+        // from a converged state (every Newton call after the first) it is the last period. The
+        // 1-D law needs only the stored samples ([`jacobian_1d`]).
+        differentiated = jacobian
+            && marching.periods == 0
+            && !(ws.samples_path && element.variant == Variant::OneD);
         if differentiated {
             march_period_differentiated(element, aft, ws, &mut w);
         } else {
@@ -300,7 +307,9 @@ pub fn evaluate(
         let o = element.tangential * m;
         aft.to_harmonics(&ws.fnormal, &mut force[o..o + m], &mut ws.aft_scratch);
     }
-    if jacobian {
+    if jacobian && ws.samples_path && samples_suffice(element, ws) {
+        jacobian_1d(element, aft, ws);
+    } else if jacobian {
         if !differentiated {
             // The last period again (the same samples), now with the derivative terms.
             let mut w_again = w_start;
@@ -320,6 +329,239 @@ pub fn evaluate(
         finish_jacobian(element, aft, ws);
     }
     Ok(marching)
+}
+
+/// Whether the 1-D Jacobian can be built from the stored samples of the last period
+/// ([`jacobian_1d`]): the 1-D law, and either one period was marched (the caller's state was
+/// periodic) or every tangential direction leaves stick in the last period (its start state is
+/// then the end state, set by the last slip or separation sample; otherwise the transient
+/// periods enter, [`march_transient_chain`]).
+fn samples_suffice(element: &LocalElement, ws: &Workspace) -> bool {
+    element.variant == Variant::OneD
+        && (ws.marching.periods == 1
+            || (0..element.tangential).all(|d| ws.regime.iter().any(|r| r[d] != Regime::Stick)))
+}
+
+/// The local Jacobian of the 1-D law ([`finish_jacobian`]: the same matrix up to rounding) from
+/// the regimes and forces of the last period alone, in O(N_t·H + R·H²) for R stick runs.
+///
+/// Per sample the 1-D law has piecewise-constant weights (SAMA paper eqs 13–14): stick
+/// ∂f_d = k_t (∂u_d − ∂w_d), slip ∂f_d = σ μ (k_n ∂v + ∂n0) with σ = sgn f_d, and
+/// ∂f_n = k_n ∂v + ∂n0 in contact. So the fixed-w part is k_t M(χ_stick) on (F_d, U_d),
+/// μ k_n M(σ χ_slip) on (F_d, V) and k_n M(χ_contact) on (F_n, V), M(a) the harmonic
+/// multiplication matrix ([`add_multiplication_block`]) from the Fourier sums of the indicator
+/// sequences ([`Aft::step_fourier_sums`]); the n0 column is M(a)'s first column (∂n0 acts as a
+/// constant signal), with the factors μ and 1.
+///
+/// Memory: a slip or separation sample j0 resets the slider, ∂w_d = E_j0 ∂U_d
+/// − (σ μ/k_t)(k_n E_j0 ∂V + ∂n0) (the second term only in slip), which then holds over the stick
+/// run R that follows; the run adds −k_t β_R ⊗ ∂w_d with β_R = Σ_{j∈R} B_·j. The period is
+/// cyclic: the run before the first reset follows the last one (w_start = w_end); a direction
+/// stuck all period marched once has ∂w_start = 0 (the caller's state is a parameter).
+fn jacobian_1d(element: &LocalElement, aft: &Aft, ws: &mut Workspace) {
+    let m = ws.m;
+    let h = (m - 1) / 2;
+    let shape = Shape::new(element, m);
+    let (cols, n0_col) = (shape.cols, shape.n0_col);
+    let p = element.params;
+    let Workspace {
+        jacobian,
+        jacobian_cols,
+        derivative: b,
+        regime,
+        ft,
+        fnormal,
+        ..
+    } = ws;
+    jacobian.clear();
+    jacobian.resize(element.signals() * m * cols, 0.0);
+    *jacobian_cols = cols;
+    b.sequence.resize(regime.len(), 0.0);
+    b.slip_sequence.resize(regime.len(), 0.0);
+    b.sums.resize(2 * m, 0.0);
+    b.beta[0].resize(m, 0.0);
+    let normal = shape.offsets.of(2);
+    if let Some(vo) = normal {
+        if fnormal.iter().all(|&f| f > 0.0) {
+            // In contact all period: M(1) = I, so k_n I and the n0 column e_0.
+            for k in 0..m {
+                jacobian[(vo + k) * cols + vo + k] += p.kn;
+            }
+            jacobian[vo * cols + n0_col] += 1.0;
+        } else {
+            for (s, &f) in b.sequence.iter_mut().zip(fnormal.iter()) {
+                *s = if f > 0.0 { 1.0 } else { 0.0 };
+            }
+            if aft.step_fourier_sums(&b.sequence, &mut b.sums) {
+                add_first_column(h, &b.sums, 1.0, jacobian, cols, vo, n0_col);
+                scale_sums(&mut b.sums, p.kn);
+                add_multiplication_block(h, &b.sums, &mut b.signed, jacobian, cols, vo, vo);
+            }
+        }
+    }
+    for d in 0..element.tangential {
+        let row0 = d * m;
+        // Stick indicator and slip sign σ = sgn f_d.
+        for (((st, sl), r), f) in b
+            .sequence
+            .iter_mut()
+            .zip(b.slip_sequence.iter_mut())
+            .zip(regime.iter())
+            .zip(&ft[d])
+        {
+            (*st, *sl) = match r[d] {
+                Regime::Stick => (1.0, 0.0),
+                Regime::Slip => (0.0, f.signum()),
+                Regime::Separation => (0.0, 0.0),
+            };
+        }
+        if aft.step_fourier_sums(&b.sequence, &mut b.sums) {
+            scale_sums(&mut b.sums, p.kt);
+            add_multiplication_block(h, &b.sums, &mut b.signed, jacobian, cols, row0, row0);
+        }
+        if aft.step_fourier_sums(&b.slip_sequence, &mut b.sums) {
+            add_first_column(h, &b.sums, p.mu, jacobian, cols, row0, n0_col);
+            if let Some(vo) = normal {
+                scale_sums(&mut b.sums, p.mu * p.kn);
+                add_multiplication_block(h, &b.sums, &mut b.signed, jacobian, cols, row0, vo);
+            }
+        }
+        let slip_sign = |j: usize| (regime[j][d] == Regime::Slip).then(|| ft[d][j].signum());
+        let mut runs = StickRuns {
+            jac: jacobian,
+            cols,
+            row0,
+            normal,
+            n0_col,
+            params: p,
+            beta: &mut b.beta[0],
+        };
+        runs.add(
+            aft,
+            regime.len(),
+            |j| regime[j][d] == Regime::Stick,
+            slip_sign,
+        );
+    }
+}
+
+/// Multiplies Fourier sums by `factor`.
+fn scale_sums(sums: &mut [f64], factor: f64) {
+    sums.iter_mut().for_each(|s| *s *= factor);
+}
+
+/// Adds `factor` × the harmonics of a weight sequence, i.e. the first column of its
+/// multiplication matrix (Q_0 = c_0, Re Q_κ = 2c_κ, Im Q_κ = −2s_κ from its Fourier sums
+/// `sums`, [`add_multiplication_block`]), to column `col` of rows `row0..row0 + 2H + 1`.
+fn add_first_column(
+    h: usize,
+    sums: &[f64],
+    factor: f64,
+    jac: &mut [f64],
+    cols: usize,
+    row0: usize,
+    col: usize,
+) {
+    jac[row0 * cols + col] += factor * sums[0];
+    for k in 1..=h {
+        jac[(row0 + 2 * k - 1) * cols + col] += 2.0 * factor * sums[2 * k];
+        jac[(row0 + 2 * k) * cols + col] -= 2.0 * factor * sums[2 * k + 1];
+    }
+}
+
+/// The slider-memory terms of one direction of the 1-D law ([`jacobian_1d`]) into the rows
+/// `row0..row0 + m` of the local Jacobian.
+struct StickRuns<'a> {
+    jac: &'a mut [f64],
+    cols: usize,
+    row0: usize,
+    /// Offset of the V coefficients (None without normal kinematics).
+    normal: Option<usize>,
+    n0_col: usize,
+    params: ContactParams,
+    /// β_R accumulator (m).
+    beta: &'a mut Vec<f64>,
+}
+
+impl StickRuns<'_> {
+    /// Walks the `n_t` samples of the period cyclically from the sample after the last reset;
+    /// `stick(j)` per sample, `slip_sign(j)` = Some(σ) for a slip sample, None for separation
+    /// (or stick).
+    fn add(
+        &mut self,
+        aft: &Aft,
+        n_t: usize,
+        stick: impl Fn(usize) -> bool,
+        slip_sign: impl Fn(usize) -> Option<f64>,
+    ) {
+        // Stuck all period: ∂w_start = 0 (one period marched, [`samples_suffice`]).
+        let Some(last) = (0..n_t).rev().find(|&j| !stick(j)) else {
+            return;
+        };
+        self.beta.fill(0.0);
+        let mut live = false;
+        let mut j0 = last;
+        let mut j = last;
+        for _ in 0..n_t {
+            j = if j + 1 == n_t { 0 } else { j + 1 };
+            if stick(j) {
+                for (bk, bv) in self.beta.iter_mut().zip(aft.analysis_column(j)) {
+                    *bk += bv;
+                }
+                live = true;
+                continue;
+            }
+            if live {
+                self.emit(aft.synthesis_row(j0), slip_sign(j0));
+                self.beta.fill(0.0);
+                live = false;
+            }
+            j0 = j;
+        }
+    }
+
+    /// Adds −k_t β ⊗ ∂w for the reset ∂w = E ∂U_d − (σ μ/k_t)(k_n E ∂V + ∂n0) (synthesis row
+    /// `e`; `sigma` None for a separation reset, ∂w = E ∂U_d).
+    fn emit(&mut self, e: &[f64], sigma: Option<f64>) {
+        let p = self.params;
+        add_outer(
+            self.jac, self.cols, self.row0, self.row0, -p.kt, self.beta, e,
+        );
+        let Some(sigma) = sigma else { return };
+        if let Some(vo) = self.normal {
+            add_outer(
+                self.jac,
+                self.cols,
+                self.row0,
+                vo,
+                sigma * p.mu * p.kn,
+                self.beta,
+                e,
+            );
+        }
+        for (k, bk) in self.beta.iter().enumerate() {
+            self.jac[(self.row0 + k) * self.cols + self.n0_col] += sigma * p.mu * bk;
+        }
+    }
+}
+
+/// `jac[row0 + k][col0 + l]` += alpha · left_k · right_l (row-major, `cols` columns).
+fn add_outer(
+    jac: &mut [f64],
+    cols: usize,
+    row0: usize,
+    col0: usize,
+    alpha: f64,
+    left: &[f64],
+    right: &[f64],
+) {
+    for (k, lk) in left.iter().enumerate() {
+        let a = alpha * lk;
+        let row = &mut jac[(row0 + k) * cols + col0..(row0 + k) * cols + col0 + right.len()];
+        for (r, rv) in row.iter_mut().zip(right) {
+            *r += a * rv;
+        }
+    }
 }
 
 /// One period of the law from the slider state `w` (updated to the end state); fills the force,
@@ -374,6 +616,10 @@ struct DerivativeBuffers {
     sequence: Vec<f64>,
     /// Fourier sums of one weight sequence (2(2H+1)).
     sums: Vec<f64>,
+    /// The slip-sign sequence of a direction of the 1-D law ([`jacobian_1d`]; N_t).
+    slip_sequence: Vec<f64>,
+    /// Scratch of [`add_multiplication_block`] (4H+1).
+    signed: Vec<[f64; 2]>,
     /// Harmonics of one n0 weight sequence (m).
     column: Vec<f64>,
     /// Σ_r left_r ⊗ right_r on the two ∂w_start columns (m × 2).
@@ -680,7 +926,7 @@ fn finish_jacobian(element: &LocalElement, aft: &Aft, ws: &mut Workspace) {
                 continue;
             }
             aft.fourier_sums(&b.sequence, &mut b.sums, aft_scratch);
-            add_multiplication_block(h, &b.sums, jacobian, cols, fb, cb);
+            add_multiplication_block(h, &b.sums, &mut b.signed, jacobian, cols, fb, cb);
         }
         if b.gather(f, 3) {
             aft.to_harmonics(&b.sequence, &mut b.column, aft_scratch);
@@ -826,41 +1072,165 @@ fn periodic_start(
 /// Fourier sums c_p = `sums[2p]`, s_p = `sums[2p+1]`, p = 0..2H ([`Aft::fourier_sums`]):
 /// M_00 = c_0, M_0,ν = (c_ν, −s_ν), M_κ,0 = (2c_κ, −2s_κ),
 /// M_κν = [[c_{κ−ν} + c_{κ+ν}, −(s_{κ+ν} + s_{ν−κ})], [−(s_{κ+ν} + s_{κ−ν}), c_{κ−ν} − c_{κ+ν}]]
-/// (2×2 blocks of (Re, Im) rows and columns; s_{−p} = −s_p).
+/// (2×2 blocks of (Re, Im) rows and columns; c_{−p} = c_p, s_{−p} = −s_p). `signed` is scratch
+/// for the sums of orders q = −2H..=2H, (c_q, s_q) at index q + 2H, so that a block row reads
+/// contiguous runs of orders. A constant weight (s_p = c_p = 0 for p ≥ 1) adds c_0 I.
 fn add_multiplication_block(
     h: usize,
     sums: &[f64],
+    signed: &mut Vec<[f64; 2]>,
     jac: &mut [f64],
     cols: usize,
     row0: usize,
     col0: usize,
 ) {
     let m = 2 * h + 1;
-    let c = |p: usize| sums[2 * p];
-    let s = |p: usize| sums[2 * p + 1];
+    if sums[2..2 * m].iter().all(|&x| x == 0.0) {
+        // A constant weight (e.g. stuck or in contact all period): M = c_0 I.
+        for k in 0..m {
+            jac[(row0 + k) * cols + col0 + k] += sums[0];
+        }
+        return;
+    }
+    let zero = 2 * h;
+    signed.resize(4 * h + 1, [0.0; 2]);
+    for p in 0..=2 * h {
+        let (c, s) = (sums[2 * p], sums[2 * p + 1]);
+        signed[zero + p] = [c, s];
+        signed[zero - p] = [c, -s];
+    }
     {
         let row = &mut jac[row0 * cols + col0..row0 * cols + col0 + m];
-        row[0] += c(0);
-        for nu in 1..=h {
-            row[2 * nu - 1] += c(nu);
-            row[2 * nu] -= s(nu);
+        row[0] += sums[0];
+        for (pair, cs) in row[1..]
+            .chunks_exact_mut(2)
+            .zip(&signed[zero + 1..=zero + h])
+        {
+            pair[0] += cs[0];
+            pair[1] -= cs[1];
         }
     }
     for ka in 1..=h {
         let two = &mut jac[(row0 + 2 * ka - 1) * cols..(row0 + 2 * ka + 1) * cols];
         let (re, im) = two.split_at_mut(cols);
-        let re = &mut re[col0..col0 + m];
-        let im = &mut im[col0..col0 + m];
-        re[0] += 2.0 * c(ka);
-        im[0] -= 2.0 * s(ka);
-        for nu in 1..=h {
-            let (cm, cp, sp) = (c(ka.abs_diff(nu)), c(ka + nu), s(ka + nu));
-            // s_{κ−ν} with its sign.
-            let sm = if ka >= nu { s(ka - nu) } else { -s(nu - ka) };
-            re[2 * nu - 1] += cm + cp;
-            re[2 * nu] -= sp - sm;
-            im[2 * nu - 1] -= sp + sm;
-            im[2 * nu] += cm - cp;
+        re[col0] += 2.0 * sums[2 * ka];
+        im[col0] -= 2.0 * sums[2 * ka + 1];
+        let re = &mut re[col0 + 1..col0 + m];
+        let im = &mut im[col0 + 1..col0 + m];
+        // Orders κ + ν (ν = 1..H, increasing) and κ − ν (decreasing).
+        let plus = &signed[zero + ka + 1..zero + ka + 1 + h];
+        let minus = &signed[zero + ka - h..zero + ka];
+        for nu in 0..h {
+            let (p, n) = (plus[nu], minus[h - 1 - nu]);
+            re[2 * nu] += n[0] + p[0];
+            re[2 * nu + 1] -= p[1] - n[1];
+            im[2 * nu] -= p[1] + n[1];
+            im[2 * nu + 1] += n[0] - p[0];
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::harmonics::HarmonicLayout;
+
+    /// Local coefficients of `signals` signals with amplitudes `amp`, decaying as 1/n, from a
+    /// fixed pseudo-random sequence.
+    fn input(seed: &mut u64, h: usize, signals: usize, amp: [f64; 3]) -> Vec<f64> {
+        let m = 2 * h + 1;
+        let mut uniform = || {
+            *seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (*seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let mut x = vec![0.0; signals * m];
+        for (c, a) in amp.iter().enumerate().take(signals) {
+            x[c * m] = 0.3 * a * uniform();
+            for n in 1..=h {
+                x[c * m + 2 * n - 1] = a * uniform() / n as f64;
+                x[c * m + 2 * n] = a * uniform() / n as f64;
+            }
+        }
+        x
+    }
+
+    /// The 1-D Jacobian from the stored samples ([`jacobian_1d`]) equals the general
+    /// differentiated march ([`finish_jacobian`]) to 1e-12 of its largest entry: every regime
+    /// (all stuck, where it is k_t I on the tangential blocks; gross and partial slip;
+    /// intermittent and permanent separation), H = 1, 3, 7, from the zero state (transient
+    /// periods) and from the converged state, for 1 or 2 directions with and without normal
+    /// kinematics; also checks the all-stuck closed form.
+    #[test]
+    fn samples_jacobian_equals_general_path() {
+        let mut seed = 7;
+        let mut compared = 0;
+        for h in [1, 3, 7] {
+            let aft = Aft::new(HarmonicLayout::with_default_samples(h)).unwrap();
+            let m = 2 * h + 1;
+            let mut ws = Workspace::new(&aft);
+            for (tangential, normal) in [(2, true), (1, true), (2, false)] {
+                for (n0, amp) in [
+                    (1.0, [0.01, 0.008, 0.01]),
+                    (1.0, [1.0, 0.8, 0.01]),
+                    (1.0, [0.12, 0.1, 0.01]),
+                    (1.0, [0.2, 0.15, 0.1]),
+                    (-1.0, [0.2, 0.15, 0.02]),
+                ] {
+                    let el = LocalElement {
+                        params: ContactParams::new(10.0, 20.0, 0.5, n0, "test").unwrap(),
+                        variant: Variant::OneD,
+                        tangential,
+                        normal,
+                    };
+                    let nsig = el.signals();
+                    let x = input(&mut seed, h, nsig, amp);
+                    let mut f = vec![0.0; nsig * m];
+                    let mut converged = [0.0; 2];
+                    evaluate(&el, &aft, &x, &mut converged, &mut f, false, &mut ws).unwrap();
+                    for start in [[0.0; 2], converged] {
+                        let mut jac = [Vec::new(), Vec::new()];
+                        let mut periods = [0; 2];
+                        for (k, samples_path) in [true, false].into_iter().enumerate() {
+                            let mut s = start;
+                            ws.samples_path = samples_path;
+                            let marching =
+                                evaluate(&el, &aft, &x, &mut s, &mut f, true, &mut ws).unwrap();
+                            ws.samples_path = true;
+                            periods[k] = marching.periods;
+                            jac[k] = ws.jacobian().0.to_vec();
+                        }
+                        assert_eq!(periods[0], periods[1]);
+                        let scale = jac[1].iter().fold(0.0f64, |a, b| a.max(b.abs()));
+                        for (i, (a, g)) in jac[0].iter().zip(&jac[1]).enumerate() {
+                            assert!(
+                                (a - g).abs() <= 1e-12 * scale,
+                                "H={h} {tangential} dir normal={normal} n0={n0} amp={amp:?} start={start:?}: entry {i}: samples {a} vs general {g}"
+                            );
+                        }
+                        compared += 1;
+                        let r = ws.report();
+                        if r.stick == 1.0 && periods[0] == 1 {
+                            // All stuck from a periodic state: k_t I on the tangential blocks.
+                            let cols = nsig * m + 1;
+                            for d in 0..tangential {
+                                for k in 0..m {
+                                    for l in 0..cols {
+                                        let want = if l == d * m + k { 10.0 } else { 0.0 };
+                                        let got = jac[0][(d * m + k) * cols + l];
+                                        assert!(
+                                            (got - want).abs() <= 1e-12 * 10.0,
+                                            "all stuck H={h}: [{k}][{l}] = {got}"
+                                        );
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(compared, 3 * 3 * 5 * 2);
     }
 }
