@@ -2,7 +2,6 @@
 //! on it (full solves for static modes, half solves with `F = Pᵀ L` for the eigensolver).
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::matmul::matmul;
 use faer::linalg::solvers::LltError;
 use faer::perm::PermRef;
 use faer::reborrow::{Reborrow, ReborrowMut};
@@ -13,7 +12,7 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::linalg::triangular_solve;
 use faer::sparse::{SparseColMat, SparseColMatRef};
-use faer::{Accum, Conj, Mat, MatMut, MatRef, Par, Side};
+use faer::{Conj, Mat, MatMut, Par, Side};
 
 use super::{input, ordering};
 use crate::error::{Error, Result};
@@ -43,9 +42,6 @@ pub struct ShiftInvert<'a> {
     ordering: FillOrdering,
     l_values: Vec<f64>,
     min_pivot_ratio: f64,
-    /// Number of border rows factorised after the `n_dof` rows of K − σM (0 unless built by
-    /// [`ShiftInvert::new_bordered`]).
-    border: usize,
 }
 
 impl std::fmt::Debug for ShiftInvert<'_> {
@@ -56,7 +52,6 @@ impl std::fmt::Debug for ShiftInvert<'_> {
             .field("factor_values", &self.l_values.len())
             .field("ordering", &self.ordering)
             .field("min_pivot_ratio", &self.min_pivot_ratio)
-            .field("border", &self.border)
             .finish()
     }
 }
@@ -154,72 +149,19 @@ impl<'a> ShiftInvert<'a> {
             ordering,
             l_values,
             min_pivot_ratio: 0.0,
-            border: 0,
         };
-        this.check_pivots(a)?;
-        Ok(this)
-    }
-
-    /// Factorises the bordered matrix `A = [[K, K_ib], [K_bi, K_bb]]` (`bordered`, (n + n_b)²,
-    /// both triangles, sorted rows; its leading n × n block must be `k`) with the n_b border rows
-    /// ordered last: `P A Pᵀ = L Lᵀ` with `P = diag(P_i, I)` (P_i nested dissection or AMD of K,
-    /// whichever gives the smaller factor), σ = 0. The leading block `L_ii` of L is then the
-    /// Cholesky factor of `P_i K P_iᵀ`, so every solve, half solve and [`lowest_modes`]
-    /// (super::lowest_modes) call works on K alone (right-hand sides are padded with zero border
-    /// rows), while `L_bi = K_bi P_iᵀ L_ii⁻ᵀ` and the trailing `L_bb` (`L_bb L_bbᵀ = K_bb − K_bi
-    /// K⁻¹ K_ib`, the Schur complement) give the Craig–Bampton static modes with half the
-    /// triangular solves ([`ShiftInvert::static_modes`], [`ShiftInvert::border_product`]).
-    ///
-    /// Errors: as [`ShiftInvert::new`], and [`Error::Input`] if `bordered` is not square or
-    /// smaller than K.
-    pub fn new_bordered(
-        k: SparseColMatRef<'a, usize, f64>,
-        m: SparseColMatRef<'a, usize, f64>,
-        bordered: SparseColMatRef<'_, usize, f64>,
-    ) -> Result<Self> {
-        input::check_pencil(k, m)?;
-        let n = bordered.nrows();
-        if bordered.ncols() != n || n < k.nrows() {
-            return Err(Error::input(format!(
-                "bordered factorisation: the bordered matrix is {}×{} but must be square and at                  least as large as K ({}×{})",
-                n,
-                bordered.ncols(),
-                k.nrows(),
-                k.ncols()
-            )));
-        }
-        let (symbolic, ordering) = bordered_symbolic_analysis(k, bordered)?;
-        let l_values = factorize_numeric(&symbolic, bordered, 0.0)?;
-        let mut this = ShiftInvert {
-            k,
-            m,
-            shift: 0.0,
-            symbolic,
-            ordering,
-            l_values,
-            min_pivot_ratio: 0.0,
-            border: n - k.nrows(),
-        };
-        this.check_pivots(bordered)?;
-        Ok(this)
-    }
-
-    /// Sets the smallest pivot ratio of the factor of `a` and rejects a factor below
-    /// [`MIN_PIVOT_RATIO`].
-    fn check_pivots(&mut self, a: SparseColMatRef<'_, usize, f64>) -> Result<()> {
-        self.min_pivot_ratio = self.pivot_ratio(a);
-        let shift = self.shift;
-        if self.min_pivot_ratio < MIN_PIVOT_RATIO {
+        this.min_pivot_ratio = this.pivot_ratio(a);
+        if this.min_pivot_ratio < MIN_PIVOT_RATIO {
             return Err(not_positive_definite(
                 shift,
                 &format!(
                     "its smallest pivot ratio L_ii²/a_ii is {:.1e} < {MIN_PIVOT_RATIO:e}, i.e. it \
                      is singular to working precision",
-                    self.min_pivot_ratio
+                    this.min_pivot_ratio
                 ),
             ));
         }
-        Ok(())
+        Ok(this)
     }
 
     /// The shift σ (rad²/s²) the factorisation was built with.
@@ -265,12 +207,6 @@ impl<'a> ShiftInvert<'a> {
                 self.n_dof()
             )));
         }
-        if self.border > 0 {
-            return for_each_column_chunk(rhs, &|mut chunk| {
-                self.forward_in_place(chunk.rb_mut())?;
-                self.backward_in_place(chunk)
-            });
-        }
         for_each_column_chunk(rhs, &|chunk| {
             let req = self
                 .symbolic
@@ -286,37 +222,19 @@ impl<'a> ShiftInvert<'a> {
         })
     }
 
-    /// Number of rows of the factor L: `n_dof` plus the border rows of a bordered factorisation.
-    fn factor_rows(&self) -> usize {
-        self.n_dof() + self.border
-    }
-
-    /// `rhs ← F⁻¹ rhs = L_ii⁻¹ P rhs` (permutation, then forward substitution; border rows of
-    /// the factor padded with zeros and dropped), sequential.
+    /// `rhs ← F⁻¹ rhs = L⁻¹ P rhs` (permutation, then forward substitution), sequential.
     pub(super) fn forward_in_place(&self, mut rhs: MatMut<'_, f64>) -> Result<()> {
-        let mut x = Mat::<f64>::zeros(self.factor_rows(), rhs.ncols());
+        let mut x = Mat::<f64>::zeros(rhs.nrows(), rhs.ncols());
         self.gather(x.rb_mut(), rhs.rb());
-        self.l_solve(x.as_mut())?;
-        rhs.copy_from(x.subrows(0, self.n_dof()));
-        Ok(())
-    }
-
-    /// `rhs ← F⁻ᵀ rhs = Pᵀ L_ii⁻ᵀ rhs` (backward substitution with zero border rows, then the
-    /// inverse permutation), sequential.
-    pub(super) fn backward_in_place(&self, rhs: MatMut<'_, f64>) -> Result<()> {
-        let mut x = Mat::<f64>::zeros(self.factor_rows(), rhs.ncols());
-        x.as_mut().subrows_mut(0, self.n_dof()).copy_from(rhs.rb());
-        self.lt_solve(x.as_mut())?;
-        self.scatter(rhs, x.as_ref());
-        Ok(())
-    }
-
-    /// `x ← L⁻¹ x` for `x` in factor row order (all `factor_rows` rows), sequential.
-    fn l_solve(&self, x: MatMut<'_, f64>) -> Result<()> {
         match self.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => {
                 let l = SparseColMatRef::new(s.factor(), &self.l_values);
-                triangular_solve::solve_lower_triangular_in_place(l, Conj::No, x, Par::Seq);
+                triangular_solve::solve_lower_triangular_in_place(
+                    l,
+                    Conj::No,
+                    x.as_mut(),
+                    Par::Seq,
+                );
             }
             SymbolicCholeskyRaw::Supernodal(s) => {
                 let mut mem = buffer(
@@ -325,194 +243,76 @@ impl<'a> ShiftInvert<'a> {
                 )?;
                 SupernodalLltRef::new(s, &self.l_values).l_solve_with_conj(
                     Conj::No,
-                    x,
+                    x.as_mut(),
                     Par::Seq,
                     MemStack::new(&mut mem),
                 );
             }
         }
+        rhs.copy_from(&x);
         Ok(())
     }
 
-    /// `x ← L⁻ᵀ x` for `x` in factor row order (all `factor_rows` rows), sequential.
-    fn lt_solve(&self, x: MatMut<'_, f64>) -> Result<()> {
+    /// `rhs ← F⁻ᵀ rhs = Pᵀ L⁻ᵀ rhs` (backward substitution, then the inverse permutation),
+    /// sequential.
+    pub(super) fn backward_in_place(&self, mut rhs: MatMut<'_, f64>) -> Result<()> {
         match self.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => {
                 let l = SparseColMatRef::new(s.factor(), &self.l_values);
                 triangular_solve::solve_lower_triangular_transpose_in_place(
                     l,
                     Conj::No,
-                    x,
+                    rhs.rb_mut(),
                     Par::Seq,
                 );
             }
             SymbolicCholeskyRaw::Supernodal(s) => {
                 let mut mem = buffer(
-                    s.solve_in_place_scratch::<f64>(x.ncols(), Par::Seq),
+                    s.solve_in_place_scratch::<f64>(rhs.ncols(), Par::Seq),
                     "the solve workspace",
                 )?;
                 SupernodalLltRef::new(s, &self.l_values).l_transpose_solve_with_conj(
                     Conj::No,
-                    x,
+                    rhs.rb_mut(),
                     Par::Seq,
                     MemStack::new(&mut mem),
                 );
             }
         }
+        let mut x = Mat::<f64>::zeros(rhs.nrows(), rhs.ncols());
+        self.scatter(x.as_mut(), rhs.rb());
+        rhs.copy_from(&x);
         Ok(())
     }
 
-    /// `dst ← P src` on the leading rows: `dst[i] = src[perm[i]]` where `perm[i]` is a row of
-    /// `src` (other rows of `dst` untouched; identity without an ordering).
+    /// `dst ← P src`: `dst[i] = src[perm[i]]` (identity without an ordering).
     fn gather(&self, mut dst: MatMut<'_, f64>, src: faer::MatRef<'_, f64>) {
         match self.symbolic.perm() {
             Some(p) => {
                 let fwd = p.arrays().0;
                 for j in 0..src.ncols() {
                     for (i, &f) in fwd.iter().enumerate() {
-                        if f < src.nrows() {
-                            dst[(i, j)] = src[(f, j)];
-                        }
+                        dst[(i, j)] = src[(f, j)];
                     }
                 }
             }
-            None => dst.subrows_mut(0, src.nrows()).copy_from(src),
+            None => dst.copy_from(src),
         }
     }
 
-    /// `dst ← Pᵀ src` on the rows of `dst`: `dst[perm[i]] = src[i]` where `perm[i]` is a row of
-    /// `dst`.
+    /// `dst ← Pᵀ src`: `dst[perm[i]] = src[i]`.
     fn scatter(&self, mut dst: MatMut<'_, f64>, src: faer::MatRef<'_, f64>) {
         match self.symbolic.perm() {
             Some(p) => {
                 let fwd = p.arrays().0;
-                for j in 0..dst.ncols() {
+                for j in 0..src.ncols() {
                     for (i, &f) in fwd.iter().enumerate() {
-                        if f < dst.nrows() {
-                            dst[(f, j)] = src[(i, j)];
-                        }
+                        dst[(f, j)] = src[(i, j)];
                     }
                 }
             }
-            None => dst.copy_from(src.subrows(0, dst.nrows())),
+            None => dst.copy_from(src),
         }
-    }
-
-    /// Number of border rows n_b of a bordered factorisation (0 otherwise).
-    pub fn border(&self) -> usize {
-        self.border
-    }
-
-    /// The trailing block `L_bb` (n_b × n_b, lower triangular) of a bordered factorisation:
-    /// `L_bb L_bbᵀ = K_bb − K_bi K⁻¹ K_ib` ([`ShiftInvert::new_bordered`]).
-    pub fn border_factor(&self) -> Mat<f64> {
-        let (n, nb) = (self.n_dof(), self.border);
-        let mut out = Mat::<f64>::zeros(nb, nb);
-        match self.symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(s) => {
-                let l = SparseColMatRef::new(s.factor(), &self.l_values);
-                for c in n..n + nb {
-                    for (r, &v) in l.row_idx_of_col(c).zip(l.val_of_col(c)) {
-                        out[(r - n, c - n)] = v;
-                    }
-                }
-            }
-            SymbolicCholeskyRaw::Supernodal(s) => {
-                let l = SupernodalLltRef::new(s, &self.l_values);
-                for i in 0..s.n_supernodes() {
-                    let node = l.supernode(i);
-                    let (start, val) = (node.start(), node.val());
-                    let size = val.ncols();
-                    let rows = (start..start + size).chain(node.pattern().iter().copied());
-                    for (ri, r) in rows.enumerate() {
-                        for c in (start..start + size).filter(|&c| c >= n && c <= r) {
-                            out[(r - n, c - n)] = val[(ri, c - start)];
-                        }
-                    }
-                }
-            }
-        }
-        out
-    }
-
-    /// Columns `first..first + psi.ncols()` of the static modes `Ψ = −K⁻¹ K_ib` of a bordered
-    /// factorisation, written to `psi` (n_dof rows): with `x_b = L_bbᵀ e_B` the backward
-    /// substitution `Lᵀ x = [0; x_b]` gives `x_i = −L_ii⁻ᵀ L_biᵀ e_B = P_i Ψ e_B`, one half solve
-    /// per column instead of a full solve. `l_bb` is [`ShiftInvert::border_factor`]. Parallel
-    /// over column chunks.
-    ///
-    /// Errors: [`Error::Input`] for a factorisation without border or mismatched sizes;
-    /// [`Error::Compute`] if a work buffer cannot be allocated.
-    pub fn static_modes(
-        &self,
-        l_bb: MatRef<'_, f64>,
-        first: usize,
-        psi: MatMut<'_, f64>,
-    ) -> Result<()> {
-        self.check_border_shapes(l_bb, psi.nrows(), first + psi.ncols())?;
-        let n = self.n_dof();
-        let mut x = Mat::<f64>::zeros(self.factor_rows(), psi.ncols());
-        for j in 0..psi.ncols() {
-            for r in 0..=first + j {
-                x[(n + r, j)] = l_bb[(first + j, r)];
-            }
-        }
-        for_each_column_chunk(x.as_mut(), &|chunk| self.lt_solve(chunk))?;
-        self.scatter(psi, x.as_ref());
-        Ok(())
-    }
-
-    /// `out ← −K_bi K⁻¹ y` (n_b × w) for `y` (n_dof × w) of a bordered factorisation: the
-    /// forward substitution `L w = [P_i y; 0]` gives `w_b = −L_bb⁻¹ L_bi L_ii⁻¹ P_i y`, and
-    /// `K_bi K⁻¹ y = L_bi L_ii⁻¹ P_i y`, so `out = L_bb w_b` (one half solve per column; for
-    /// `y = M_ib + M Ψ` this is the `Ψᵀ y` of the Craig–Bampton mass). Parallel over column
-    /// chunks.
-    ///
-    /// Errors: as [`ShiftInvert::static_modes`].
-    pub fn border_product(
-        &self,
-        l_bb: MatRef<'_, f64>,
-        y: MatRef<'_, f64>,
-        out: MatMut<'_, f64>,
-    ) -> Result<()> {
-        self.check_border_shapes(l_bb, y.nrows(), 0)?;
-        if out.nrows() != self.border || out.ncols() != y.ncols() {
-            return Err(Error::input(format!(
-                "border_product: the output is {}×{} but must be {}×{}",
-                out.nrows(),
-                out.ncols(),
-                self.border,
-                y.ncols()
-            )));
-        }
-        let mut w = Mat::<f64>::zeros(self.factor_rows(), y.ncols());
-        self.gather(w.as_mut(), y);
-        for_each_column_chunk(w.as_mut(), &|chunk| self.l_solve(chunk))?;
-        matmul(
-            out,
-            Accum::Replace,
-            l_bb,
-            w.subrows(self.n_dof(), self.border),
-            1.0,
-            par(),
-        );
-        Ok(())
-    }
-
-    /// A bordered factorisation, `l_bb` of n_b², `rows` = n_dof and `cols` ≤ n_b.
-    fn check_border_shapes(&self, l_bb: MatRef<'_, f64>, rows: usize, cols: usize) -> Result<()> {
-        let nb = self.border;
-        if nb == 0 || l_bb.nrows() != nb || l_bb.ncols() != nb || rows != self.n_dof() || cols > nb
-        {
-            return Err(Error::input(format!(
-                "bordered solve: needs a bordered factorisation (border {nb}), L_bb of {nb}², \
-                 {} rows and at most {nb} columns; got L_bb {}×{}, {rows} rows, {cols} columns",
-                self.n_dof(),
-                l_bb.nrows(),
-                l_bb.ncols()
-            )));
-        }
-        Ok(())
     }
 
     /// The diagonal of L (row order of the factor).
@@ -590,24 +390,14 @@ fn analyse_with(
     a: SparseColMatRef<'_, usize, f64>,
     ordering: FillOrdering,
 ) -> Result<SymbolicCholesky<usize>> {
-    match ordering {
-        FillOrdering::Amd => analyse_custom(a, None),
+    let nd = match ordering {
+        FillOrdering::Amd => None,
         FillOrdering::NestedDissection => {
-            analyse_custom(a, Some(ordering::nested_dissection(a.symbolic())))
+            let fwd = ordering::nested_dissection(a.symbolic());
+            let inv = ordering::inverse(&fwd);
+            Some((fwd, inv))
         }
-    }
-}
-
-/// Symbolic Cholesky analysis of the pattern of `a` with the fill ordering `fwd`
-/// (`fwd[new] = old`; `None`: faer's AMD).
-fn analyse_custom(
-    a: SparseColMatRef<'_, usize, f64>,
-    fwd: Option<Vec<usize>>,
-) -> Result<SymbolicCholesky<usize>> {
-    let nd = fwd.map(|fwd| {
-        let inv = ordering::inverse(&fwd);
-        (fwd, inv)
-    });
+    };
     let ord = match &nd {
         None => SymmetricOrdering::Amd,
         Some((fwd, inv)) => SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, a.nrows())),
@@ -624,35 +414,6 @@ fn analyse_custom(
              this machine"
         ))
     })
-}
-
-/// Symbolic analysis of the bordered matrix `a` ((n + n_b)², leading block `k`, n × n) with the
-/// border last: K's rows in nested-dissection or AMD order (whichever gives the smaller factor
-/// of `a`), then the border rows in their given order.
-fn bordered_symbolic_analysis(
-    k: SparseColMatRef<'_, usize, f64>,
-    a: SparseColMatRef<'_, usize, f64>,
-) -> Result<(SymbolicCholesky<usize>, FillOrdering)> {
-    let (n, n_all) = (k.nrows(), a.nrows());
-    let amd: Vec<usize> = match analyse_with(k, FillOrdering::Amd)?.perm() {
-        Some(p) => p.arrays().0.to_vec(),
-        None => (0..n).collect(),
-    };
-    let mut best: Option<(SymbolicCholesky<usize>, FillOrdering)> = None;
-    for (ord, mut fwd) in [
-        (
-            FillOrdering::NestedDissection,
-            ordering::nested_dissection(k.symbolic()),
-        ),
-        (FillOrdering::Amd, amd),
-    ] {
-        fwd.extend(n..n_all);
-        let s = analyse_custom(a, Some(fwd))?;
-        if best.as_ref().is_none_or(|(b, _)| s.len_val() < b.len_val()) {
-            best = Some((s, ord));
-        }
-    }
-    Ok(best.expect("two candidate orderings"))
 }
 
 /// Symbolic Cholesky analyses of `a` with nested dissection and with AMD; keeps the one with

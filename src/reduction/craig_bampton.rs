@@ -80,7 +80,7 @@ pub struct CraigBampton {
 /// Wall time (s) of the phases of [`craig_bampton`].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CbTimings {
-    /// Partition of K and M, ordering and Cholesky factorisation of the bordered matrix.
+    /// Partition of K and M, ordering and Cholesky factorisation of K_ii.
     pub factor_s: f64,
     /// Fixed-interface modes (block Krylov–Schur with the factor).
     pub modes_s: f64,
@@ -140,11 +140,15 @@ pub fn craig_bampton(
         ));
     }
     let t0 = Instant::now();
-    let mut blocks = Blocks::split(k, m, partition);
-    let mut k_bb = std::mem::replace(&mut blocks.k_bb, Mat::new());
-    let mut m_bb = std::mem::replace(&mut blocks.m_bb, Mat::new());
-    let factor = bordered_factor(&blocks, k, partition)?;
-    let l_bb = factor.border_factor();
+    let blocks = Blocks::split(k, m, partition);
+    let factor =
+        ShiftInvert::new(blocks.k_ii.as_ref(), blocks.m_ii.as_ref(), 0.0).map_err(|e| match e {
+            Error::Compute(msg) => Error::Compute(format!(
+                "Craig–Bampton: the interior stiffness K_ii cannot be factorised ({msg}). A part \
+                 of the model is neither clamped nor connected to a master node"
+            )),
+            other => other,
+        })?;
     let factor_s = t0.elapsed().as_secs_f64();
     let (lambda, residuals, phi) = if n_m > 0 {
         let modes = factor.lowest_modes(n_m, &opts.eigen)?;
@@ -154,13 +158,15 @@ pub fn craig_bampton(
     };
     let modes_s = t0.elapsed().as_secs_f64() - factor_s;
 
+    let mut k_bb = blocks.k_bb;
+    let mut m_bb = blocks.m_bb;
     let mut m_mb = Mat::<f64>::zeros(n_m, n_b);
     let mut start = 0;
     while start < n_b {
         let w = opts.block_columns.min(n_b - start);
-        // Ψ_B from the bordered factor (one half solve per column)
         let mut x = Mat::<f64>::zeros(n_i, w);
-        factor.static_modes(l_bb.as_ref(), start, x.as_mut())?;
+        scatter_columns(x.as_mut(), blocks.k_ib.as_ref(), start, -1.0);
+        factor.solve_in_place(x.as_mut())?;
         // K_cb_bb[:, B] += K_ibᵀ Ψ_B
         transpose_product_add(
             k_bb.as_mut().subcols_mut(start, w),
@@ -168,17 +174,10 @@ pub fn craig_bampton(
             x.as_ref(),
             1.0,
         );
-        transpose_product_add(
-            m_bb.as_mut().subcols_mut(start, w),
-            blocks.m_ib.as_ref(),
-            x.as_ref(),
-            1.0,
-        );
         // Y = M_ib[:, B] + M_ii Ψ_B
         let mut y = Mat::<f64>::zeros(n_i, w);
         scatter_columns(y.as_mut(), blocks.m_ib.as_ref(), start, 1.0);
         product_add(y.as_mut(), blocks.m_ii.as_ref(), x.as_ref());
-        drop(x);
         if n_m > 0 {
             matmul(
                 m_mb.as_mut().subcols_mut(start, w),
@@ -189,11 +188,20 @@ pub fn craig_bampton(
                 faer::get_global_parallelism(),
             );
         }
-        // M_cb_bb[:, B] += Ψᵀ Y = −K_bi K_ii⁻¹ Y (the other half solve)
-        let mut psi_t_y = Mat::<f64>::zeros(n_b, w);
-        factor.border_product(l_bb.as_ref(), y.as_ref(), psi_t_y.as_mut())?;
-        let mut dst = m_bb.as_mut().subcols_mut(start, w);
-        dst += &psi_t_y;
+        transpose_product_add(
+            m_bb.as_mut().subcols_mut(start, w),
+            blocks.m_ib.as_ref(),
+            x.as_ref(),
+            1.0,
+        );
+        drop(x);
+        factor.solve_in_place(y.as_mut())?;
+        transpose_product_add(
+            m_bb.as_mut().subcols_mut(start, w),
+            blocks.k_ib.as_ref(),
+            y.as_ref(),
+            -1.0,
+        );
         start += w;
     }
     symmetrise(k_bb.as_mut());
@@ -231,28 +239,6 @@ pub fn craig_bampton(
     })
 }
 
-/// The bordered Cholesky factorisation of `[[K_ii, K_ib], [K_bi, K_bb]]` with the masters last
-/// ([`ShiftInvert::new_bordered`]).
-fn bordered_factor<'a>(
-    blocks: &'a Blocks,
-    k: SparseColMatRef<'_, usize, f64>,
-    partition: &Partition,
-) -> Result<ShiftInvert<'a>> {
-    let bordered = Blocks::bordered(k, partition);
-    ShiftInvert::new_bordered(
-        blocks.k_ii.as_ref(),
-        blocks.m_ii.as_ref(),
-        bordered.as_ref(),
-    )
-    .map_err(|e| match e {
-        Error::Compute(msg) => Error::Compute(format!(
-            "Craig–Bampton: the interior stiffness K_ii cannot be factorised ({msg}). A part \
-                 of the model is neither clamped nor connected to a master node"
-        )),
-        other => other,
-    })
-}
-
 /// The partitioned blocks of K and M.
 struct Blocks {
     k_ii: SparseColMat<usize, f64>,
@@ -287,48 +273,6 @@ impl Blocks {
             k_bb: dense_select(k, &master_index, &master_rows),
             m_bb: dense_select(m, &master_index, &master_rows),
         }
-    }
-}
-
-impl Blocks {
-    /// `[[K_ii, K_ib], [K_bi, K_bb]]`: K with the interior rows first (in their order) and the
-    /// masters last (in [`Partition::masters`] order), rows sorted.
-    fn bordered(k: SparseColMatRef<'_, usize, f64>, p: &Partition) -> SparseColMat<usize, f64> {
-        let n_i = p.interior.len();
-        let mut index = vec![usize::MAX; p.n_free];
-        for (new, &old) in p.interior.iter().enumerate() {
-            index[old] = new;
-        }
-        for (new, d) in p.masters.iter().enumerate() {
-            index[d.free_row] = n_i + new;
-        }
-        let order: Vec<usize> = p
-            .interior
-            .iter()
-            .copied()
-            .chain(p.masters.iter().map(|d| d.free_row))
-            .collect();
-        let mut col_ptr = Vec::with_capacity(order.len() + 1);
-        col_ptr.push(0usize);
-        let (mut rows, mut vals) = (Vec::new(), Vec::new());
-        let mut column: Vec<(usize, f64)> = Vec::new();
-        for &c in &order {
-            column.clear();
-            column.extend(
-                k.row_idx_of_col(c)
-                    .zip(k.val_of_col(c))
-                    .map(|(r, &v)| (index[r], v))
-                    .filter(|&(r, _)| r != usize::MAX),
-            );
-            column.sort_unstable_by_key(|e| e.0);
-            rows.extend(column.iter().map(|e| e.0));
-            vals.extend(column.iter().map(|e| e.1));
-            col_ptr.push(rows.len());
-        }
-        SparseColMat::new(
-            SymbolicSparseColMat::new_checked(order.len(), order.len(), col_ptr, None, rows),
-            vals,
-        )
     }
 }
 
