@@ -155,7 +155,8 @@ impl CyclicGeometry {
 /// R_α has the eigenvalues 1 (axial direction) and e^{±iα} (the two circular in-plane
 /// directions). So for k = 0 only the axial component survives, for k = 1 and k = N−1 only one
 /// circularly polarised in-plane component each (both in-plane components when N = 2), and for
-/// every other k the node is fixed. The transform stage applies this constraint explicitly.
+/// every other k the node is fixed. The transform stage applies this constraint explicitly
+/// ([`DofPair::on_axis`], [`axis_basis`], [`CyclicTransform`]).
 #[derive(Clone, Debug, PartialEq, Eq, Default)]
 pub struct FrontierPairs {
     /// Low-frontier node indices, ascending.
@@ -493,13 +494,76 @@ pub fn is_real_harmonic(k: usize, sectors: usize) -> bool {
 }
 
 /// A cyclic frontier pair expressed in rows of the matrices the transform acts on: the x, y, z
-/// rows of a low-frontier node and of its image on the high frontier.
+/// rows of a low-frontier node and of its image on the high frontier. A node on the symmetry
+/// axis (its own image, see [`FrontierPairs`]) is the pair with `low == high`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct DofPair {
     /// Rows of u_low (components x, y, z).
     pub low: [usize; 3],
-    /// Rows of u_high (components x, y, z).
+    /// Rows of u_high (components x, y, z); equal to `low` for a node on the axis.
     pub high: [usize; 3],
+}
+
+impl DofPair {
+    /// The pair of a node on the axis (rows x, y, z): its own image.
+    pub fn on_axis(rows: [usize; 3]) -> Self {
+        DofPair {
+            low: rows,
+            high: rows,
+        }
+    }
+
+    /// Whether this is a node on the axis (`low == high`).
+    pub fn is_axis(&self) -> bool {
+        self.low == self.high
+    }
+}
+
+/// Basis (orthonormal, global x, y, z components) of the displacements u of a node on the axis
+/// that satisfy the cyclic constraint `u = e^{iφ_k} R_α u` of harmonic index k: the eigenvectors
+/// of R_α for the eigenvalue e^{−iφ_k}. With the axis a and the in-plane pair e₁ ⟂ a,
+/// e₂ = a × e₁ (R_α e₁ = cos α e₁ + sin α e₂): k = 0 → {a}; N = 2, k = 1 → {e₁, e₂} (R_α = −1 in
+/// the plane); k = 1 → {(e₁ + i e₂)/√2} (R_α v = e^{−iα} v); k = N − 1 → {(e₁ − i e₂)/√2};
+/// any other k → {} (the node does not move).
+pub fn axis_basis(geom: &CyclicGeometry, k: usize) -> Vec<[c64; 3]> {
+    let a = geom.axis;
+    let real = |v: [f64; 3]| v.map(|x| c64::new(x, 0.0));
+    // e₁: the coordinate direction least aligned with the axis, made orthogonal to it.
+    let c = (0..3)
+        .min_by(|&i, &j| a[i].abs().total_cmp(&a[j].abs()))
+        .unwrap_or(0);
+    let mut e1 = [0.0; 3];
+    e1[c] = 1.0;
+    let e1 = {
+        let v = [
+            e1[0] - a[c] * a[0],
+            e1[1] - a[c] * a[1],
+            e1[2] - a[c] * a[2],
+        ];
+        let n = norm(v);
+        [v[0] / n, v[1] / n, v[2] / n]
+    };
+    let e2 = [
+        a[1] * e1[2] - a[2] * e1[1],
+        a[2] * e1[0] - a[0] * e1[2],
+        a[0] * e1[1] - a[1] * e1[0],
+    ];
+    let n = geom.sectors;
+    let circular = |sign: f64| -> [c64; 3] {
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        [0, 1, 2].map(|i| c64::new(h * e1[i], sign * h * e2[i]))
+    };
+    if k == 0 {
+        vec![real(a)]
+    } else if n == 2 && k == 1 {
+        vec![real(e1), real(e2)]
+    } else if k == 1 {
+        vec![circular(1.0)]
+    } else if k == n - 1 {
+        vec![circular(-1.0)]
+    } else {
+        Vec::new()
+    }
 }
 
 /// The cyclic transform of harmonic index k (`conventions.md` §2): q = T_k q_k, where q holds
@@ -507,7 +571,10 @@ pub struct DofPair {
 /// and every high row is `u_high = e^{iφ_k} R_α u_low`:
 /// `T_k[high_c, low_d] = e^{iφ_k} R_α[c][d]`, identity on the kept rows.
 ///
-/// Nodes on the symmetry axis must not appear in the pairs (see [`FrontierPairs`]).
+/// A node on the axis (a pair with `low == high`) keeps, instead of its 3 rows, the amplitudes
+/// of the [`axis_basis`] vectors b_j (0, 1 or 2 coordinates): `T_k[row_c, j] = b_j[c]`. Each
+/// such coordinate takes the place (in `kept`) of the node's row of the largest |b_j[c]|, so
+/// that its label is that component.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CyclicTransform {
     /// Harmonic index k.
@@ -516,7 +583,8 @@ pub struct CyclicTransform {
     pub sectors: usize,
     /// Whether T_k is real (k = 0 or N/2): the imaginary parts are then exactly zero.
     pub real: bool,
-    /// Full row of each reduced coordinate (every row that is not a high-frontier row), ascending.
+    /// Full row of each reduced coordinate (every row that is not a high-frontier row, or the
+    /// label row of an axis coordinate), ascending.
     pub kept: Vec<usize>,
     /// Per full row, the nonzero entries (reduced column, value) of T_k.
     rows: Vec<Vec<(usize, c64)>>,
@@ -548,7 +616,7 @@ impl CyclicTransform {
                 is_high[r] = true;
             }
             for &r in &p.low {
-                if is_high[r] {
+                if is_high[r] && !p.is_axis() {
                     return Err(Error::input(format!(
                         "cyclic transform: row {r} is both a low- and a high-frontier DOF"
                     )));
@@ -556,18 +624,46 @@ impl CyclicTransform {
                 is_low[r] = true;
             }
         }
-        let kept: Vec<usize> = (0..n_full).filter(|&r| !is_high[r]).collect();
+        // Axis nodes: their rows are "high" (replaced); their coordinates take label rows.
+        let basis = axis_basis(geom, k);
+        let mut label: Vec<Option<[c64; 3]>> = vec![None; n_full];
+        for p in pairs.iter().filter(|p| p.is_axis()) {
+            let mut taken = [false; 3];
+            for b in &basis {
+                let c = (0..3)
+                    .filter(|&c| !taken[c])
+                    .max_by(|&i, &j| b[i].norm().total_cmp(&b[j].norm()))
+                    .unwrap_or(0);
+                taken[c] = true;
+                label[p.low[c]] = Some(*b);
+            }
+        }
+        let kept: Vec<usize> = (0..n_full)
+            .filter(|&r| !is_high[r] || label[r].is_some())
+            .collect();
         let mut column = vec![usize::MAX; n_full];
         for (j, &r) in kept.iter().enumerate() {
             column[r] = j;
         }
         let mut rows: Vec<Vec<(usize, c64)>> = vec![Vec::new(); n_full];
-        for &r in &kept {
+        for &r in kept.iter().filter(|&&r| !is_high[r]) {
             rows[r].push((column[r], c64::new(1.0, 0.0)));
         }
         let e = phase_factor(k, geom.sectors);
         let rot = geom.rotation(1);
         for p in pairs {
+            if p.is_axis() {
+                for &l in &p.low {
+                    if let Some(b) = label[l] {
+                        for c in 0..3 {
+                            if b[c] != c64::new(0.0, 0.0) {
+                                rows[p.low[c]].push((column[l], b[c]));
+                            }
+                        }
+                    }
+                }
+                continue;
+            }
             for c in 0..3 {
                 rows[p.high[c]] = (0..3)
                     .filter(|&d| rot[c][d] != 0.0)

@@ -5,17 +5,19 @@
 //! Without CB (T_kᴴ K T_k on the sparse sector) to 1e-8, with CB to the CB accuracy. Also: the
 //! properties of K_k (Hermitian, K_{N−k} = conj K_k, real k = 0, N/2), GSI, and bad input.
 
+mod cyclic_common;
+
 use std::path::PathBuf;
 
+use cyclic_common::{max_rel_error, merge_sectors, sparse_sector_frequencies, union_below_cut};
 use faer::{c64, Mat};
 use nlrom::case::Case;
-use nlrom::cyclic::{match_frontiers, CyclicGeometry, CyclicTransform};
+use nlrom::cyclic::{match_frontiers, CyclicGeometry};
 use nlrom::eigen::{lowest_modes, EigenOptions};
 use nlrom::fe::{assemble, clamp, Material, Materials, Quadrature};
 use nlrom::mesh::msh::read_msh;
-use nlrom::mesh::{ElementBlock, Mesh};
 use nlrom::model::{self, StructuralModel};
-use nlrom::reduction::{free_frontier_pairs, hermitian_modes, Sector};
+use nlrom::reduction::{hermitian_modes, Sector};
 use nlrom::Error;
 
 const N: usize = 8;
@@ -70,66 +72,13 @@ fn sector_case() -> (Case, StructuralModel) {
     load(&case_text("", "\"hub\"")).expect("sector case")
 }
 
-/// N rotated copies of the sector, each high-frontier node merged with the low-frontier node of
-/// the next copy; only the volume elements and the hub faces are kept.
-fn annulus(sector: &Mesh) -> Mesh {
-    let geom = CyclicGeometry::new(N, [0.0; 3], [0.0, 0.0, 1.0]).unwrap();
-    let pairs = match_frontiers(sector, &geom, "left_frontier", "right_frontier").unwrap();
-    assert!(pairs.axis_nodes.is_empty());
-    let nn = sector.num_nodes();
-    let mut low_of_high = vec![u32::MAX; nn];
-    for (&l, &h) in pairs.low.iter().zip(&pairs.high) {
-        low_of_high[h as usize] = l;
-    }
-    // Global id of node n of copy s (before compaction).
-    let id = |s: usize, n: u32| -> usize {
-        match low_of_high[n as usize] {
-            u32::MAX => s * nn + n as usize,
-            l => ((s + 1) % N) * nn + l as usize,
-        }
-    };
-    let mut index = vec![u32::MAX; N * nn];
-    let mut coords = Vec::new();
-    for s in 0..N {
-        for n in 0..nn as u32 {
-            if low_of_high[n as usize] == u32::MAX {
-                index[id(s, n)] = coords.len() as u32;
-                coords.push(geom.rotate_point(sector.coords[n as usize], s as i32));
-            }
-        }
-    }
-    let hub = sector.group("hub").unwrap().clone();
-    let mut blocks = Vec::new();
-    for s in 0..N {
-        for b in &sector.blocks {
-            let keep = b.kind.dim() == 3 || (b.kind.dim() == 2 && b.physicals.contains(&hub.tag));
-            if !keep {
-                continue;
-            }
-            blocks.push(ElementBlock {
-                kind: b.kind,
-                entity: b.entity,
-                physicals: b.physicals.clone(),
-                tags: b.tags.iter().map(|t| t + (s as u64) * 1_000_000).collect(),
-                connectivity: b.connectivity.iter().map(|&n| index[id(s, n)]).collect(),
-            });
-        }
-    }
-    Mesh {
-        source: None,
-        format: sector.format,
-        node_tags: (1..=coords.len() as u64).collect(),
-        coords,
-        blocks,
-        groups: sector.groups.clone(),
-        periodic: Vec::new(),
-    }
-}
-
 /// The lowest `n` annulus frequencies (Hz), hub clamped.
 fn annulus_frequencies(n: usize) -> Vec<f64> {
     let sector = read_msh(&root().join("meshes/sector8.msh")).unwrap();
-    let mesh = annulus(&sector);
+    let geom = CyclicGeometry::new(N, [0.0; 3], [0.0, 0.0, 1.0]).unwrap();
+    let pairs = match_frontiers(&sector, &geom, "left_frontier", "right_frontier").unwrap();
+    assert!(pairs.axis_nodes.is_empty());
+    let mesh = merge_sectors(&sector, N, "left_frontier", "right_frontier", "hub");
     assert_eq!(mesh.num_nodes(), 11584); // meshes/README.md: frontiers merged only
     let full = assemble(&mesh, &Materials::uniform(STEEL), &Quadrature::default()).unwrap();
     let free = clamp(&full, &mesh, &["hub".to_string()]).unwrap();
@@ -143,62 +92,11 @@ fn annulus_frequencies(n: usize) -> Vec<f64> {
     modes.frequencies_hz()
 }
 
-/// Frequencies (Hz) of the sparse sector model of harmonic index k (T_kᴴ K T_k, no CB): the
-/// lowest `n` distinct ones (the real embedding of a complex k doubles every eigenvalue).
-fn sparse_sector_frequencies(model: &StructuralModel, case: &Case, k: usize, n: usize) -> Vec<f64> {
-    let (geom, pairs) = free_frontier_pairs(case, model).unwrap();
-    let t = CyclicTransform::new(&geom, k, model.free.n_free(), &pairs).unwrap();
-    let kk = t.project_sparse_embedded(model.free.k.as_ref()).unwrap();
-    let mk = t.project_sparse_embedded(model.free.m.as_ref()).unwrap();
-    let copies = if t.real { 1 } else { 2 };
-    let modes = lowest_modes(
-        kk.as_ref(),
-        mk.as_ref(),
-        copies * n,
-        &EigenOptions::default(),
-    )
-    .expect("sector modes");
-    let f = modes.frequencies_hz();
-    if copies == 2 {
-        for p in f.chunks(2) {
-            assert!(
-                (p[0] / p[1] - 1.0).abs() < 1e-9,
-                "k = {k}: embedding pair {p:?}"
-            );
-        }
-    }
-    f.iter().step_by(copies).copied().collect()
-}
-
-/// Union over k of per-k frequencies, cut below the smallest per-k maximum (so no frequency of
-/// any k is missing below the cut), sorted.
-fn union_below_cut(per_k: &[Vec<f64>]) -> Vec<f64> {
-    let cut = per_k
-        .iter()
-        .map(|f| *f.last().unwrap())
-        .fold(f64::INFINITY, f64::min);
-    let mut all: Vec<f64> = per_k
-        .iter()
-        .flatten()
-        .copied()
-        .filter(|&f| f < cut)
-        .collect();
-    all.sort_by(f64::total_cmp);
-    all
-}
-
 fn fmt(v: &[f64]) -> String {
     v.iter()
         .map(|e| format!("{e:.1e}"))
         .collect::<Vec<_>>()
         .join(" ")
-}
-
-fn max_rel_error(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x / y - 1.0).abs())
-        .fold(0.0, f64::max)
 }
 
 #[test]

@@ -24,10 +24,14 @@
 //! * `matrix = "D.mtx"`: not supported with a mesh reduction (an input error).
 //!
 //! # Nodes on the axis
-//! Frontier nodes on the symmetry axis need the constraint `u = e^{iφ_k} R_α u` on one node
-//! (see [`crate::cyclic::FrontierPairs`]), which leaves non-physical coordinates for k = 0, 1, N−1.
-//! Clamped axis nodes are fine (they have no DOF); a free axis node is reported as an input error
-//! (not supported yet).
+//! A free frontier node on the symmetry axis belongs to both frontiers and is its own image; its
+//! displacement obeys `u = e^{iφ_k} R_α u` ([`crate::cyclic::FrontierPairs`]). It is a master
+//! (low-frontier role) of the CB model like any frontier node, and the cyclic transform replaces
+//! its 3 rows by the amplitudes of [`crate::cyclic::axis_basis`]: the axial component for k = 0,
+//! one circularly polarised in-plane component for k = 1 and N − 1 (both in-plane components for
+//! N = 2), none otherwise. Each such coordinate is labelled with the node's component of largest
+//! weight in its basis vector (for k = 1, N − 1 it is a complex combination of two components).
+//! Clamped axis nodes have no DOF and need nothing.
 
 pub mod craig_bampton;
 pub mod dense;
@@ -48,7 +52,7 @@ use crate::error::{Error, Result};
 use crate::model::StructuralModel;
 use crate::rom::{HarmonicRom, MasterNode, MasterRole, ReducedDof, Rom};
 
-pub use craig_bampton::{craig_bampton, CbOptions, CraigBampton};
+pub use craig_bampton::{craig_bampton, CbOptions, CbTimings, CraigBampton};
 pub use dense::{hermitian_modes, DenseModes};
 pub use masters::{case_master_groups, partition, MasterDof, Partition};
 
@@ -134,10 +138,14 @@ impl Sector {
             opts,
         )?;
         log(&format!(
-            "Craig–Bampton: {} masters + {} modes in {:.2} s",
+            "Craig–Bampton: {} masters + {} modes in {:.2} s (factorisation {:.2} s, \
+             interface modes {:.2} s, static modes {:.2} s)",
             cb.n_masters,
             cb.n_modes(),
-            t.elapsed().as_secs_f64()
+            t.elapsed().as_secs_f64(),
+            cb.timings.factor_s,
+            cb.timings.modes_s,
+            cb.timings.static_s
         ));
         Ok(Sector {
             partition,
@@ -300,22 +308,6 @@ fn frontier_pairs(
     let geom = CyclicGeometry::from_case(c)?;
     let pairs = match_frontiers(mesh, &geom, &c.low, &c.high)?;
     let both_clamped = check_frontier_clamps(mesh, &pairs, &c.low, &c.high, &case.model.clamp)?;
-    let free_axis: Vec<u32> = pairs
-        .axis_nodes
-        .iter()
-        .copied()
-        .filter(|&n| !rows_of_node(n).is_empty())
-        .collect();
-    if let Some(&n) = free_axis.first() {
-        return Err(Error::input(format!(
-            "{}: {} free node(s) of the cyclic frontiers lie on the symmetry axis (e.g. node {}); \
-             nlrom does not reduce free axis nodes yet — clamp them (add their group to \
-             `[model] clamp`) or mesh the sector without nodes on the axis",
-            mesh.source_name(),
-            free_axis.len(),
-            mesh.node_tags[n as usize]
-        )));
-    }
     let mut dof_pairs = Vec::with_capacity(pairs.len());
     for (i, (&l, &h)) in pairs.low.iter().zip(&pairs.high).enumerate() {
         if both_clamped.binary_search(&i).is_ok() {
@@ -339,6 +331,21 @@ fn frontier_pairs(
             low: [rl[0], rl[1], rl[2]],
             high: [rh[0], rh[1], rh[2]],
         });
+    }
+    for &n in &pairs.axis_nodes {
+        match rows_of_node(n)[..] {
+            [] => {} // clamped: nothing to constrain
+            [x, y, z] => dof_pairs.push(DofPair::on_axis([x, y, z])),
+            ref rows => {
+                return Err(Error::input(format!(
+                    "{}: node {} lies on the symmetry axis (both cyclic frontiers) with {} free \
+                     DOF; clamp all 3 components of an axis node or none",
+                    mesh.source_name(),
+                    mesh.node_tags[n as usize],
+                    rows.len()
+                )))
+            }
+        }
     }
     Ok((geom, dof_pairs))
 }
