@@ -467,7 +467,7 @@ fn sector_curve(
     let system = problem.system()?;
     let sizes: Vec<usize> = interfaces
         .iter()
-        .map(|i| i.pairs.iter().map(|p| p.targets.len()).sum())
+        .map(ContactInterface::element_count)
         .collect();
     let fractions = |q: &[f64], state: &PairState| {
         interface_fractions(&problem.contact.inner, &problem.layout, q, state, &sizes)
