@@ -292,6 +292,10 @@ pub struct Contact {
     /// How contact nodes are paired with the target; default `sama`.
     #[serde(default)]
     pub model: ContactModel,
+    /// SAMA only: how a contact node is coupled to the target face around its virtual node:
+    /// `array` (default, the paper's eq 31) or `interpolated` (shape functions, paper Fig. 8).
+    #[serde(default)]
+    pub coupling: SamaCoupling,
     /// Friction element: independent (`1d`, default) or coupled (`2d`) tangential directions.
     #[serde(default)]
     pub element: ContactElement,
@@ -318,6 +322,23 @@ pub enum ContactModel {
     /// Coincident node pairs.
     #[serde(rename = "node-to-node")]
     NodeToNode,
+}
+
+/// How SAMA couples a contact node c to the n_T nodes t_j of the target face that contains its
+/// virtual node t_v (Battiato 2021, §4).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum SamaCoupling {
+    /// The self-adaptive macroslip array of eq 31 (Fig. 7a): one friction element per pair c–t_j
+    /// on u_c − u_tj with the inverse-distance weights w_j of eq 29 scaling k_t, k_n and n0.
+    #[default]
+    #[serde(rename = "array")]
+    Array,
+    /// One friction element per contact node on u_c − u(t_v), u(t_v) = Σ_j N_j(t_v) u_tj
+    /// interpolated by the target face's shape functions (the alternative of §4, Fig. 8); its
+    /// force goes back to the t_j by the same N_j. Unlike the array it gives no force under a
+    /// rigid rotation of both faces and adds no stiffness to the target face's own deformation.
+    #[serde(rename = "interpolated")]
+    Interpolated,
 }
 
 /// The friction element used per contact pair.

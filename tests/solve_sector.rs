@@ -3,6 +3,8 @@
 //! cyclic constraint, stuck limit against the ROM plus independently assembled contact springs,
 //! and the cyclic consistency of the pair rows, σ and phases under a rigid rotation.
 
+mod common;
+
 use std::path::PathBuf;
 
 use faer::linalg::solvers::Solve;
@@ -285,17 +287,7 @@ fn contact_springs(s: &Setup, k: usize, closed: &[bool]) -> Mat<c64> {
             let col = [0, 1, 2].map(|a| -e * rot[a][d]);
             l.push((rom_row(t[d]), col));
         }
-        for &(ri, li) in &l {
-            for &(rj, lj) in &l {
-                let mut v = c64::new(0.0, 0.0);
-                for (a, la) in li.iter().enumerate() {
-                    for (b, lb) in lj.iter().enumerate() {
-                        v += la.conj() * g(a, b) * lb;
-                    }
-                }
-                kc[(ri, rj)] += v;
-            }
-        }
+        common::springs::add_spring(&mut kc, &l, g);
     }
     kc
 }

@@ -13,6 +13,8 @@
 //! * [`grounded`]: [`grounded::DofElements`], the `[[element]]` friction elements on DOF
 //!   combinations of a matrix model as a `HarmonicForce`.
 //! * `assembly`: the parallel evaluate-and-sum loop shared by the two.
+//! * [`mapped`]: [`mapped::DofMap`], elements reading linear combinations of the solved DOFs
+//!   (SAMA's interpolated virtual target nodes).
 
 pub mod aft;
 pub(crate) mod assembly;
@@ -20,4 +22,5 @@ pub mod element;
 pub mod grounded;
 pub mod kinematics;
 pub mod law;
+pub mod mapped;
 pub mod pairs;

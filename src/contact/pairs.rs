@@ -26,6 +26,7 @@ use crate::contact::kinematics::{
     check_frame, mat_mul, node_jacobian, relative_local, relative_transpose, Mat3, Phases,
 };
 use crate::contact::law::{ContactParams, Variant};
+use crate::contact::mapped::DofMap;
 use crate::error::{Error, Result};
 use crate::harmonics::{HarmonicForce, HarmonicLayout};
 
@@ -79,6 +80,8 @@ pub struct PairSet {
     pairs: Vec<ContactPair>,
     prepared: Vec<Prepared>,
     coupling: Option<SectorCoupling>,
+    /// Rows of the pairs are inner DOFs y = B x of this map (x: the DOFs the force acts on).
+    map: Option<DofMap>,
     aft: AftCache,
     slots: SlotStorage,
 }
@@ -163,9 +166,25 @@ impl PairSet {
             pairs,
             prepared,
             coupling,
+            map: None,
             aft: AftCache::default(),
             slots: SlotStorage::default(),
         })
+    }
+
+    /// The same pairs reading inner DOFs y = B x ([`DofMap`]): the rows given to [`PairSet::new`]
+    /// (its `n_dofs`) are rows of y, and the set acts on x (`map.outer()` DOFs) with forces Bᵀ F_y
+    /// and Jacobian Bᵀ J_y B. Error ([`Error::Input`]) when the map's inner size is not `n_dofs`.
+    pub fn with_map(mut self, map: DofMap) -> Result<Self> {
+        if map.inner() != self.n_dofs {
+            return Err(Error::input(format!(
+                "contact pairs: the DOF map gives {} inner DOFs, the pairs use {}",
+                map.inner(),
+                self.n_dofs
+            )));
+        }
+        self.map = Some(map);
+        Ok(self)
     }
 
     /// The pairs.
@@ -182,6 +201,8 @@ impl PairSet {
         state: &PairState,
         loops: bool,
     ) -> Result<Vec<(ElementReport, Option<HysteresisLoop>)>> {
+        let mapped = self.map.as_ref().map(|map| map.forward(layout, q));
+        let q = mapped.as_deref().unwrap_or(q);
         let (aft, phases) = self.prepare(layout, q, state)?;
         let m = layout.coefficients();
         let mut out = Vec::with_capacity(self.pairs.len());
@@ -380,8 +401,53 @@ impl PairSet {
         }
     }
 
-    /// Evaluates every pair in parallel and sums into the outputs.
+    /// Evaluates every pair into the outputs, through the DOF map when there is one.
     fn run(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &mut PairState,
+        outputs: Outputs<'_>,
+    ) -> Result<()> {
+        let Some(map) = &self.map else {
+            return self.run_inner(layout, q, state, outputs);
+        };
+        if q.len() != layout.len(map.outer()) {
+            return Err(Error::Compute(format!(
+                "contact pairs: harmonic vector of length {} for {} DOFs × {} coefficients",
+                q.len(),
+                map.outer(),
+                layout.coefficients()
+            )));
+        }
+        let y = map.forward(layout, q);
+        let n = layout.len(self.n_dofs);
+        let mut force = outputs.force.as_ref().map(|_| vec![0.0; n]);
+        let mut dn0 = outputs.dn0.as_ref().map(|_| vec![0.0; n]);
+        let mut jacobian = outputs
+            .jacobian
+            .as_ref()
+            .map(|_| faer::Mat::<f64>::zeros(n, n));
+        let inner = Outputs {
+            force: force.as_deref_mut(),
+            dn0: dn0.as_deref_mut(),
+            jacobian: jacobian.as_mut().map(|j| j.as_mut()),
+        };
+        self.run_inner(layout, &y, state, inner)?;
+        if let (Some(out), Some(f)) = (outputs.force, &force) {
+            map.add_transpose(layout, f, out);
+        }
+        if let (Some(out), Some(d)) = (outputs.dn0, &dn0) {
+            map.add_transpose(layout, d, out);
+        }
+        if let (Some(out), Some(j)) = (outputs.jacobian, &jacobian) {
+            map.add_jacobian(layout, j.as_ref(), out);
+        }
+        Ok(())
+    }
+
+    /// Evaluates every pair in parallel on the pairs' own DOF vector and sums into the outputs.
+    fn run_inner(
         &self,
         layout: &HarmonicLayout,
         q: &[f64],
@@ -432,7 +498,7 @@ impl HarmonicForce for PairSet {
     type State = PairState;
 
     fn n_dofs(&self) -> usize {
-        self.n_dofs
+        self.map.as_ref().map_or(self.n_dofs, DofMap::outer)
     }
 
     /// Sliders at rest at the origin of the relative motion.

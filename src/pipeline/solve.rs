@@ -481,7 +481,7 @@ fn sector_curve(
     let system = problem.system()?;
     let sizes: Vec<usize> = interfaces
         .iter()
-        .map(|i| i.pairs.iter().map(|p| p.targets.len()).sum())
+        .map(ContactInterface::element_count)
         .collect();
     let evaluate = |q: &[f64], state: &PairState, loops: bool| {
         problem

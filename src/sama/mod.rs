@@ -18,7 +18,10 @@
 //!    above the coincidence tolerance) or is farther than [`MAX_DISTANCE`] × the target's mean
 //!    edge is **unprojected**: listed in [`ContactInterface::unprojected`], never dropped silently;
 //! 3. **weights** (SAMA): w_j by inverse distance in the contact plane (eqs 28–29, [`weights`]);
-//!    zero weights of eq 29's coincident case are left out of the pair;
+//!    zero weights of eq 29's coincident case are left out of the pair. With `coupling =
+//!    "interpolated"` the w_j are instead the target face's shape functions N_j at t_v (§4,
+//!    Fig. 8; a coincident node still gets weight 1 alone), which may be negative (corner nodes
+//!    of quadratic faces);
 //! 4. **parameters** per pair c–t_j (eq 31): k_tj = w_j k_t, k_nj = w_j k_n, n0_j = w_j n0_c,
 //!    where k_t, k_n are per contact node (`interface.md`) and n0_c is the contact node's share of
 //!    the interface's total preload n0, in proportion to its tributary area on the contact faces
@@ -28,11 +31,22 @@
 //! 5. for `model = "node-to-node"`: pairs every contact node with the target node at the same
 //!    position after placement (weight 1); a contact node without one is an error that lists them.
 //!
-//! The harmonic balance turns each pair c–t_j into a node-to-node friction element acting on the
+//! With `coupling = "array"` (default) the harmonic balance turns each pair c–t_j into a
+//! node-to-node friction element acting on the
 //! relative displacement r = u_c − e^{iσφ_k} R_α^σ u_tj ([`ContactInterface::relative_displacement`];
 //! eq 33 of the paper), whose force goes back to the target node by the adjoint map
 //! ([`ContactInterface::pair_forces`]). [`ContactInterface::elements`] hands the pairs to
 //! [`crate::contact::pairs::PairSet`] as such elements (weighted parameters and preload rates).
+//! With `coupling = "interpolated"` each contact node becomes one element (k_t, k_n, n0_c) on
+//! r = u_c − e^{iσφ_k} R_α^σ Σ_j N_j u_tj: the element reads a *virtual node* whose rows the
+//! [`crate::contact::mapped::DofMap`] fills with Σ_j N_j u_tj ([`ContactInterface::elements_with`]).
+//!
+//! Why the choice matters (measured on the bundled shroud, `examples/stuck_frequencies.rs`): the
+//! array's pairs c–t_j join points up to one target element apart, so a rigid rotation θ of both
+//! faces stretches them by θ × (x_c − x_tj) and the target face's own deformation within an
+//! element is resisted by Σ_j w_j k_t — spurious stiffness that raised the fully stuck frequency
+//! of the non-conforming sector by 15 % over the node-to-node benchmark; the interpolated coupling
+//! reproduces linear fields exactly and stays within 0.6 %.
 
 pub mod elements;
 pub mod geom;
@@ -44,7 +58,7 @@ pub mod weights;
 
 use std::collections::HashMap;
 
-use crate::case::{Case, Contact, ContactElement, ContactModel};
+use crate::case::{Case, Contact, ContactElement, ContactModel, SamaCoupling};
 use crate::cyclic::{CyclicGeometry, MATCH_TOLERANCE};
 use crate::error::{Error, Result};
 use crate::mesh::faces::group_faces;
@@ -120,6 +134,9 @@ pub struct ContactInterface {
     pub name: String,
     /// SAMA or node-to-node.
     pub model: ContactModel,
+    /// SAMA coupling of a contact node to its target nodes (array of eq 31, or interpolated);
+    /// irrelevant for pairs with a single target (weight 1).
+    pub coupling: SamaCoupling,
     /// 1-D or 2-D friction element per pair.
     pub element: ContactElement,
     /// Friction coefficient μ of every pair.
@@ -221,6 +238,7 @@ pub fn build_interface(
     let mut iface = ContactInterface {
         name: c.name.clone(),
         model: c.model,
+        coupling: c.coupling,
         element: c.element,
         mu: c.mu,
         sigma: trial.sigma,
@@ -465,11 +483,23 @@ fn fill_pairs(
             Some(m) => (vec![m[i]], vec![1.0]),
             None => {
                 let xs = geo.surface.face_points(p.face);
-                let w = weights::inverse_distance_weights(p.point, &p.frame, &xs, geo.coincident);
+                let w = match c.coupling {
+                    SamaCoupling::Array => {
+                        weights::inverse_distance_weights(p.point, &p.frame, &xs, geo.coincident)
+                    }
+                    SamaCoupling::Interpolated => weights::interpolation_weights(
+                        face.kind,
+                        p.uv,
+                        p.point,
+                        &p.frame,
+                        &xs,
+                        geo.coincident,
+                    ),
+                };
                 face.nodes
                     .iter()
                     .zip(w)
-                    .filter(|(_, w)| *w > 0.0)
+                    .filter(|(_, w)| *w != 0.0)
                     .map(|(&n, w)| (n, w))
                     .unzip()
             }

@@ -2,7 +2,7 @@
 
 use serde_json::{json, Value};
 
-use crate::case::ContactModel;
+use crate::case::{ContactModel, SamaCoupling};
 
 use super::ContactInterface;
 
@@ -11,6 +11,14 @@ pub fn model_name(model: ContactModel) -> &'static str {
     match model {
         ContactModel::Sama => "sama",
         ContactModel::NodeToNode => "node-to-node",
+    }
+}
+
+/// The coupling's spelling in the case file and the report.
+pub fn coupling_name(coupling: SamaCoupling) -> &'static str {
+    match coupling {
+        SamaCoupling::Array => "array",
+        SamaCoupling::Interpolated => "interpolated",
     }
 }
 
@@ -57,6 +65,7 @@ pub fn interface_json(iface: &ContactInterface) -> Value {
     json!({
         "name": iface.name,
         "model": model_name(iface.model),
+        "coupling": coupling_name(iface.coupling),
         "sigma": iface.sigma,
         "contact_nodes": iface.contact_nodes,
         "projected": iface.pairs.len(),

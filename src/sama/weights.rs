@@ -41,6 +41,40 @@ pub fn inverse_distance_weights(
     w
 }
 
+/// Shape-function weights of the target nodes of one contact node (SAMA paper §4, Fig. 8: the
+/// virtual node's displacement interpolated on the target face, u(t_v) = Σ_j N_j u_tj).
+///
+/// * `kind`, `uv`: the target face's element type and the reference coordinates of t_v on it;
+/// * `virtual_point`, `frame`, `targets`, `coincident`: as for [`inverse_distance_weights`]: when a target node
+///   lies within `coincident` of t_v in the contact plane, it gets weight 1 and the others 0
+///   (exactly the node-to-node pair, as eq 29 does).
+///
+/// Otherwise returns N_j(u, v) in the face's node order: Σ_j N_j = 1 and Σ_j N_j x_tj = t_v on a
+/// flat face (linear fields are reproduced, so a rigid motion gives no relative displacement);
+/// the corner values of quadratic faces are negative inside the face. Values below 1e-12 in
+/// magnitude (nodes of the edge t_v lies on) are set to 0, so the pair leaves them out.
+pub fn interpolation_weights(
+    kind: ElementType,
+    uv: [f64; 2],
+    virtual_point: [f64; 3],
+    frame: &[[f64; 3]; 3],
+    targets: &[[f64; 3]],
+    coincident: f64,
+) -> Vec<f64> {
+    if let Some(j) = targets
+        .iter()
+        .position(|&x| plane_distance(virtual_point, frame, x) <= coincident)
+    {
+        let mut w = vec![0.0; targets.len()];
+        w[j] = 1.0;
+        return w;
+    }
+    let (n, _) = surface_shape(kind, uv[0], uv[1]);
+    n.into_iter()
+        .map(|nj| if nj.abs() < 1e-12 { 0.0 } else { nj })
+        .collect()
+}
+
 /// Eq 28: distance (m) between t_v and a target node, measured in the contact plane (t1, t2).
 pub fn plane_distance(virtual_point: [f64; 3], frame: &[[f64; 3]; 3], target: [f64; 3]) -> f64 {
     let d = sub(virtual_point, target);

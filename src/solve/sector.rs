@@ -17,6 +17,7 @@ use faer::c64;
 
 use crate::case::{Case, ContactElement, Excitation, ExcitationLoad};
 use crate::contact::law::Variant;
+use crate::contact::mapped::DofMap;
 use crate::contact::pairs::{PairSet, SectorCoupling};
 use crate::cyclic::harmonic_indices;
 use crate::error::{Error, Result};
@@ -25,6 +26,7 @@ use crate::hbm::preload::FromStaticEquilibrium;
 use crate::hbm::{HbmSystem, LinearModel, MatrixBlock};
 use crate::mesh::Mesh;
 use crate::rom::{HarmonicRom, Rom};
+use crate::sama::elements::VirtualNodes;
 use crate::sama::ContactInterface;
 
 /// A physical DOF of the reference sector: Gmsh node tag and component 0/1/2 = x/y/z (global).
@@ -190,7 +192,8 @@ fn node_row_map(dofs: &[DofLabel]) -> BTreeMap<u64, [usize; 3]> {
 }
 
 /// The [`PairSet`] of all interfaces on the contact DOF vector, with the cyclic coupling
-/// (R_α, k_n) when the ROM is cyclic.
+/// (R_α, k_n) when the ROM is cyclic; interpolated SAMA couplings read virtual nodes
+/// (Σ_j N_j u_tj) through a [`DofMap`] appended after the physical rows.
 fn pair_set(
     rom: &Rom,
     interfaces: &[ContactInterface],
@@ -199,8 +202,9 @@ fn pair_set(
     k_n: &[usize],
 ) -> Result<PairSet> {
     let mut pairs = Vec::new();
+    let mut virtuals = VirtualNodes::new(n_dofs);
     for iface in interfaces {
-        pairs.extend(iface.elements(|tag| node_rows.get(&tag).copied())?);
+        pairs.extend(iface.elements_with(|tag| node_rows.get(&tag).copied(), &mut virtuals)?);
     }
     let variant = friction_variant(interfaces)?;
     let coupling = rom.cyclic.as_ref().map(|g| SectorCoupling {
@@ -208,7 +212,12 @@ fn pair_set(
         rotation: g.rotation(1),
         harmonic_indices: k_n.to_vec(),
     });
-    PairSet::new(n_dofs, variant, pairs, coupling)
+    if virtuals.rows.is_empty() {
+        return PairSet::new(n_dofs, variant, pairs, coupling);
+    }
+    let inner = n_dofs + virtuals.rows.len();
+    PairSet::new(inner, variant, pairs, coupling)?
+        .with_map(DofMap::identity_and(n_dofs, virtuals.rows)?)
 }
 
 /// The one friction element variant of all interfaces (the PairSet has one).
