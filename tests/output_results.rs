@@ -97,6 +97,7 @@ fn contact(name: &str, elements: usize) -> ContactData {
         curves: details(elements, &[6, 3]),
         name: name.to_string(),
         model: "sama".to_string(),
+        coupling: "interpolated".to_string(),
         element: "2d".to_string(),
         sigma: -1,
         mu: 0.5,

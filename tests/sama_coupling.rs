@@ -15,6 +15,7 @@ use nlrom::cyclic::phase;
 use nlrom::harmonics::HarmonicForce;
 use nlrom::hbm::{solve_fixed, FrequencyPath, HbmSystem, NewtonOptions};
 use nlrom::model;
+use nlrom::output::ContactData;
 use nlrom::reduction::reduce;
 use nlrom::rom::{HarmonicRom, Rom};
 use nlrom::sama::{build_interfaces, ContactInterface};
@@ -158,6 +159,19 @@ fn interpolated_stuck_limit_equals_rom_with_interpolated_springs() {
     array_case.contact[0].coupling = SamaCoupling::Array;
     let array_ifaces = build_interfaces(&array_case, mesh, rom.cyclic.as_ref()).unwrap();
     let array = SectorProblem::build(&array_case, &rom, mesh, &array_ifaces).unwrap();
+    // the results file lists the harmonic balance's elements, one row each, for both couplings
+    for (iface, prob) in [(&interfaces[0], &problem), (&array_ifaces[0], &array)] {
+        let data = ContactData::from_interface(iface);
+        assert_eq!(data.pairs.len(), prob.contact.inner.pairs().len());
+        assert_eq!(data.pairs.len(), iface.element_count());
+        let kt: f64 = data.pairs.iter().map(|p| p.kt).sum();
+        let total: f64 = iface.pairs.iter().flat_map(|p| p.kt.iter()).sum();
+        assert!(
+            (kt - total).abs() <= 1e-12 * total,
+            "{} {kt} {total}",
+            data.coupling
+        );
+    }
     let other = rel_err(&hb_outputs(&array, omega), &direct);
     println!("interpolated HB vs ROM + springs: {err:.2e}; array coupling differs by {other:.2e}");
     assert!(err < 1e-8, "{err:.3e}");

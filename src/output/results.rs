@@ -18,7 +18,7 @@
 //! | `/frf/<i>/newton_iterations` | u64 [P] | 1 | Newton iterations of each point |
 //! | `/frf/<i>/stable` | i64 [P] | 1 | 1 stable, 0 unstable (only when computed) |
 //! | `/contact` attributes | | | `names`: the interfaces in the order of the points' contact fractions |
-//! | `/contact/<name>` attributes | | | `model`, `element`, `sigma`, `mu` |
+//! | `/contact/<name>` attributes | | | `model`, `coupling` (array, interpolated), `element`, `sigma`, `mu` |
 //! | `/contact/<name>/pairs` | compound [E] {contact_node u64, target_node u64} | 1 | the node-to-node elements (c, t_j) |
 //! | `/contact/<name>/weights`, `kt`, `kn`, `preload` | f64 [E] | 1, N/m, N/m, N | w_j, k_tj, k_nj, n0_j of each element (SAMA eq. 29–31) |
 //! | `/contact/<name>/frames` | f64 [E, 3, 3] | 1 | local frame, rows t1, t2, n (global axes) |
@@ -159,6 +159,9 @@ pub struct ContactData {
     pub name: String,
     /// `"sama"` or `"node-to-node"`.
     pub model: String,
+    /// SAMA coupling: `"array"` (eq. 31, one element per c–t_j) or `"interpolated"` (one element
+    /// per contact node on its interpolated virtual node).
+    pub coupling: String,
     /// `"1d"` or `"2d"`.
     pub element: String,
     /// Sector offset σ of the target (`conventions.md` §3).
@@ -172,25 +175,50 @@ pub struct ContactData {
 }
 
 impl ContactData {
-    /// The elements (c, t_j) of a SAMA / node-to-node interface, one per target node of each
-    /// contact node, with the weights, frames and eq. 31 parameters `sama` computed.
+    /// The friction elements of a SAMA / node-to-node interface, in the order of the harmonic
+    /// balance's elements: with the array coupling one per target node t_j of each contact node,
+    /// with the weights, frames and eq. 31 parameters `sama` computed; with the interpolated
+    /// coupling one per contact node (weight 1, the node's k_t, k_n and n0_c), whose
+    /// `target_node` is the target node of the largest shape-function share.
     pub fn from_interface(interface: &crate::sama::ContactInterface) -> Self {
-        let pairs = interface
-            .pairs
-            .iter()
-            .flat_map(|pair| {
-                (0..pair.targets.len()).map(move |j| ContactPairData {
+        use crate::case::SamaCoupling;
+        let interpolated = interface.coupling == SamaCoupling::Interpolated;
+        let mut pairs = Vec::new();
+        for pair in &interface.pairs {
+            let row =
+                |target_node: u64, weight: f64, kt: f64, kn: f64, preload: f64| ContactPairData {
                     contact_node: pair.contact_node,
-                    target_node: pair.targets[j],
-                    weight: pair.weights[j],
+                    target_node,
+                    weight,
                     frame: pair.frame,
-                    kt: pair.kt[j],
-                    kn: pair.kn[j],
-                    preload: pair.n0[j],
+                    kt,
+                    kn,
+                    preload,
                     virtual_point: pair.virtual_point,
-                })
-            })
-            .collect();
+                };
+            if interpolated && pair.targets.len() > 1 {
+                let dominant = (0..pair.targets.len())
+                    .max_by(|&a, &b| pair.weights[a].abs().total_cmp(&pair.weights[b].abs()))
+                    .unwrap_or(0);
+                pairs.push(row(
+                    pair.targets[dominant],
+                    1.0,
+                    pair.kt.iter().sum(),
+                    pair.kn.iter().sum(),
+                    pair.n0_node,
+                ));
+            } else {
+                for j in 0..pair.targets.len() {
+                    pairs.push(row(
+                        pair.targets[j],
+                        pair.weights[j],
+                        pair.kt[j],
+                        pair.kn[j],
+                        pair.n0[j],
+                    ));
+                }
+            }
+        }
         ContactData {
             name: interface.name.clone(),
             model: match interface.model {
@@ -198,6 +226,7 @@ impl ContactData {
                 crate::case::ContactModel::NodeToNode => "node-to-node",
             }
             .to_string(),
+            coupling: crate::sama::report::coupling_name(interface.coupling).to_string(),
             element: match interface.element {
                 crate::case::ContactElement::OneD => "1d",
                 crate::case::ContactElement::TwoD => "2d",
@@ -454,6 +483,7 @@ fn contact_group(parent: &mut Group, contact: &ContactData, frfs: &[FrfData]) ->
     let group = parent.group(&contact.name);
     group
         .set_attr("model", Attr::Str(contact.model.clone()))
+        .set_attr("coupling", Attr::Str(contact.coupling.clone()))
         .set_attr("element", Attr::Str(contact.element.clone()))
         .set_attr("sigma", Attr::I64(contact.sigma))
         .set_attr("mu", Attr::F64(contact.mu));
@@ -950,6 +980,7 @@ fn read_contact(reader: &H5Reader, name: &str, frf_points: &[usize]) -> Result<C
     Ok(ContactData {
         name: name.to_string(),
         model: reader.attr_str(&base, "model")?,
+        coupling: reader.attr_str(&base, "coupling")?,
         element: reader.attr_str(&base, "element")?,
         sigma: reader.attr_i64(&base, "sigma")?,
         mu: reader.attr_f64(&base, "mu")?,
