@@ -13,8 +13,6 @@ mod common;
 use faer::linalg::solvers::Solve;
 use faer::{c64, Mat};
 use nlrom::case::{Case, MarchScheme};
-use nlrom::harmonics::HarmonicForce;
-use nlrom::hbm::{solve_fixed, FrequencyPath, HbmSystem, NewtonOptions};
 use nlrom::march::from_case::{case_march, CaseMarch};
 use nlrom::march::{march, MarchOutcome};
 use nlrom::model;
@@ -23,6 +21,7 @@ use nlrom::sama::build_interfaces;
 use nlrom::solve::SectorProblem;
 
 use common::cli::root;
+use common::sector_hb::hb_outputs;
 
 const N: usize = 8;
 const FORCE: [f64; 3] = [0.3, -0.2, 1.0];
@@ -222,27 +221,7 @@ fn hb_h1(case: &Case, omega: f64) -> Vec<c64> {
     let mesh = sm.mesh.as_ref().unwrap();
     let interfaces = build_interfaces(case, mesh, rom.cyclic.as_ref()).expect("interfaces");
     let p = SectorProblem::build(case, &rom, mesh, &interfaces).expect("problem");
-    let system = HbmSystem::new(p.layout, &p.linear, &p.contact).unwrap();
-    let path = FrequencyPath {
-        system: &system,
-        level: 1.0,
-    };
-    let opts = NewtonOptions {
-        tolerance: 1e-10,
-        ..NewtonOptions::default()
-    };
-    let x0 = vec![0.0; system.dim()];
-    let x = solve_fixed(&path, &x0, omega, &p.contact.initial_state(), &opts)
-        .expect("HB converges")
-        .x;
-    let nd = p.linear.n_condensed();
-    let q1: Vec<c64> = (0..nd)
-        .map(|i| {
-            let r = p.layout.cos_index(1, i, nd);
-            c64::new(x[r], x[r + 1])
-        })
-        .collect();
-    p.linear.condense(1, omega).unwrap().recover(&q1)
+    hb_outputs(&p, omega)
 }
 
 /// Micro-slip of the shroud at k = 0 (engine order 0), 170 Hz (the first stuck k = 0 mode is near

@@ -13,13 +13,14 @@ use faer::{c64, Mat};
 use nlrom::case::{Case, SamaCoupling};
 use nlrom::cyclic::phase;
 use nlrom::harmonics::HarmonicForce;
-use nlrom::hbm::{solve_fixed, FrequencyPath, HbmSystem, NewtonOptions};
 use nlrom::model;
 use nlrom::output::ContactData;
 use nlrom::reduction::reduce;
 use nlrom::rom::{HarmonicRom, Rom};
 use nlrom::sama::{build_interfaces, ContactInterface};
 use nlrom::solve::SectorProblem;
+
+use common::sector_hb::hb_outputs;
 
 /// The case with the interpolated coupling, μ = 1e6 (never slips), n0 = 1e6 N (the smallest
 /// node's share, ≈ 2e3 N, keeps it closed: k_n × the relative motion is far below) and H = 1.
@@ -100,31 +101,6 @@ fn rom_solve(
         .iter()
         .map(|o| q[(h.row_of(o.node_tag, o.component).unwrap(), 0)])
         .collect()
-}
-
-/// Harmonic 1 of the output DOFs of the HB solution at ω by Newton from zero.
-fn hb_outputs(problem: &SectorProblem, omega: f64) -> Vec<c64> {
-    let system = HbmSystem::new(problem.layout, &problem.linear, &problem.contact).unwrap();
-    let path = FrequencyPath {
-        system: &system,
-        level: 1.0,
-    };
-    let opts = NewtonOptions {
-        tolerance: 1e-10,
-        ..NewtonOptions::default()
-    };
-    let x0 = vec![0.0; system.dim()];
-    let x = solve_fixed(&path, &x0, omega, &problem.contact.initial_state(), &opts)
-        .expect("HB converges")
-        .x;
-    let nd = problem.linear.n_condensed();
-    let q1: Vec<c64> = (0..nd)
-        .map(|i| {
-            let r = problem.layout.cos_index(1, i, nd);
-            c64::new(x[r], x[r + 1])
-        })
-        .collect();
-    problem.linear.condense(1, omega).unwrap().recover(&q1)
 }
 
 fn rel_err(a: &[c64], b: &[c64]) -> f64 {

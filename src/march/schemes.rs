@@ -402,33 +402,25 @@ pub fn piecewise_linear_step(
     let mut extra = vec![0.0; sys.n];
     dense::matvec(&sys.mass, &mq, &mut extra);
     dense::matvec_add(&sys.damping, &cq, &mut extra);
-    match state_iteration(ctx, true, states, sliders, &extra, cache)? {
-        Ok((q1, samples, iterations)) => {
-            let (a1, v1) = newmark_rates(&q1, &qs, &vs, dt);
-            Ok(StepOutcome {
-                kin: Kinematics {
-                    q: q1,
-                    v: v1,
-                    a: a1,
-                },
-                samples,
-                iterations,
-            })
-        }
-        Err(tried) => {
-            let (q1, samples, its) = damped_newton(ctx, true, &start.q, sliders, &extra, cache)?;
-            let (a1, v1) = newmark_rates(&q1, &qs, &vs, dt);
-            Ok(StepOutcome {
-                kin: Kinematics {
-                    q: q1,
-                    v: v1,
-                    a: a1,
-                },
-                samples,
-                iterations: tried + its,
-            })
-        }
-    }
+    let (q1, samples, iterations) =
+        match state_iteration(ctx, true, states, sliders, &extra, cache)? {
+            Ok(solved) => solved,
+            Err(tried) => {
+                let (q1, samples, its) =
+                    damped_newton(ctx, true, &start.q, sliders, &extra, cache)?;
+                (q1, samples, tried + its)
+            }
+        };
+    let (a1, v1) = newmark_rates(&q1, &qs, &vs, dt);
+    Ok(StepOutcome {
+        kin: Kinematics {
+            q: q1,
+            v: v1,
+            a: a1,
+        },
+        samples,
+        iterations,
+    })
 }
 
 /// Quasi-static step (paper §5.2, eq. 10, Appendix B, eqs A17–A20): (K + K_c) q₁ = f_e + r_c with

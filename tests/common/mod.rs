@@ -3,4 +3,5 @@
 
 pub mod cli;
 pub mod python;
+pub mod sector_hb;
 pub mod springs;
