@@ -15,10 +15,10 @@ use std::time::Duration;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 #[path = "common/contact_input.rs"]
 mod contact_input;
-use contact_input::{input, pair_set};
+use contact_input::{bench_element, input, pair_set};
 use nlrom::contact::aft::Aft;
-use nlrom::contact::element::{evaluate, LocalElement, Workspace};
-use nlrom::contact::law::{ContactParams, Variant};
+use nlrom::contact::element::{evaluate, Workspace};
+use nlrom::contact::law::Variant;
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 
 fn element(c: &mut Criterion) {
@@ -31,12 +31,7 @@ fn element(c: &mut Criterion) {
         for (h, n_t) in [(3, 16), (3, 32), (7, 32)] {
             let aft = Aft::new(HarmonicLayout::new(h, n_t).unwrap()).unwrap();
             let mut ws = Workspace::new(&aft);
-            let el = LocalElement {
-                params: ContactParams::new(10.0, 20.0, 0.5, 1.0, "bench").unwrap(),
-                variant,
-                tangential: 2,
-                normal: true,
-            };
+            let el = bench_element(variant);
             let x = input(h);
             let mut f = vec![0.0; x.len()];
             let mut state = [0.0; 2];

@@ -20,10 +20,10 @@ use std::time::Instant;
 
 #[path = "../benches/common/contact_input.rs"]
 mod contact_input;
-use contact_input::{input, pair_set};
+use contact_input::{bench_element, input, pair_set};
 use nlrom::contact::aft::Aft;
-use nlrom::contact::element::{evaluate, LocalElement, Workspace};
-use nlrom::contact::law::{ContactParams, Variant};
+use nlrom::contact::element::{evaluate, Workspace};
+use nlrom::contact::law::Variant;
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -45,12 +45,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let count: usize = args[4].parse()?;
     let aft = Aft::new(HarmonicLayout::new(h, n_t)?)?;
     let mut ws = Workspace::new(&aft);
-    let element = LocalElement {
-        params: ContactParams::new(10.0, 20.0, 0.5, 1.0, "contact_cost")?,
-        variant,
-        tangential: 2,
-        normal: true,
-    };
+    let element = bench_element(variant);
     let x = input(h);
     let mut f = vec![0.0; x.len()];
     let mut state = [0.0; 2];

@@ -9,7 +9,10 @@ mod cyclic_common;
 
 use std::path::PathBuf;
 
-use cyclic_common::{max_rel_error, merge_sectors, sparse_sector_frequencies, union_below_cut};
+use cyclic_common::{
+    check_union_against_full, max_rel_error, merge_sectors, sparse_sector_frequencies,
+    union_below_cut,
+};
 use faer::{c64, Mat};
 use nlrom::case::Case;
 use nlrom::cyclic::{match_frontiers, CyclicGeometry};
@@ -106,19 +109,8 @@ fn union_of_sector_frequencies_is_the_annulus_spectrum() {
     let sparse: Vec<Vec<f64>> = (0..N)
         .map(|k| sparse_sector_frequencies(&model, &case, k, per_mode))
         .collect();
-    let union = union_below_cut(&sparse);
-    let reference = annulus_frequencies(union.len() + 2);
-    println!("annulus (Hz): {:?}", &reference[..union.len()]);
-    println!("union over k of the sector (Hz): {union:?}");
-    let err = max_rel_error(&union, &reference);
-    println!(
-        "cs without CB: {} frequencies, max relative error {err:.2e}",
-        union.len()
-    );
-    assert!(union.len() >= 20, "{}", union.len());
-    assert!(err < 1e-8, "{err:e}");
-    // The next annulus frequency is above the cut: no annulus mode was missed.
-    assert!(reference[union.len()] >= union[union.len() - 1] * (1.0 - 1e-8));
+    let (union, reference) =
+        check_union_against_full(&sparse, annulus_frequencies, 20, "cs without CB");
     // k and N − k are conjugate: equal frequencies.
     for k in 1..N / 2 {
         assert!(max_rel_error(&sparse[k], &sparse[N - k]) < 1e-9, "k = {k}");

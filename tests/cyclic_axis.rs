@@ -12,7 +12,9 @@ mod cyclic_common;
 
 use std::path::PathBuf;
 
-use cyclic_common::{max_rel_error, merge_sectors, sparse_sector_frequencies, union_below_cut};
+use cyclic_common::{
+    check_union_against_full, max_rel_error, merge_sectors, sparse_sector_frequencies,
+};
 use nlrom::case::Case;
 use nlrom::cyclic::{axis_basis, match_frontiers, CyclicGeometry};
 use nlrom::eigen::{lowest_modes, EigenOptions};
@@ -113,18 +115,7 @@ fn disk_with_axis_nodes_union_of_sector_frequencies_is_the_full_spectrum() {
     let sparse: Vec<Vec<f64>> = (0..N)
         .map(|k| sparse_sector_frequencies(&model, &case, k, per_k))
         .collect();
-    let union = union_below_cut(&sparse);
-    let reference = disk_frequencies(union.len() + 2);
-    println!("disk (Hz): {:?}", &reference[..union.len()]);
-    println!("union over k of the sector (Hz): {union:?}");
-    let err = max_rel_error(&union, &reference);
-    println!(
-        "axis nodes, cs without CB: {} frequencies, max relative error {err:.2e}",
-        union.len()
-    );
-    assert!(union.len() >= 16, "{}", union.len());
-    assert!(err < 1e-8, "{err:e}");
-    assert!(reference[union.len()] >= union[union.len() - 1] * (1.0 - 1e-8));
+    check_union_against_full(&sparse, disk_frequencies, 16, "axis nodes, cs without CB");
 
     // CB + CS with the axis nodes as masters (60 interface modes): the CB truncation error,
     // measured 4.2e-4..7.0e-4 for every k (with or without axis coordinates).

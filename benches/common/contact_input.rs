@@ -1,10 +1,22 @@
 //! The inputs of the contact benchmarks, shared by `benches/contact.rs` and
 //! `examples/contact_cost.rs`.
 
+use nlrom::contact::element::LocalElement;
 use nlrom::contact::law::{ContactParams, Variant};
 use nlrom::contact::pairs::{ContactPair, PairSet, SectorCoupling};
 use nlrom::cyclic::{harmonic_indices, CyclicGeometry};
 use nlrom::harmonics::HarmonicLayout;
+
+/// The benchmark element: k_t = 10, k_n = 20, μ = 0.5, n0 = 1, two tangential directions and
+/// the normal, law `variant`.
+pub fn bench_element(variant: Variant) -> LocalElement {
+    LocalElement {
+        params: ContactParams::new(10.0, 20.0, 0.5, 1.0, "bench").unwrap(),
+        variant,
+        tangential: 2,
+        normal: true,
+    }
+}
 
 /// Local input of a 3-D element: u1, u2 of amplitude ~0.1 (stick limit 0.05), v of 0.01.
 pub fn input(h: usize) -> Vec<f64> {

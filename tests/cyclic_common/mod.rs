@@ -129,3 +129,28 @@ pub fn max_rel_error(a: &[f64], b: &[f64]) -> f64 {
         .map(|(x, y)| (x / y - 1.0).abs())
         .fold(0.0, f64::max)
 }
+
+/// The cyclic-symmetry check: the union over k of the sector frequencies `per_k` (Hz) below the
+/// common cut against the lowest frequencies of the full model, `full(n)` giving its lowest n.
+/// Asserts at least `min_count` frequencies, agreement to 1e-8 relative, and that the next full
+/// frequency lies above the cut (no mode of the full model missed). Returns (union, reference).
+pub fn check_union_against_full(
+    per_k: &[Vec<f64>],
+    full: impl Fn(usize) -> Vec<f64>,
+    min_count: usize,
+    label: &str,
+) -> (Vec<f64>, Vec<f64>) {
+    let union = union_below_cut(per_k);
+    let reference = full(union.len() + 2);
+    println!("full model (Hz): {:?}", &reference[..union.len()]);
+    println!("union over k of the sector (Hz): {union:?}");
+    let err = max_rel_error(&union, &reference);
+    println!(
+        "{label}: {} frequencies, max relative error {err:.2e}",
+        union.len()
+    );
+    assert!(union.len() >= min_count, "{}", union.len());
+    assert!(err < 1e-8, "{err:e}");
+    assert!(reference[union.len()] >= union[union.len() - 1] * (1.0 - 1e-8));
+    (union, reference)
+}
