@@ -10,9 +10,10 @@ use std::path::{Path, PathBuf};
 use nlrom::mesh::msh::read_msh;
 use nlrom::mesh::{ElementType, Mesh, MshVersion};
 
-const MODELS: [&str; 10] = [
+const MODELS: [&str; 11] = [
     "sector_conforming",
     "sector_nonconforming",
+    "sector_coarse_target",
     "sector8",
     "cube_tet4",
     "cube_tet10",
