@@ -4,6 +4,8 @@
 //! iterations of the last point). Bars are drawn only when stderr is a terminal and never with
 //! `--quiet`; log lines are printed above the bars.
 
+use std::collections::HashSet;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -18,6 +20,9 @@ pub struct Reporter {
     verbose: bool,
     prefix: String,
     multi: MultiProgress,
+    /// Warnings already printed (shared by clones): sweep points solved in parallel raise the
+    /// same warning once each, and the user needs it once.
+    warned: Arc<Mutex<HashSet<String>>>,
 }
 
 impl Reporter {
@@ -34,6 +39,7 @@ impl Reporter {
             verbose,
             prefix: String::new(),
             multi: MultiProgress::with_draw_target(target),
+            warned: Arc::new(Mutex::new(HashSet::new())),
         }
     }
 
@@ -74,9 +80,21 @@ impl Reporter {
         }
     }
 
-    /// A warning, shown even with `--quiet`.
+    /// A warning, shown even with `--quiet`, once per reporter family (a repeated line, e.g. the
+    /// same projection warning from every sweep point, is not printed again).
     pub fn warn(&self, line: &str) {
-        self.print(&format!("warning: {line}"));
+        if self.first_warning(line) {
+            self.print(&format!("warning: {line}"));
+        }
+    }
+
+    /// Whether `line` (with this reporter's prefix) is warned for the first time; records it.
+    fn first_warning(&self, line: &str) -> bool {
+        let text = format!("{}{line}", self.prefix);
+        match self.warned.lock() {
+            Ok(mut seen) => seen.insert(text),
+            Err(_) => true,
+        }
     }
 
     /// A progress bar for one frequency response from `start_hz` to `end_hz`.
@@ -132,5 +150,22 @@ impl CurveBar {
     /// Removes the bar.
     pub fn finish(self) {
         self.bar.finish_and_clear();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Reporter;
+
+    #[test]
+    fn a_warning_is_given_once_per_label() {
+        let rep = Reporter::silent();
+        let clone = rep.clone();
+        assert!(rep.first_warning("5 nodes unprojected"));
+        assert!(!clone.first_warning("5 nodes unprojected"));
+        assert!(rep.first_warning("another warning"));
+        let job = rep.labelled("case 2");
+        assert!(job.first_warning("5 nodes unprojected"));
+        assert!(!job.labelled("case 2").first_warning("5 nodes unprojected"));
     }
 }
