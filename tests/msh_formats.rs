@@ -10,9 +10,10 @@ use std::path::{Path, PathBuf};
 use nlrom::mesh::msh::read_msh;
 use nlrom::mesh::{ElementType, Mesh, MshVersion};
 
-const MODELS: [&str; 10] = [
+const MODELS: [&str; 11] = [
     "sector_conforming",
     "sector_nonconforming",
+    "sector_coarse_target",
     "sector8",
     "cube_tet4",
     "cube_tet10",
@@ -142,7 +143,13 @@ fn counts_agree_with_meshio() {
         .expect("meshio_counts.json");
     let expected: serde_json::Value = serde_json::from_str(&text).expect("valid JSON");
     let files = expected.as_object().expect("object");
-    assert_eq!(files.len(), 4 * MODELS.len(), "one entry per bundled file");
+    // Every model in four variants, and disk8.msh (tools/make_disk_mesh.py) in MSH 4.1 ASCII only.
+    assert_eq!(
+        files.len(),
+        4 * MODELS.len() + 1,
+        "one entry per bundled file"
+    );
+    assert!(files.contains_key("meshes/disk8.msh"));
     for (rel, want) in files {
         let m = load(rel);
         let got = nlrom::cli::mesh_summary(&m);
