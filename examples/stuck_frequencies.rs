@@ -356,10 +356,10 @@ fn main() -> Result<()> {
         .unwrap_or(0);
     let k = m % geom.sectors;
     let h = rom.harmonic(k).expect("the ROM holds k_1");
-    let own = case.contact[0].coupling;
-    case.contact[0].coupling = SamaCoupling::Array;
+    let own = case.contact[0].coupling.unwrap_or_default();
+    case.contact[0].coupling = Some(SamaCoupling::Array);
     let array = build_interfaces(&case, mesh, Some(&geom))?.remove(0);
-    case.contact[0].coupling = SamaCoupling::Interpolated;
+    case.contact[0].coupling = Some(SamaCoupling::Interpolated);
     let shape = build_interfaces(&case, mesh, Some(&geom))?.remove(0);
     let e = c64::from_polar(1.0, array.sigma as f64 * phase(k, geom.sectors));
     let rot = geom.rotation(array.sigma);

@@ -293,9 +293,10 @@ pub struct Contact {
     #[serde(default)]
     pub model: ContactModel,
     /// SAMA only: how a contact node is coupled to the target face around its virtual node:
-    /// `array` (default, the paper's eq 31) or `interpolated` (shape functions, paper Fig. 8).
+    /// `array` (the paper's eq 31; the default when absent) or `interpolated` (shape functions,
+    /// paper Fig. 8). Giving it with `model = "node-to-node"` is an input error.
     #[serde(default)]
-    pub coupling: SamaCoupling,
+    pub coupling: Option<SamaCoupling>,
     /// Friction element: independent (`1d`, default) or coupled (`2d`) tangential directions.
     #[serde(default)]
     pub element: ContactElement,
@@ -1347,6 +1348,14 @@ impl Case {
                 },
             )?;
             self.check_friction(&key, c.mu, c.kt, c.kn, c.n0, true)?;
+            self.require(
+                c.coupling.is_none() || c.model == ContactModel::Sama,
+                &format!("{key}.coupling"),
+                || {
+                    "`coupling` applies to `model = \"sama\"` only (node-to-node pairs have one \
+                     target node each); remove it or set `model = \"sama\"`"
+                },
+            )?;
             if let Some(m) = &c.misalignment {
                 self.check_misalignment(&format!("{key}.misalignment"), m)?;
             }

@@ -330,6 +330,13 @@ fn value_range_errors_name_their_keys() {
             matrix_with("weights = [-1.0, 1.0]", "weights = [-1.0]"),
             "element[0].tangential",
         ),
+        (
+            full_with(
+                "model = \"sama\"  ",
+                "model = \"node-to-node\"\ncoupling = \"interpolated\"\n",
+            ),
+            "contact[0].coupling",
+        ),
     ];
     for (text, key) in cases {
         let msg = input_error(&text);

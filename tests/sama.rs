@@ -572,7 +572,7 @@ fn interpolated_coupling_reproduces_the_virtual_node_and_rigid_rotations() {
     use nlrom::case::SamaCoupling;
     let (mut case, mesh, geom) = setup("shroud_nonconforming");
     let array = interface(&case, &mesh, &geom);
-    case.contact[0].coupling = SamaCoupling::Interpolated;
+    case.contact[0].coupling = Some(SamaCoupling::Interpolated);
     let interp = interface(&case, &mesh, &geom);
     assert_eq!(interp.pairs.len(), 65);
     assert_eq!(interp.element_count(), 65);

@@ -27,7 +27,7 @@ use common::sector_hb::hb_outputs;
 fn case() -> Case {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/shroud_nonconforming.toml");
     let mut case = Case::load(&path).unwrap();
-    case.contact[0].coupling = SamaCoupling::Interpolated;
+    case.contact[0].coupling = Some(SamaCoupling::Interpolated);
     case.contact[0].mu = 1e6;
     case.contact[0].n0 = 1e6;
     case.harmonic_balance.harmonics = 1;
@@ -132,7 +132,7 @@ fn interpolated_stuck_limit_equals_rom_with_interpolated_springs() {
     let direct = rom_solve(h, &problem, &case, omega, &kc);
     let err = rel_err(&hb, &direct);
     let mut array_case = case.clone();
-    array_case.contact[0].coupling = SamaCoupling::Array;
+    array_case.contact[0].coupling = Some(SamaCoupling::Array);
     let array_ifaces = build_interfaces(&array_case, mesh, rom.cyclic.as_ref()).unwrap();
     let array = SectorProblem::build(&array_case, &rom, mesh, &array_ifaces).unwrap();
     // the results file lists the harmonic balance's elements, one row each, for both couplings

@@ -2,7 +2,7 @@
 //! misalignment cases, rigid translation, bad input), random curved surfaces (BVH projection
 //! against a brute-force search over every face), and the area lumping rule.
 
-use nlrom::case::{Contact, ContactElement, ContactModel, Misalignment, Rotation, SamaCoupling};
+use nlrom::case::{Contact, ContactElement, ContactModel, Misalignment, Rotation};
 use nlrom::mesh::{ElementBlock, ElementType, Mesh, MshFormat, MshVersion, PhysicalGroup};
 use nlrom::sama::project::closest_on_face;
 use nlrom::sama::surface::{SurfaceFace, TargetSurface};
@@ -103,7 +103,7 @@ fn contact(model: ContactModel, misalignment: Option<Misalignment>) -> Contact {
         contact: "contact".into(),
         target: "target".into(),
         model,
-        coupling: SamaCoupling::Array,
+        coupling: None,
         element: ContactElement::OneD,
         mu: 0.3,
         kt: 2.0e6,

@@ -238,7 +238,7 @@ pub fn build_interface(
     let mut iface = ContactInterface {
         name: c.name.clone(),
         model: c.model,
-        coupling: c.coupling,
+        coupling: c.coupling.unwrap_or_default(),
         element: c.element,
         mu: c.mu,
         sigma: trial.sigma,
@@ -483,7 +483,7 @@ fn fill_pairs(
             Some(m) => (vec![m[i]], vec![1.0]),
             None => {
                 let xs = geo.surface.face_points(p.face);
-                let w = match c.coupling {
+                let w = match c.coupling.unwrap_or_default() {
                     SamaCoupling::Array => {
                         weights::inverse_distance_weights(p.point, &p.frame, &xs, geo.coincident)
                     }
