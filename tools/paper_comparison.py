@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The SAMA paper's experiment (seed 004, §6.2) on the bundled shrouded sector, in one command.
 
-    python3 tools/paper_comparison.py [--modes m1 m2] [--skip-solve] [--out results/paper]
+    python3 tools/paper_comparison.py [--modes m1 m2] [--skip-solve] [--out results/paper] [--figures docs/paper]
 
 Modes (default: both): M1 = the first stuck-shroud mode of harmonic index 3 (bending, 791 Hz fully
 stuck), M2 = the first torsional blade mode of harmonic index 3 (5126 Hz fully stuck); see
@@ -16,7 +16,9 @@ For every mode (cases/paper/<mode>_{conforming,nonconforming,misaligned}.toml) i
     resonance within 0.5 %, amplitude within 3 %);
   - plots <out>/<mode>_*_frf.png (FRFs per preload, Figs 19-20), <out>/<mode>_frf_compare.png
     (Figs 21-22 / 26-27 at n0 = 113 N) and <out>/<mode>_performance.png (Figs 23-25 / 28-30),
-    using tools/plot_frf.py (same metric definitions as `nlrom solve`).
+    using tools/plot_frf.py (same metric definitions as `nlrom solve`);
+  - copies the comparison table and the PNGs to --figures (default docs/paper/, committed: the
+    README shows them).
 Exit status 1 when, in any mode, a SAMA-vs-conforming difference exceeds the tolerance, a
 conforming or SAMA path stops inside the window (its peak is then unknown), there are no
 conforming results, or a case differs from m1's in [model], [cyclic], [reduction] or [[contact]]
@@ -25,6 +27,7 @@ conforming results, or a case differs from m1's in [model], [cyclic], [reduction
 
 import argparse
 import os
+import shutil
 import subprocess
 import sys
 
@@ -173,12 +176,29 @@ def plot_mode(plt, mode, trees, tables, out_dir):
     plot_frf.plot_performance(plt, perf, labels, os.path.join(out_dir, f"{mode}_performance.png"))
 
 
+def publish(out_dir, figures_dir, modes, table):
+    """Copy the figures of `modes` and the comparison table to `figures_dir` (for the README)."""
+    os.makedirs(figures_dir, exist_ok=True)
+    names = [os.path.basename(table)]
+    for mode in modes:
+        names += [f"{mode}_frf_compare.png", f"{mode}_performance.png"]
+        names += [f"{mode}_{v}_frf.png" for v in VARIANTS]
+    for name in names:
+        src = os.path.join(out_dir, name)
+        if os.path.exists(src):
+            shutil.copyfile(src, os.path.join(figures_dir, name))
+    print(f"figures and table copied to {figures_dir}")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--modes", nargs="+", default=list(MODES),
                         help="modes to run (default: m1 m2), e.g. --modes m2")
     parser.add_argument("--skip-solve", action="store_true", help="reuse existing result files")
     parser.add_argument("--out", default=os.path.join(ROOT, "results", "paper"))
+    parser.add_argument("--figures", default=os.path.join(ROOT, "docs", "paper"),
+                        help="where the README's copies of the PNGs and comparison.md go "
+                             "(default: docs/paper, committed)")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
     import matplotlib
@@ -206,6 +226,7 @@ def main():
     with open(path + ".tmp", "w") as f:
         f.write(text)
     os.replace(path + ".tmp", path)
+    publish(args.out, args.figures, args.modes, path)
     if failures:
         print("failed (SAMA vs conforming outside 0.5 % resonance / 3 % amplitude, a path that "
               "stops inside the window, or the modes' cases differ in their models):")
