@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Craig–Bampton reduction written with scipy: reference numbers and a speed/memory comparison.
 
-    python3 tools/bench_reduce.py mesh [--size 0.0066] [--out tools/large/reduce]
+    python3 tools/bench_reduce.py mesh [DIR] [--size 0.0066]   (DIR defaults to tools/large/reduce)
     python3 tools/bench_reduce.py reference DIR [--modes 100] [--out FILE.json]
     python3 tools/bench_reduce.py bench DIR [--modes 100] [--block 128] [--solver cholmod|superlu]
                                   [--nlrom "COMMAND ..."]
@@ -12,14 +12,16 @@ write such a directory for the bundled sector with
 `NLROM_CB_DUMP=DIR cargo test --release --test reduction_cb cb_frequencies`; `benches/reduce.rs`
 writes one for the large generated sector (`NLROM_REDUCE_DUMP=DIR`).
 
-mesh: writes OUT/block.msh (gmsh, 10-node tetrahedra of uniform size --size, a 0.124 × 0.4 × 0.03 m
+mesh: writes DIR/block.msh (gmsh, 10-node tetrahedra of uniform size --size, a 0.124 × 0.4 × 0.03 m
   block standing in for a blade sector: x = 0 face "hub" (clamped), y = 0 face "low", y = 0.4 face
-  "high" (the frontiers, ~3 600 master DOF at the default size, ~120 000 free DOF), OUT/case.toml
+  "high" (the frontiers, ~3 000 master DOF at the default size, ~115 000 free DOF), DIR/case.toml
   (steel, hub clamped, [reduction] interface_modes = 100, keep = ["low", "high"]; no [cyclic]
-  table, so the CB of the sector is all that is computed) and OUT/master_tags.txt (node tags of
-  low and high). Then `nlrom export OUT/case.toml OUT` writes K.mtx, M.mtx and dofs.csv, and
-  `bench OUT --case OUT/case.toml` maps the master tags to rows (masters.txt), runs scipy and
-  `nlrom modes OUT/case.toml --stage cb --num 10` (the same reduction) and prints the ratios.
+  table, so the CB of the sector is all that is computed) and DIR/master_tags.txt (node tags of
+  low and high). gmsh meshes with 2 threads, so the node count varies slightly between runs.
+  Then `nlrom export DIR/case.toml --dir DIR` writes K.mtx, M.mtx and dofs.csv, and `bench DIR`
+  maps the master tags to rows (masters.txt), runs scipy and, with --nlrom, the given nlrom
+  command (e.g. `nlrom reduce DIR/case.toml -o DIR/rom.h5`, the same reduction) and prints the
+  ratios.
 
 reference: the lowest --modes eigenvalues λ (rad²/s²) of the fixed-interface problem
   K_ii φ = λ M_ii φ by ARPACK shift-invert (σ = 0, tol 1e-14) with CHOLMOD's (or SuperLU's)

@@ -4,13 +4,15 @@
 //! mass-normalised modes with their residuals.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 
-use faer::reborrow::ReborrowMut;
+use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::matmul::sparse_dense_matmul;
 use faer::{Accum, ColRef, Mat, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
 use super::lanczos::{BlockKrylov, BlockSizes};
+use super::rows::{symmetric_product_rows, RowBlock};
 use super::shift_invert::for_each_column_chunk;
 use super::{dense, EigenOptions, Modes, ShiftInvert};
 use crate::error::{Error, Result};
@@ -31,10 +33,21 @@ const MIN_RELATIVE_TOLERANCE: f64 = 1e-14;
 pub(super) const RESIDUAL_FLOOR: f64 = 1e-6;
 
 /// The operator `A = F⁻¹ M F⁻ᵀ` (`K − σM = F Fᵀ`), symmetric positive semi-definite with
-/// eigenvalues θ = 1/(λ − σ); counts its applications (columns).
+/// eigenvalues θ = 1/(λ − σ); counts its applications (columns). Its vectors live in the
+/// factor's row order (`y = Fᵀ φ = Lᵀ P φ`), so one application is `L⁻¹ (P M Pᵀ) L⁻ᵀ`: a
+/// backward solve, the permuted product with M and a forward solve, all on blocks stored by rows
+/// ([`super::rows`]); the work blocks are kept for the next application.
 pub(super) struct Operator<'s, 'a> {
     si: &'s ShiftInvert<'a>,
     applications: AtomicUsize,
+    pool: Mutex<Vec<Work>>,
+}
+
+/// Work blocks of one column chunk of an application.
+struct Work {
+    x: RowBlock,
+    y: RowBlock,
+    scratch: Vec<f64>,
 }
 
 impl std::fmt::Debug for Operator<'_, '_> {
@@ -51,6 +64,7 @@ impl<'s, 'a> Operator<'s, 'a> {
         Operator {
             si,
             applications: AtomicUsize::new(0),
+            pool: Mutex::new(Vec::new()),
         }
     }
 
@@ -65,22 +79,46 @@ impl<'s, 'a> Operator<'s, 'a> {
     }
 
     /// `out ← A rhs = F⁻¹ M F⁻ᵀ rhs`; the columns are processed in parallel chunks.
-    pub(super) fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>) -> Result<()> {
+    pub(super) fn apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>) -> Result<()> {
+        let n = self.n_dof();
+        let width = rhs.ncols();
+        let mut out = out;
         out.copy_from(rhs);
-        for_each_column_chunk(out, &|mut chunk| {
-            let mut w = chunk.to_owned();
-            self.si.backward_in_place(w.as_mut())?;
-            sparse_dense_matmul(
-                chunk.rb_mut(),
-                Accum::Replace,
-                self.si.m,
-                w.as_ref(),
-                1.0,
-                Par::Seq,
-            );
-            self.si.forward_in_place(chunk)
+        for_each_column_chunk(out, &|chunk| {
+            let mut work = self.take_work(chunk.ncols().max(width), n)?;
+            let result = self.apply_chunk(chunk, &mut work);
+            if let Ok(mut pool) = self.pool.lock() {
+                pool.push(work);
+            }
+            result
         })?;
-        self.applications.fetch_add(rhs.ncols(), Ordering::Relaxed);
+        self.applications.fetch_add(width, Ordering::Relaxed);
+        Ok(())
+    }
+
+    /// Work blocks for up to `k` columns: a pooled one if any, else new ones.
+    fn take_work(&self, k: usize, n: usize) -> Result<Work> {
+        let pooled = self.pool.lock().ok().and_then(|mut p| p.pop());
+        match pooled {
+            Some(w) if w.x.capacity() >= k * n => Ok(w),
+            _ => Ok(Work {
+                x: RowBlock::zeros(k, n)?,
+                y: RowBlock::zeros(k, n)?,
+                scratch: self.si.factor().row_scratch(k),
+            }),
+        }
+    }
+
+    /// `chunk ← A chunk` with the work blocks `work` (sequential).
+    fn apply_chunk(&self, mut chunk: MatMut<'_, f64>, work: &mut Work) -> Result<()> {
+        let (k, n) = (chunk.ncols(), chunk.nrows());
+        work.x.load(chunk.rb(), |i| i);
+        let factor = self.si.factor();
+        factor.backward_rows(&mut work.x, &mut work.scratch);
+        work.y.reset(k, n);
+        symmetric_product_rows(&mut work.y, self.si.m, factor.factor_rows(), &work.x, 1.0);
+        factor.forward_rows(&mut work.y, &mut work.scratch);
+        work.y.store(chunk.rb_mut(), |i| i);
         Ok(())
     }
 }
@@ -209,7 +247,7 @@ impl ShiftInvert<'_> {
                 mode_stats(phi.col(j), kphi.col(0), mphi.col(0), self.shift(), floor)
             })
             .collect();
-        Ok(sorted_modes(&phi, &stats))
+        Ok(sorted_modes(phi, &stats))
     }
 
     /// `a · x` for a sparse `a` (K or M), sequential (called in parallel per column).
@@ -256,13 +294,32 @@ fn mode_stats(
     }
 }
 
-/// The modes sorted by ascending λ, columns of `phi` scaled to unit modal mass.
-fn sorted_modes(phi: &Mat<f64>, stats: &[ModeStats]) -> Modes {
+/// The modes sorted by ascending λ, columns of `phi` scaled to unit modal mass, in place (no
+/// second `N_dof × n` matrix: it would raise the peak memory of a Craig–Bampton reduction).
+fn sorted_modes(mut phi: Mat<f64>, stats: &[ModeStats]) -> Modes {
     let mut order: Vec<usize> = (0..stats.len()).collect();
     order.sort_by(|&a, &b| stats[a].lambda.total_cmp(&stats[b].lambda));
-    let vectors = Mat::from_fn(phi.nrows(), order.len(), |i, c| {
-        phi[(i, order[c])] * stats[order[c]].scale
-    });
+    for (j, st) in stats.iter().enumerate() {
+        phi.col_mut(j).iter_mut().for_each(|v| *v *= st.scale);
+    }
+    // Column c of the result is column order[c]: follow the cycles of the permutation.
+    let mut placed = vec![false; order.len()];
+    for start in 0..order.len() {
+        if placed[start] {
+            continue;
+        }
+        let first = phi.col(start).to_owned();
+        let mut c = start;
+        while order[c] != start {
+            let src = phi.col(order[c]).to_owned();
+            phi.col_mut(c).copy_from(&src);
+            placed[c] = true;
+            c = order[c];
+        }
+        phi.col_mut(c).copy_from(&first);
+        placed[c] = true;
+    }
+    let vectors = phi;
     Modes {
         eigenvalues: order.iter().map(|&j| stats[j].lambda).collect(),
         vectors,

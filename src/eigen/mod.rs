@@ -75,17 +75,22 @@
 //! factorisation runs in parallel inside faer. Triangular solves are parallelised across
 //! right-hand sides: the columns are split into one chunk per thread (at least 4 columns per
 //! chunk), each solved sequentially — faer's parallelism inside the many small supernodes of a
-//! solve spent half its time in thread synchronisation. Products with the Krylov basis
-//! (Gram–Schmidt, restarts) use faer's parallel matrix multiplication.
+//! solve spent half its time in thread synchronisation. The solves of the iteration keep each
+//! chunk stored by rows in the factor's order (`rows.rs`). Products with the Krylov basis
+//! (Gram–Schmidt, restarts) are split into row chunks over rayon's threads, each chunk a
+//! sequential faer product (faer's own parallel product synchronised its threads more than it
+//! computed on these thin products).
 
 mod dense;
 mod input;
 mod krylov;
 mod lanczos;
 mod ordering;
+pub mod rows;
 mod shift_invert;
 
-pub use dense::self_adjoint_eigen_qr;
+pub use dense::{self_adjoint_eigen_qr, self_adjoint_eigenvalues_qr};
+pub use rows::CholeskyFactor;
 pub use shift_invert::{FillOrdering, ShiftInvert};
 
 use faer::sparse::SparseColMatRef;

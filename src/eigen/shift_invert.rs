@@ -14,6 +14,7 @@ use faer::sparse::linalg::triangular_solve;
 use faer::sparse::{SparseColMat, SparseColMatRef};
 use faer::{Conj, Mat, MatMut, Par, Side};
 
+use super::rows::CholeskyFactor;
 use super::{input, ordering};
 use crate::error::{Error, Result};
 
@@ -38,10 +39,9 @@ pub struct ShiftInvert<'a> {
     pub(super) k: SparseColMatRef<'a, usize, f64>,
     pub(super) m: SparseColMatRef<'a, usize, f64>,
     shift: f64,
-    symbolic: SymbolicCholesky<usize>,
     ordering: FillOrdering,
-    l_values: Vec<f64>,
     min_pivot_ratio: f64,
+    factor: CholeskyFactor,
 }
 
 impl std::fmt::Debug for ShiftInvert<'_> {
@@ -49,7 +49,7 @@ impl std::fmt::Debug for ShiftInvert<'_> {
         f.debug_struct("ShiftInvert")
             .field("n_dof", &self.n_dof())
             .field("shift", &self.shift)
-            .field("factor_values", &self.l_values.len())
+            .field("factor_values", &self.factor.l_values.len())
             .field("ordering", &self.ordering)
             .field("min_pivot_ratio", &self.min_pivot_ratio)
             .finish()
@@ -145,10 +145,9 @@ impl<'a> ShiftInvert<'a> {
             k,
             m,
             shift,
-            symbolic,
             ordering,
-            l_values,
             min_pivot_ratio: 0.0,
+            factor: CholeskyFactor::new(symbolic, l_values),
         };
         this.min_pivot_ratio = this.pivot_ratio(a);
         if this.min_pivot_ratio < MIN_PIVOT_RATIO {
@@ -164,6 +163,17 @@ impl<'a> ShiftInvert<'a> {
         Ok(this)
     }
 
+    /// The Cholesky factor `P (K − σM) Pᵀ = L Lᵀ` (row-stored solves, [`super::rows`]).
+    pub fn factor(&self) -> &CholeskyFactor {
+        &self.factor
+    }
+
+    /// The Cholesky factor alone, releasing the borrows of K and M (so the caller may drop
+    /// them while it keeps solving).
+    pub fn into_factor(self) -> CholeskyFactor {
+        self.factor
+    }
+
     /// The shift σ (rad²/s²) the factorisation was built with.
     pub fn shift(&self) -> f64 {
         self.shift
@@ -177,7 +187,7 @@ impl<'a> ShiftInvert<'a> {
     /// Number of values stored for the Cholesky factor L (supernodal storage counts the dense
     /// blocks in full); 8 bytes each.
     pub fn factor_len(&self) -> usize {
-        self.l_values.len()
+        self.factor.l_values.len()
     }
 
     /// The fill-reducing ordering of the factor (nested dissection or AMD, whichever gives the
@@ -209,10 +219,11 @@ impl<'a> ShiftInvert<'a> {
         }
         for_each_column_chunk(rhs, &|chunk| {
             let req = self
+                .factor
                 .symbolic
                 .solve_in_place_scratch::<f64>(chunk.ncols(), Par::Seq);
             let mut mem = buffer(req, "the solve workspace")?;
-            LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
+            LltRef::new(&self.factor.symbolic, &self.factor.l_values).solve_in_place_with_conj(
                 Conj::No,
                 chunk,
                 Par::Seq,
@@ -222,43 +233,12 @@ impl<'a> ShiftInvert<'a> {
         })
     }
 
-    /// `rhs ← F⁻¹ rhs = L⁻¹ P rhs` (permutation, then forward substitution), sequential.
-    pub(super) fn forward_in_place(&self, mut rhs: MatMut<'_, f64>) -> Result<()> {
-        let mut x = Mat::<f64>::zeros(rhs.nrows(), rhs.ncols());
-        self.gather(x.rb_mut(), rhs.rb());
-        match self.symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(s) => {
-                let l = SparseColMatRef::new(s.factor(), &self.l_values);
-                triangular_solve::solve_lower_triangular_in_place(
-                    l,
-                    Conj::No,
-                    x.as_mut(),
-                    Par::Seq,
-                );
-            }
-            SymbolicCholeskyRaw::Supernodal(s) => {
-                let mut mem = buffer(
-                    s.solve_in_place_scratch::<f64>(x.ncols(), Par::Seq),
-                    "the solve workspace",
-                )?;
-                SupernodalLltRef::new(s, &self.l_values).l_solve_with_conj(
-                    Conj::No,
-                    x.as_mut(),
-                    Par::Seq,
-                    MemStack::new(&mut mem),
-                );
-            }
-        }
-        rhs.copy_from(&x);
-        Ok(())
-    }
-
     /// `rhs ← F⁻ᵀ rhs = Pᵀ L⁻ᵀ rhs` (backward substitution, then the inverse permutation),
     /// sequential.
     pub(super) fn backward_in_place(&self, mut rhs: MatMut<'_, f64>) -> Result<()> {
-        match self.symbolic.raw() {
+        match self.factor.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => {
-                let l = SparseColMatRef::new(s.factor(), &self.l_values);
+                let l = SparseColMatRef::new(s.factor(), &self.factor.l_values);
                 triangular_solve::solve_lower_triangular_transpose_in_place(
                     l,
                     Conj::No,
@@ -271,7 +251,7 @@ impl<'a> ShiftInvert<'a> {
                     s.solve_in_place_scratch::<f64>(rhs.ncols(), Par::Seq),
                     "the solve workspace",
                 )?;
-                SupernodalLltRef::new(s, &self.l_values).l_transpose_solve_with_conj(
+                SupernodalLltRef::new(s, &self.factor.l_values).l_transpose_solve_with_conj(
                     Conj::No,
                     rhs.rb_mut(),
                     Par::Seq,
@@ -285,24 +265,9 @@ impl<'a> ShiftInvert<'a> {
         Ok(())
     }
 
-    /// `dst ← P src`: `dst[i] = src[perm[i]]` (identity without an ordering).
-    fn gather(&self, mut dst: MatMut<'_, f64>, src: faer::MatRef<'_, f64>) {
-        match self.symbolic.perm() {
-            Some(p) => {
-                let fwd = p.arrays().0;
-                for j in 0..src.ncols() {
-                    for (i, &f) in fwd.iter().enumerate() {
-                        dst[(i, j)] = src[(f, j)];
-                    }
-                }
-            }
-            None => dst.copy_from(src),
-        }
-    }
-
     /// `dst ← Pᵀ src`: `dst[perm[i]] = src[i]`.
     fn scatter(&self, mut dst: MatMut<'_, f64>, src: faer::MatRef<'_, f64>) {
-        match self.symbolic.perm() {
+        match self.factor.symbolic.perm() {
             Some(p) => {
                 let fwd = p.arrays().0;
                 for j in 0..src.ncols() {
@@ -317,13 +282,13 @@ impl<'a> ShiftInvert<'a> {
 
     /// The diagonal of L (row order of the factor).
     fn factor_diagonal(&self) -> Vec<f64> {
-        match self.symbolic.raw() {
+        match self.factor.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => {
-                let l = SparseColMatRef::new(s.factor(), &self.l_values);
+                let l = SparseColMatRef::new(s.factor(), &self.factor.l_values);
                 (0..l.ncols()).map(|j| l.val_of_col(j)[0]).collect()
             }
             SymbolicCholeskyRaw::Supernodal(s) => {
-                let l = SupernodalLltRef::new(s, &self.l_values);
+                let l = SupernodalLltRef::new(s, &self.factor.l_values);
                 let mut d = Vec::with_capacity(s.nrows());
                 for i in 0..s.n_supernodes() {
                     let block = l.supernode(i).val();
@@ -338,7 +303,7 @@ impl<'a> ShiftInvert<'a> {
     /// which cannot happen after a successful factorisation).
     fn pivot_ratio(&self, a: SparseColMatRef<'_, usize, f64>) -> f64 {
         let diag = self.factor_diagonal();
-        let fwd: Vec<usize> = match self.symbolic.perm() {
+        let fwd: Vec<usize> = match self.factor.symbolic.perm() {
             Some(p) => p.arrays().0.to_vec(),
             None => (0..diag.len()).collect(),
         };
@@ -486,7 +451,7 @@ fn not_positive_definite(shift: f64, why: &str) -> Error {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
     // Every column is visited exactly once, whatever the chunking.
@@ -518,15 +483,16 @@ mod tests {
         assert!(matches!(r, Err(Error::Compute(m)) if m == "boom"));
     }
 
-    /// The 7-point Laplacian on an n³ grid (Dirichlet outside), both triangles stored.
-    fn lattice(n: usize) -> SparseColMat<usize, f64> {
+    /// The 7-point Laplacian on an n³ grid (Dirichlet outside) plus `shift` on the diagonal,
+    /// both triangles stored (also used by the tests of `rows.rs`).
+    pub(in crate::eigen) fn lattice(n: usize, shift: f64) -> SparseColMat<usize, f64> {
         let id = |i: usize, j: usize, k: usize| i + n * (j + n * k);
         let mut t = Vec::new();
         for k in 0..n {
             for j in 0..n {
                 for i in 0..n {
                     let p = id(i, j, k);
-                    t.push(faer::sparse::Triplet::new(p, p, 6.0));
+                    t.push(faer::sparse::Triplet::new(p, p, 6.0 + shift));
                     for (di, dj, dk) in [(1, 0, 0), (0, 1, 0), (0, 0, 1)] {
                         if i + di < n && j + dj < n && k + dk < n {
                             let q = id(i + di, j + dj, k + dk);
@@ -544,7 +510,7 @@ mod tests {
     // keeps it. Measured: see the printed sizes.
     #[test]
     fn nested_dissection_beats_amd_on_a_3d_lattice() {
-        let k = lattice(30);
+        let k = lattice(30, 0.0);
         let nd = analyse_with(k.as_ref(), FillOrdering::NestedDissection).unwrap();
         let amd = analyse_with(k.as_ref(), FillOrdering::Amd).unwrap();
         println!(

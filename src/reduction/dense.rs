@@ -3,9 +3,10 @@
 //! (xᴴ M x = 1). Real matrices are solved in real arithmetic, so the modes of k = 0, N/2 are real
 //! (zero imaginary parts).
 
+use faer::linalg::solvers::Llt;
 use faer::{c64, Mat, MatRef, Side};
 
-use crate::eigen::self_adjoint_eigen_qr;
+use crate::eigen::{self_adjoint_eigen_qr, self_adjoint_eigenvalues_qr};
 use crate::error::{Error, Result};
 
 /// All modes of a dense Hermitian pencil, ascending.
@@ -20,11 +21,7 @@ pub struct DenseModes {
 impl DenseModes {
     /// Natural frequencies f = √max(λ, 0)/2π (Hz) of the first `n` modes.
     pub fn frequencies_hz(&self, n: usize) -> Vec<f64> {
-        self.eigenvalues
-            .iter()
-            .take(n)
-            .map(|&l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI))
-            .collect()
+        frequencies_hz(&self.eigenvalues, n)
     }
 
     /// Relative residual ‖K x − λ M x‖₂ / ‖K x‖₂ of each of the first `n` modes.
@@ -71,17 +68,48 @@ pub fn symmetric_modes(k: MatRef<'_, f64>, m: MatRef<'_, f64>) -> Result<(Vec<f6
     generalized(k, m)
 }
 
-/// The generalized problem in inverse form: K = L Lᴴ, B = L⁻¹ M L⁻ᴴ, B y = μ y with μ = 1/λ,
-/// x = L⁻ᴴ y / √μ (so xᴴ M x = 1).
+/// The eigenvalues λ (rad²/s², ascending) of (K, M), as [`hermitian_modes`] without the mode
+/// shapes: the dense eigensolver then skips the eigenvectors, most of its O(n³) work (on the
+/// 3 064-coordinate CB model of the issue-4 benchmark ~7× less time).
 ///
-/// Why inverse: a backward-stable symmetric eigensolver gives eigenvalues to about ε‖B‖
-/// absolute, so the largest μ — the lowest frequencies, the ones that matter — come out to
-/// relative accuracy ε·λ_j/λ_1; the direct form L_M⁻¹ K L_M⁻ᴴ would give the lowest λ only to
-/// ε·λ_max/λ_j (3e-7 on the CB sector, whose λ span 1e5–1e15). The tridiagonal eigenproblem is
-/// solved by faer's implicit QR algorithm: faer 0.24's divide-and-conquer (its default above
-/// n = 128) returned residuals up to 5e-3 relative on graded matrices like these (measured on a
-/// 753 × 753 test matrix with entries graded over 12 orders of magnitude).
-fn generalized<T>(k: MatRef<'_, T>, m: MatRef<'_, T>) -> Result<(Vec<f64>, Mat<T>)>
+/// Errors ([`Error::Compute`]): K is not positive definite, or the eigensolver fails.
+pub fn hermitian_eigenvalues(
+    k: MatRef<'_, c64>,
+    m: MatRef<'_, c64>,
+    real: bool,
+) -> Result<Vec<f64>> {
+    if real {
+        let b = {
+            let kr = Mat::from_fn(k.nrows(), k.ncols(), |i, j| k[(i, j)].re);
+            let mr = Mat::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)].re);
+            inverse_form(kr.as_ref(), mr.as_ref())?.1
+        };
+        return Ok(ascending_lambda(&self_adjoint_eigenvalues_qr(b.as_ref())?));
+    }
+    let b = inverse_form(k, m)?.1;
+    Ok(ascending_lambda(&self_adjoint_eigenvalues_qr(b.as_ref())?))
+}
+
+/// f = √max(λ, 0)/2π (Hz) of the first `n` eigenvalues λ (rad²/s²).
+pub fn frequencies_hz(eigenvalues: &[f64], n: usize) -> Vec<f64> {
+    eigenvalues
+        .iter()
+        .take(n)
+        .map(|&l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI))
+        .collect()
+}
+
+/// λ = 1/μ for the ascending eigenvalues μ of the inverse form, in ascending order of λ (μ ≤ 0
+/// gives λ = ∞).
+fn ascending_lambda(mu: &[f64]) -> Vec<f64> {
+    mu.iter()
+        .rev()
+        .map(|&m| if m > 0.0 { 1.0 / m } else { f64::INFINITY })
+        .collect()
+}
+
+/// The Cholesky factorisation K = L Lᴴ and B = L⁻¹ M L⁻ᴴ (see [`generalized`]).
+fn inverse_form<T>(k: MatRef<'_, T>, m: MatRef<'_, T>) -> Result<(Llt<T>, Mat<T>)>
 where
     T: faer::traits::ComplexField<Real = f64>,
 {
@@ -97,7 +125,28 @@ where
     let mut x = m.to_owned();
     l.solve_lower_triangular_in_place(x.as_mut());
     let mut b = x.adjoint().to_owned();
+    drop(x);
     l.solve_lower_triangular_in_place(b.as_mut());
+    Ok((llt, b))
+}
+
+/// The generalized problem in inverse form: K = L Lᴴ, B = L⁻¹ M L⁻ᴴ, B y = μ y with μ = 1/λ,
+/// x = L⁻ᴴ y / √μ (so xᴴ M x = 1).
+///
+/// Why inverse: a backward-stable symmetric eigensolver gives eigenvalues to about ε‖B‖
+/// absolute, so the largest μ — the lowest frequencies, the ones that matter — come out to
+/// relative accuracy ε·λ_j/λ_1; the direct form L_M⁻¹ K L_M⁻ᴴ would give the lowest λ only to
+/// ε·λ_max/λ_j (3e-7 on the CB sector, whose λ span 1e5–1e15). The tridiagonal eigenproblem is
+/// solved by faer's implicit QR algorithm: faer 0.24's divide-and-conquer (its default above
+/// n = 128) returned residuals up to 5e-3 relative on graded matrices like these (measured on a
+/// 753 × 753 test matrix with entries graded over 12 orders of magnitude).
+fn generalized<T>(k: MatRef<'_, T>, m: MatRef<'_, T>) -> Result<(Vec<f64>, Mat<T>)>
+where
+    T: faer::traits::ComplexField<Real = f64>,
+{
+    let n = k.nrows();
+    let (llt, b) = inverse_form(k, m)?;
+    let l = llt.L();
     let (mu, mut y) = self_adjoint_eigen_qr(b.as_ref())?;
     // Descending μ = ascending λ.
     let order: Vec<usize> = (0..n).rev().collect();
@@ -161,5 +210,35 @@ mod tests {
         let g = modes.vectors.adjoint() * &m * &modes.vectors;
         let err = (&g - Mat::<c64>::identity(n, n)).norm_max();
         assert!(err < 1e-10, "M-orthonormality {err:e}");
+    }
+
+    // The eigenvalues-only path against the full modes (whose residuals are checked above), for
+    // a complex and a real pencil: the same λ to 1e-12 relative.
+    #[test]
+    fn eigenvalues_only_match_the_modes() {
+        let n = 200;
+        let k = random_hpd(n, 1.0, 7);
+        let m = random_hpd(n, 10.0, 9);
+        let real = |a: &Mat<c64>| Mat::<c64>::from_fn(n, n, |i, j| c64::new(a[(i, j)].re, 0.0));
+        for (k, m, is_real) in [(k.clone(), m.clone(), false), (real(&k), real(&m), true)] {
+            let modes = hermitian_modes(k.as_ref(), m.as_ref(), is_real).unwrap();
+            let values = hermitian_eigenvalues(k.as_ref(), m.as_ref(), is_real).unwrap();
+            assert_eq!(values.len(), n);
+            for (a, b) in values.iter().zip(&modes.eigenvalues) {
+                assert!(
+                    (a - b).abs() <= 1e-12 * b.abs(),
+                    "real {is_real}: {a} vs {b}"
+                );
+            }
+            assert_eq!(
+                frequencies_hz(&values, 3),
+                modes
+                    .frequencies_hz(3)
+                    .iter()
+                    .zip(&values)
+                    .map(|(_, &l)| l.sqrt() / (2.0 * std::f64::consts::PI))
+                    .collect::<Vec<_>>()
+            );
+        }
     }
 }
