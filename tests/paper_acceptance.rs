@@ -10,8 +10,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::cli::{nlrom, root, stderr};
-use serde_json::Value;
+use common::cli::{json_report, root};
 
 /// `cases/paper/m1_<model>.toml` with one preload (`n0` = 113 N, no sweep), the window
 /// 776–796 Hz around the resonance, absolute mesh path, written to `dir`.
@@ -32,16 +31,7 @@ fn one_preload_case(dir: &Path, model: &str) -> PathBuf {
 
 /// (resonance frequency in Hz, peak amplitude in m) of `nlrom solve CASE --json`.
 fn resonance(case: &Path, out: &Path) -> (f64, f64) {
-    let run = nlrom(&[
-        "solve",
-        case.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--json",
-        "-q",
-    ]);
-    assert!(run.status.success(), "{}", stderr(&run));
-    let json: Value = serde_json::from_slice(&run.stdout).expect("json");
+    let json = json_report("solve", case, out);
     let frf = &json["frf"][0];
     assert_eq!(frf["end"], "reached_end", "{frf}");
     (

@@ -13,7 +13,7 @@ mod common;
 
 use std::path::Path;
 
-use common::cli::{nlrom, root};
+use common::cli::{json_report, root};
 use common::python::run_python;
 use nlrom::output::read_results;
 use serde_json::Value;
@@ -41,21 +41,7 @@ fn per_element_state_and_loops_at_the_peak() {
     let dir = tempfile::tempdir().unwrap();
     let case = slipping_demo(dir.path());
     let out = dir.path().join("slip.h5");
-    let o = nlrom(&[
-        "run",
-        case.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--json",
-        "-q",
-    ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let summary: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let summary: Value = json_report("run", &case, &out);
     let resonance_hz = summary["frf"][0]["resonance_hz"].as_f64().unwrap();
 
     let r = read_results(&out).unwrap();

@@ -7,7 +7,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::cli::{nlrom, root, stderr};
+use common::cli::{json_report, nlrom, root, stderr};
 use faer::linalg::solvers::Solve;
 use faer::{c64, Mat};
 use nlrom::case::Case;
@@ -21,16 +21,7 @@ use nlrom::output::{read_results, ResponseDof, ResultsFile};
 
 /// `nlrom solve CASE -o OUT --json -q`: asserts exit status 0, returns the JSON report.
 fn solve_json(case: &Path, out: &Path) -> serde_json::Value {
-    let o = nlrom(&[
-        "solve",
-        case.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--json",
-        "-q",
-    ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    serde_json::from_slice(&o.stdout).expect("one JSON object on stdout")
+    json_report("solve", case, out)
 }
 
 /// The chain of `cases/chain3_jenkins.toml` (matrices of `cases/chain3/`) with the given force,

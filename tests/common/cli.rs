@@ -1,6 +1,6 @@
 //! Running the `nlrom` binary from the integration tests.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// The crate root (where `cases/`, `meshes/` are).
@@ -20,4 +20,19 @@ pub fn nlrom(args: &[&str]) -> Output {
 /// The stderr of a run as text.
 pub fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// `nlrom COMMAND CASE -o OUT --json -q` (`solve` or `run`): asserts exit status 0, returns the
+/// JSON report.
+pub fn json_report(command: &str, case: &Path, out: &Path) -> serde_json::Value {
+    let o = nlrom(&[
+        command,
+        case.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    serde_json::from_slice(&o.stdout).expect("one JSON object on stdout")
 }
