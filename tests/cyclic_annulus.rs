@@ -10,25 +10,18 @@ mod cyclic_common;
 use std::path::PathBuf;
 
 use cyclic_common::{
-    check_union_against_full, max_rel_error, merge_sectors, sparse_sector_frequencies,
-    union_below_cut,
+    check_union_against_full, full_model_frequencies, max_rel_error, merge_sectors,
+    sparse_sector_frequencies, union_below_cut,
 };
 use faer::{c64, Mat};
 use nlrom::case::Case;
 use nlrom::cyclic::{match_frontiers, CyclicGeometry};
-use nlrom::eigen::{lowest_modes, EigenOptions};
-use nlrom::fe::{assemble, clamp, Material, Materials, Quadrature};
 use nlrom::mesh::msh::read_msh;
 use nlrom::model::{self, StructuralModel};
 use nlrom::reduction::{hermitian_modes, Sector};
 use nlrom::Error;
 
 const N: usize = 8;
-const STEEL: Material = Material {
-    young: 210e9,
-    poisson: 0.3,
-    density: 7800.0,
-};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -83,16 +76,7 @@ fn annulus_frequencies(n: usize) -> Vec<f64> {
     assert!(pairs.axis_nodes.is_empty());
     let mesh = merge_sectors(&sector, N, "left_frontier", "right_frontier", "hub");
     assert_eq!(mesh.num_nodes(), 11584); // meshes/README.md: frontiers merged only
-    let full = assemble(&mesh, &Materials::uniform(STEEL), &Quadrature::default()).unwrap();
-    let free = clamp(&full, &mesh, &["hub".to_string()]).unwrap();
-    let modes = lowest_modes(
-        free.k.as_ref(),
-        free.m.as_ref(),
-        n,
-        &EigenOptions::default(),
-    )
-    .expect("annulus modes");
-    modes.frequencies_hz()
+    full_model_frequencies(&mesh, "hub", n)
 }
 
 fn fmt(v: &[f64]) -> String {

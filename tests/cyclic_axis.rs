@@ -13,22 +13,16 @@ mod cyclic_common;
 use std::path::PathBuf;
 
 use cyclic_common::{
-    check_union_against_full, max_rel_error, merge_sectors, sparse_sector_frequencies,
+    check_union_against_full, full_model_frequencies, max_rel_error, merge_sectors,
+    sparse_sector_frequencies,
 };
 use nlrom::case::Case;
 use nlrom::cyclic::{axis_basis, match_frontiers, CyclicGeometry};
-use nlrom::eigen::{lowest_modes, EigenOptions};
-use nlrom::fe::{assemble, clamp, Material, Materials, Quadrature};
 use nlrom::mesh::msh::read_msh;
 use nlrom::model::{self, StructuralModel};
 use nlrom::reduction::{free_frontier_pairs, hermitian_modes, Sector};
 
 const N: usize = 8;
-const STEEL: Material = Material {
-    young: 210e9,
-    poisson: 0.3,
-    density: 7800.0,
-};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -63,16 +57,7 @@ fn disk_frequencies(n: usize) -> Vec<f64> {
     let pairs = match_frontiers(&sector, &geom, "low", "high").unwrap();
     assert!(pairs.axis_nodes.len() >= 3, "{:?}", pairs.axis_nodes);
     let mesh = merge_sectors(&sector, N, "low", "high", "rim");
-    let full = assemble(&mesh, &Materials::uniform(STEEL), &Quadrature::default()).unwrap();
-    let free = clamp(&full, &mesh, &["rim".to_string()]).unwrap();
-    let modes = lowest_modes(
-        free.k.as_ref(),
-        free.m.as_ref(),
-        n,
-        &EigenOptions::default(),
-    )
-    .expect("disk modes");
-    modes.frequencies_hz()
+    full_model_frequencies(&mesh, "rim", n)
 }
 
 // The basis vectors satisfy u = e^{iφ_k} R_α u and are orthonormal; k = 2..6 leave none.

@@ -241,9 +241,8 @@ fn cb_of_the_no_cyclic_case_converges_to_the_full_model() {
         ..CbOptions::default()
     };
     let cb = craig_bampton(model.free.k.as_ref(), model.free.m.as_ref(), &part, &opts).unwrap();
-    let (worst, worst_but_last) = error_table(&cb, &full.frequencies_hz(), part.interior.len());
+    let (worst, _) = error_table(&cb, &full.frequencies_hz(), part.interior.len());
     assert!(worst[4] < 1.2e-3, "30 interface modes: {:e}", worst[4]);
-    assert!(worst_but_last[4] < 1.2e-3, "{:e}", worst_but_last[4]);
     assert!(worst[5] < 1e-3, "40 interface modes: {:e}", worst[5]);
     assert!(worst[7] < 1e-4, "100 interface modes: {:e}", worst[7]);
     assert!(worst.windows(2).all(|w| w[1] <= w[0] * 1.0001), "{worst:?}");

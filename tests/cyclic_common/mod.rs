@@ -6,9 +6,32 @@
 use nlrom::case::Case;
 use nlrom::cyclic::{match_frontiers, CyclicGeometry, CyclicTransform};
 use nlrom::eigen::{lowest_modes, EigenOptions};
+use nlrom::fe::{assemble, clamp, Material, Materials, Quadrature};
 use nlrom::mesh::{ElementBlock, Mesh};
 use nlrom::model::StructuralModel;
 use nlrom::reduction::free_frontier_pairs;
+
+/// The material of the sector models of these tests (steel, SI units).
+pub const STEEL: Material = Material {
+    young: 210e9,
+    poisson: 0.3,
+    density: 7800.0,
+};
+
+/// The `n` lowest natural frequencies (Hz) of `mesh` (steel) assembled by nlrom as an ordinary
+/// model and clamped on the group `clamp_group`: the full-model reference of the union over k.
+pub fn full_model_frequencies(mesh: &Mesh, clamp_group: &str, n: usize) -> Vec<f64> {
+    let full = assemble(mesh, &Materials::uniform(STEEL), &Quadrature::default()).unwrap();
+    let free = clamp(&full, mesh, &[clamp_group.to_string()]).unwrap();
+    let modes = lowest_modes(
+        free.k.as_ref(),
+        free.m.as_ref(),
+        n,
+        &EigenOptions::default(),
+    )
+    .expect("full-model modes");
+    modes.frequencies_hz()
+}
 
 /// N rotated copies of `sector` about the z axis, each `high` node merged with the `low` node of
 /// the next copy and the nodes on the axis shared by all copies; only the volume elements and
