@@ -26,7 +26,7 @@ use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_upper_triangular_in_place,
 };
 use faer::reborrow::{Reborrow, ReborrowMut};
-use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
+use faer::sparse::linalg::cholesky::supernodal::{SupernodalLltRef, SupernodeRef};
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
 use faer::{Accum, MatMut, MatRef, Par};
@@ -147,6 +147,11 @@ pub struct CholeskyFactor {
     pinv: Vec<usize>,
     /// Largest number of off-diagonal rows of a supernode (0 when simplicial).
     max_pattern: usize,
+    /// Supernode of each factor-order row (empty when simplicial).
+    supernode_of_row: Vec<usize>,
+    /// Parent of each supernode in the supernodal elimination tree (`usize::MAX` at a root):
+    /// the supernode of its first off-diagonal row.
+    supernode_parent: Vec<usize>,
 }
 
 impl std::fmt::Debug for CholeskyFactor {
@@ -166,21 +171,65 @@ impl CholeskyFactor {
             Some(p) => p.arrays().1.to_vec(),
             None => (0..n).collect(),
         };
-        let max_pattern = match symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(_) => 0,
-            SymbolicCholeskyRaw::Supernodal(s) => {
-                let l = SupernodalLltRef::new(s, &l_values);
-                (0..s.n_supernodes())
-                    .map(|i| l.supernode(i).pattern().len())
-                    .max()
-                    .unwrap_or(0)
+        let mut max_pattern = 0;
+        let mut supernode_of_row = Vec::new();
+        let mut supernode_parent = Vec::new();
+        if let SymbolicCholeskyRaw::Supernodal(s) = symbolic.raw() {
+            let l = SupernodalLltRef::new(s, &l_values);
+            supernode_of_row = vec![0; n];
+            for sn in 0..s.n_supernodes() {
+                let node = l.supernode(sn);
+                let start = node.start();
+                supernode_of_row[start..start + node.val().ncols()].fill(sn);
+                max_pattern = max_pattern.max(node.pattern().len());
             }
-        };
+            supernode_parent = (0..s.n_supernodes())
+                .map(|sn| {
+                    let pattern = l.supernode(sn).pattern();
+                    pattern.first().map_or(usize::MAX, |&r| supernode_of_row[r])
+                })
+                .collect();
+        }
         CholeskyFactor {
             symbolic,
             l_values,
             pinv,
             max_pattern,
+            supernode_of_row,
+            supernode_parent,
+        }
+    }
+
+    /// The supernodes, ascending, on which `L⁻¹ b` can be nonzero when b is nonzero only in
+    /// the factor-order `rows`: the union of the elimination-tree paths from the supernodes of
+    /// `rows` to their roots (Gilbert and Peierls's reach, supernodal). `None` for a simplicial
+    /// factor (solve over all columns).
+    pub fn forward_reach(&self, rows: impl IntoIterator<Item = usize>) -> Option<Vec<usize>> {
+        if self.supernode_parent.is_empty() {
+            return None;
+        }
+        let mut marked = vec![false; self.supernode_parent.len()];
+        let mut reach = Vec::new();
+        for r in rows {
+            let mut sn = self.supernode_of_row[r];
+            while sn != usize::MAX && !marked[sn] {
+                marked[sn] = true;
+                reach.push(sn);
+                sn = self.supernode_parent[sn];
+            }
+        }
+        reach.sort_unstable();
+        Some(reach)
+    }
+
+    /// Number of factor rows (columns of L) in the supernodes `reach`.
+    pub fn reach_rows(&self, reach: &[usize]) -> usize {
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(_) => self.n_dof(),
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let l = SupernodalLltRef::new(s, &self.l_values);
+                reach.iter().map(|&sn| l.supernode(sn).val().ncols()).sum()
+            }
         }
     }
 
@@ -203,6 +252,13 @@ impl CholeskyFactor {
     /// `x ← L⁻¹ x` for a block in factor order (sequential). `scratch` from
     /// [`Self::row_scratch`] with at least `x.k()` right-hand sides.
     pub fn forward_rows(&self, x: &mut RowBlock, scratch: &mut [f64]) {
+        self.forward_rows_in(x, None, scratch);
+    }
+
+    /// [`Self::forward_rows`] restricted to the supernodes `reach` (ascending, from
+    /// [`Self::forward_reach`] of the rows where x is nonzero; all supernodes with `None`). The
+    /// other rows of x must be zero on entry and stay zero: L⁻¹ b vanishes outside the reach of b.
+    pub fn forward_rows_in(&self, x: &mut RowBlock, reach: Option<&[usize]>, scratch: &mut [f64]) {
         let k = x.k;
         match self.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => {
@@ -221,34 +277,10 @@ impl CholeskyFactor {
             }
             SymbolicCholeskyRaw::Supernodal(s) => {
                 let l = SupernodalLltRef::new(s, &self.l_values);
-                for sn in 0..s.n_supernodes() {
-                    let node = l.supernode(sn);
-                    let (start, pattern, ls) = (node.start(), node.pattern(), node.val());
-                    let w = ls.ncols();
-                    let (top, bot) = ls.split_at_row(w);
-                    let mut xt = x.as_transposed_mut();
-                    let mut x_top = xt.rb_mut().subcols_mut(start, w);
-                    solve_lower_triangular_in_place(top, x_top.rb_mut().transpose_mut(), Par::Seq);
-                    if pattern.is_empty() {
-                        continue;
-                    }
-                    let tmp = &mut scratch[..k * pattern.len()];
-                    let tmp_mat = MatMut::from_column_major_slice_mut(tmp, k, pattern.len());
-                    matmul(
-                        tmp_mat,
-                        Accum::Replace,
-                        x_top.rb(),
-                        bot.transpose(),
-                        1.0,
-                        Par::Seq,
-                    );
-                    for (idx, &i) in pattern.iter().enumerate() {
-                        axpy(
-                            &mut x.data[k * i..k * (i + 1)],
-                            -1.0,
-                            &tmp[k * idx..k * (idx + 1)],
-                        );
-                    }
+                let mut forward = |sn: usize| forward_supernode(l.supernode(sn), x, scratch);
+                match reach {
+                    Some(r) => r.iter().for_each(|&sn| forward(sn)),
+                    None => (0..s.n_supernodes()).for_each(forward),
                 }
             }
         }
@@ -257,6 +289,14 @@ impl CholeskyFactor {
     /// `x ← L⁻ᵀ x` for a block in factor order (sequential); `scratch` as for
     /// [`Self::forward_rows`].
     pub fn backward_rows(&self, x: &mut RowBlock, scratch: &mut [f64]) {
+        self.backward_rows_in(x, None, scratch);
+    }
+
+    /// [`Self::backward_rows`] computed only on the supernodes `reach` (ascending, closed under
+    /// ancestors, e.g. from [`Self::forward_reach`]; all with `None`): the rows of `L⁻ᵀ x` in
+    /// those supernodes are exact (each depends only on its ancestors), the other rows keep
+    /// their input values.
+    pub fn backward_rows_in(&self, x: &mut RowBlock, reach: Option<&[usize]>, scratch: &mut [f64]) {
         let k = x.k;
         match self.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => {
@@ -275,35 +315,10 @@ impl CholeskyFactor {
             }
             SymbolicCholeskyRaw::Supernodal(s) => {
                 let l = SupernodalLltRef::new(s, &self.l_values);
-                for sn in (0..s.n_supernodes()).rev() {
-                    let node = l.supernode(sn);
-                    let (start, pattern, ls) = (node.start(), node.pattern(), node.val());
-                    let w = ls.ncols();
-                    let (top, bot) = ls.split_at_row(w);
-                    if !pattern.is_empty() {
-                        let tmp = &mut scratch[..k * pattern.len()];
-                        for (idx, &i) in pattern.iter().enumerate() {
-                            tmp[k * idx..k * (idx + 1)]
-                                .copy_from_slice(&x.data[k * i..k * (i + 1)]);
-                        }
-                        let tmp_mat = MatRef::from_column_major_slice(tmp, k, pattern.len());
-                        let mut xt = x.as_transposed_mut();
-                        matmul(
-                            xt.rb_mut().subcols_mut(start, w),
-                            Accum::Add,
-                            tmp_mat,
-                            bot,
-                            -1.0,
-                            Par::Seq,
-                        );
-                    }
-                    let mut xt = x.as_transposed_mut();
-                    let x_top = xt.rb_mut().subcols_mut(start, w);
-                    solve_upper_triangular_in_place(
-                        top.transpose(),
-                        x_top.transpose_mut(),
-                        Par::Seq,
-                    );
+                let mut backward = |sn: usize| backward_supernode(l.supernode(sn), x, scratch);
+                match reach {
+                    Some(r) => r.iter().rev().for_each(|&sn| backward(sn)),
+                    None => (0..s.n_supernodes()).rev().for_each(backward),
                 }
             }
         }
@@ -314,6 +329,67 @@ impl CholeskyFactor {
         self.forward_rows(x, scratch);
         self.backward_rows(x, scratch);
     }
+}
+
+/// One supernode of the forward sweep: `Y_topᵀ ← Y_topᵀ L_top⁻ᵀ`, then
+/// `Yᵀ[:, R] −= Y_topᵀ L_botᵀ`. The update is formed as `L_bot Y_top` (|R| × k, column-major in
+/// `scratch`): with the long dimension |R| as the product's row count it runs about 1.6× faster
+/// than `Y_topᵀ L_botᵀ` (k × |R|) for k = 64 (measured on the issue-4 benchmark).
+fn forward_supernode(node: SupernodeRef<'_, usize, f64>, x: &mut RowBlock, scratch: &mut [f64]) {
+    let k = x.k;
+    let (start, pattern, ls) = (node.start(), node.pattern(), node.val());
+    let w = ls.ncols();
+    let (top, bot) = ls.split_at_row(w);
+    let mut xt = x.as_transposed_mut();
+    let mut x_top = xt.rb_mut().subcols_mut(start, w);
+    solve_lower_triangular_in_place(top, x_top.rb_mut().transpose_mut(), Par::Seq);
+    let p = pattern.len();
+    if p == 0 {
+        return;
+    }
+    let tmp = &mut scratch[..k * p];
+    matmul(
+        MatMut::from_column_major_slice_mut(tmp, p, k),
+        Accum::Replace,
+        bot,
+        x_top.rb().transpose(),
+        1.0,
+        Par::Seq,
+    );
+    for (idx, &i) in pattern.iter().enumerate() {
+        let xi = &mut x.data[k * i..k * (i + 1)];
+        for (v, t) in xi.iter_mut().zip(tmp[idx..].iter().step_by(p)) {
+            *v -= t;
+        }
+    }
+}
+
+/// One supernode of the backward sweep: `X_topᵀ −= Xᵀ[:, R] L_bot`, then
+/// `X_topᵀ ← X_topᵀ L_top⁻¹`.
+fn backward_supernode(node: SupernodeRef<'_, usize, f64>, x: &mut RowBlock, scratch: &mut [f64]) {
+    let k = x.k;
+    let (start, pattern, ls) = (node.start(), node.pattern(), node.val());
+    let w = ls.ncols();
+    let (top, bot) = ls.split_at_row(w);
+    if !pattern.is_empty() {
+        let tmp = &mut scratch[..k * pattern.len()];
+        for (idx, &i) in pattern.iter().enumerate() {
+            tmp[k * idx..k * (idx + 1)].copy_from_slice(&x.data[k * i..k * (i + 1)]);
+        }
+        let tmp_mat = MatRef::from_column_major_slice(tmp, k, pattern.len());
+        let mut xt = x.as_transposed_mut();
+        matmul(
+            xt.rb_mut().subcols_mut(start, w),
+            Accum::Add,
+            tmp_mat,
+            bot,
+            -1.0,
+            Par::Seq,
+        );
+    }
+    let mut xt = x.as_transposed_mut();
+    let x_top = xt.rb_mut().subcols_mut(start, w);
+    solve_upper_triangular_in_place(top.transpose(), x_top.transpose_mut(), Par::Seq);
 }
 
 /// `y += alpha · (P A Pᵀ) x` for a symmetric sparse `a` (both triangles stored, original row
@@ -420,6 +496,7 @@ mod tests {
     /// solve_rows against faer's column-major solve (and the identity K X = B), for a simplicial
     /// (small) and a supernodal (larger) factor; forward then backward must equal the full solve.
     fn check_solve(n: usize, supernodal: bool) {
+        const COLS: usize = 5;
         let k = lattice(n, 0.5);
         let si = ShiftInvert::new(k.as_ref(), k.as_ref(), 0.0).unwrap();
         assert_eq!(
@@ -430,16 +507,16 @@ mod tests {
             supernodal,
             "n = {n}: unexpected factor type"
         );
-        let b = pseudo_random(k.nrows(), 5);
+        let b = pseudo_random(k.nrows(), COLS);
         let mut reference = b.clone();
         si.solve_in_place(reference.as_mut()).unwrap();
         let pinv = si.factor().factor_rows().to_vec();
-        let mut x = RowBlock::zeros(5, k.nrows()).unwrap();
+        let mut x = RowBlock::zeros(COLS, k.nrows()).unwrap();
         x.load(b.as_ref(), |i| pinv[i]);
         let factor = si.into_factor();
-        let mut scratch = factor.row_scratch(5);
+        let mut scratch = factor.row_scratch(COLS);
         factor.solve_rows(&mut x, &mut scratch);
-        let mut got = Mat::<f64>::zeros(k.nrows(), 5);
+        let mut got = Mat::<f64>::zeros(k.nrows(), COLS);
         x.store(got.as_mut(), |i| pinv[i]);
         let scale = reference.norm_max();
         assert!((&got - &reference).norm_max() <= 1e-13 * scale, "n = {n}");
@@ -455,6 +532,38 @@ mod tests {
     #[test]
     fn row_solves_match_column_solves_supernodal() {
         check_solve(16, true);
+    }
+
+    // A forward sweep restricted to the reach of a sparse right-hand side equals the full sweep
+    // bit for bit (the skipped supernodes would only add zeros) and is nonzero only on the reach.
+    #[test]
+    fn forward_sweep_on_the_reach_equals_the_full_sweep() {
+        let a = lattice(16, 0.5);
+        let factor = ShiftInvert::new(a.as_ref(), a.as_ref(), 0.0)
+            .unwrap()
+            .into_factor();
+        let n = factor.n_dof();
+        let rows = [3usize, 17, 400].map(|i| factor.factor_rows()[i]);
+        let mut full = RowBlock::zeros(2, n).unwrap();
+        for (c, &r) in rows.iter().enumerate() {
+            full.row_mut(r)[c % 2] = 1.0 + c as f64;
+        }
+        let mut part = full.clone();
+        let reach = factor.forward_reach(rows).expect("supernodal factor");
+        assert!(!reach.is_empty() && reach.len() < factor.supernode_parent.len());
+        assert!(reach.windows(2).all(|w| w[0] < w[1]));
+        let mut scratch = factor.row_scratch(2);
+        factor.forward_rows(&mut full, &mut scratch);
+        factor.forward_rows_in(&mut part, Some(&reach), &mut scratch);
+        assert_eq!(full.data, part.data);
+        let nonzero = (0..n)
+            .filter(|&i| full.row(i).iter().any(|&v| v != 0.0))
+            .count();
+        let in_reach = factor.reach_rows(&reach);
+        assert!(
+            nonzero <= in_reach && in_reach < n,
+            "{nonzero} {in_reach} {n}"
+        );
     }
 
     // (P A Pᵀ) X in factor order against faer's sparse × dense product in the original order.
