@@ -369,7 +369,8 @@ impl StaticInputs<'_> {
                 Par::Seq,
             );
         }
-        // M_cb_bb[:, B] += M_ibᵀ Ψ_B + Ψᵀ Y = M_ibᵀ Ψ_B − K_ibᵀ K_ii⁻¹ Y
+        // M_cb_bb[:, B] += M_ibᵀ Ψ_B + Ψᵀ Y = M_ibᵀ Ψ_B − K_ibᵀ K_ii⁻¹ Y, the backward sweep
+        // only on the supernodes K_ibᵀ reads (`coupled`).
         transpose_product_rows(m_cols.as_mut(), self.m_ib.as_ref(), &work.x, 1.0);
         self.factor.forward_rows(&mut work.y, &mut work.scratch);
         self.factor
