@@ -249,24 +249,35 @@ impl ShiftInvert<'_> {
             .into_par_iter()
             .map(|first| {
                 let cols = phi.get(.., first..(first + STATS_COLUMNS).min(phi.ncols()));
-                let (c, n) = (cols.ncols(), cols.nrows());
-                let mut x = RowBlock::zeros(c, n)?;
-                x.load(cols, |i| i);
-                let mut kx = RowBlock::zeros(c, n)?;
-                symmetric_product_rows(&mut kx, self.k, &identity, &x, 1.0);
-                let mut mx = RowBlock::zeros(c, n)?;
-                symmetric_product_rows(&mut mx, self.m, &identity, &x, 1.0);
-                let (kt, mt) = (kx.as_transposed(), mx.as_transposed());
-                Ok((0..c)
-                    .map(|j| {
-                        let (kphi, mphi) = (kt.row(j).transpose(), mt.row(j).transpose());
-                        mode_stats(cols.col(j), kphi, mphi, self.shift(), floor)
-                    })
-                    .collect())
+                self.chunk_stats(cols, &identity, floor)
             })
             .collect::<Result<_>>()?;
         let stats: Vec<ModeStats> = chunks.into_iter().flatten().collect();
         Ok(sorted_modes(phi, &stats))
+    }
+
+    /// [`mode_stats`] of the columns `cols` of the unnormalised modes: Kφ and Mφ for all of them
+    /// with one pass over K and M each (row-stored blocks, `identity` = the row order).
+    fn chunk_stats(
+        &self,
+        cols: MatRef<'_, f64>,
+        identity: &[usize],
+        floor: f64,
+    ) -> Result<Vec<ModeStats>> {
+        let (c, n) = (cols.ncols(), cols.nrows());
+        let mut x = RowBlock::zeros(c, n)?;
+        x.load(cols, |i| i);
+        let mut kx = RowBlock::zeros(c, n)?;
+        symmetric_product_rows(&mut kx, self.k, identity, &x, 1.0);
+        let mut mx = RowBlock::zeros(c, n)?;
+        symmetric_product_rows(&mut mx, self.m, identity, &x, 1.0);
+        let (kt, mt) = (kx.as_transposed(), mx.as_transposed());
+        Ok((0..c)
+            .map(|j| {
+                let (kphi, mphi) = (kt.row(j).transpose(), mt.row(j).transpose());
+                mode_stats(cols.col(j), kphi, mphi, self.shift(), floor)
+            })
+            .collect())
     }
 }
 
