@@ -7,7 +7,9 @@
 //! - variables scaled, u = x / x_s (x_s = the largest ‖x‖₂ on the path so far, starting from the
 //!   start point's) and μ = λ / λ_s (λ_s = |λ_end − λ_start|); arc length s measured in (u, μ);
 //! - start: Newton at λ_start from x = 0, whose first step solves the linearised (for friction:
-//!   stuck) system — the linear solution;
+//!   stuck) system — the linear solution ([`trace`]); or a start solved otherwise
+//!   ([`trace_from`]: a frequency response whose start Newton misses gets it by a continuation in
+//!   the excitation level, `hbm::frf`);
 //! - tangent predictor: t solves [∂r/∂u  ∂r/∂μ; t_prevᵀ] t = [0; 1], normalised, so that
 //!   t · t_prev > 0: the orientation is carried over and folds (where dλ/ds changes sign) are
 //!   passed;
@@ -69,7 +71,9 @@ impl ContinuationOptions {
         }
     }
 
-    fn validate(&self) -> Result<()> {
+    /// Checks the settings: finite start ≠ end, a step > 0, at least one point and one target
+    /// iteration ([`Error::Input`] otherwise).
+    pub fn validate(&self) -> Result<()> {
         let finite = [self.start, self.end, self.initial_step]
             .iter()
             .all(|v| v.is_finite());
@@ -137,7 +141,8 @@ struct Scales {
     residual: f64,
 }
 
-/// Traces the path of `system` from `opts.start` to `opts.end`. `on_point` is called for every
+/// Traces the path of `system` from `opts.start` to `opts.end`, the start point solved by Newton
+/// from x = 0 (whose first step is the linear solution). `on_point` is called for every
 /// converged point (progress reports). Fails only when the start point does not converge.
 pub fn trace<S: ParameterSystem>(
     system: &S,
@@ -145,14 +150,35 @@ pub fn trace<S: ParameterSystem>(
     on_point: &mut dyn FnMut(&PathPoint<S::State>),
 ) -> Result<Path<S::State>> {
     opts.validate()?;
-    let state0 = system.initial_state();
     let x0 = vec![0.0; system.dim()];
+    let state0 = system.initial_state();
     let start = solve_fixed(system, &x0, opts.start, &state0, &opts.newton).map_err(|f| {
         Error::Compute(format!(
             "the start point at parameter {} did not converge from the linear solution: {} — try another start value, a smaller excitation or more damping",
             opts.start, f.message
         ))
     })?;
+    trace_from(system, opts, start, on_point)
+}
+
+/// As [`trace`] from a start point already solved at `opts.start` (its linearization must be
+/// that of `system`: ∂r/∂λ is the tangent's parameter column).
+pub fn trace_from<S: ParameterSystem>(
+    system: &S,
+    opts: &ContinuationOptions,
+    start: NewtonSolution<S::State>,
+    on_point: &mut dyn FnMut(&PathPoint<S::State>),
+) -> Result<Path<S::State>> {
+    opts.validate()?;
+    if start.x.len() != system.dim() || start.parameter != opts.start {
+        return Err(Error::input(format!(
+            "continuation: the start point has {} unknowns at parameter {}; the system has {} and the path starts at {}",
+            start.x.len(),
+            start.parameter,
+            system.dim(),
+            opts.start
+        )));
+    }
     let range = (opts.end - opts.start).abs();
     let direction = (opts.end - opts.start).signum();
     let x_norm = norm(&start.x);

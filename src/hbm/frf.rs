@@ -3,11 +3,12 @@
 //! `[continuation]` table.
 
 use super::newton::NewtonOptions;
+use super::newton::{solve_fixed, NewtonSolution};
 use super::response::{output_response, OutputResponse, ResponseOptions};
 use super::stability::is_stable;
-use super::system::{FrequencyPath, HbmSystem};
+use super::system::{FrequencyPath, HbmSystem, LevelPath, ParameterSystem};
 use crate::case::Case;
-use crate::continuation::{trace, ContinuationOptions, PathEnd, PathPoint};
+use crate::continuation::{trace, trace_from, ContinuationOptions, PathEnd, PathPoint};
 use crate::error::{Error, Result};
 use crate::harmonics::HarmonicForce;
 
@@ -56,8 +57,9 @@ pub fn frequency_response<F: HarmonicForce>(
             opts.start, opts.end
         )));
     }
+    opts.validate()?;
     let fp = FrequencyPath { system, level: 1.0 };
-    let path = trace(&fp, opts, on_point)?;
+    let path = trace_from(&fp, opts, start_point(system, opts)?, on_point)?;
     let points = path
         .points
         .into_iter()
@@ -83,6 +85,114 @@ pub fn frequency_response<F: HarmonicForce>(
         end: path.end,
         retries: path.retries,
     })
+}
+
+/// The smallest fraction of the excitation the level continuation of [`start_point`] starts from
+/// (2⁻¹⁰).
+const SMALLEST_START_LEVEL: f64 = 1.0 / 1024.0;
+
+/// The start point of a frequency response at ω_start = `opts.start`.
+///
+/// Newton from the linear solution (Q = 0: its first step solves the stuck, linearised system)
+/// usually converges. When the excitation is strong enough for friction to slip or contacts to
+/// separate far from that solution, it may not; the start is then reached by continuation in the
+/// excitation level λ at the fixed ω_start ([`LevelPath`], the residual
+/// D̄(ω) Q − λ F̄_e + F_c(Q)) from λ₀ up to λ = 1, through any fold in λ. λ₀ = ½, halved (down
+/// to 2⁻¹⁰) while the start at λ₀ does not converge or the path turns back below λ₀; a path that
+/// stops on the way is not retried (a smaller λ₀ would meet the same point). Newton at λ = 1 from
+/// the end of that path then gives the start point with the frequency path's linearization.
+///
+/// Errors ([`Error::Compute`]): neither way reaches λ = 1; the message gives both reasons.
+fn start_point<F: HarmonicForce>(
+    system: &HbmSystem<'_, F>,
+    opts: &ContinuationOptions,
+) -> Result<NewtonSolution<F::State>> {
+    let fp = FrequencyPath { system, level: 1.0 };
+    let x0 = vec![0.0; system.dim()];
+    let direct = match solve_fixed(&fp, &x0, opts.start, &fp.initial_state(), &opts.newton) {
+        Ok(sol) => return Ok(sol),
+        Err(f) => f.message,
+    };
+    let fail = |why: String, from: f64| {
+        Error::Compute(format!(
+            "Newton from the linear solution failed ({direct}), and so did the continuation in the \
+             excitation level from {from:.3e} × the force up to 1 at that frequency ({why}) — try \
+             another start frequency, a smaller excitation or more damping"
+        ))
+    };
+    let level = level_continuation(system, opts);
+    let from = level.from;
+    let (x, state) = level.end.map_err(|why| fail(why, from))?;
+    solve_fixed(&fp, &x, opts.start, &state, &opts.newton).map_err(|f| {
+        let why = format!(
+            "Newton at the full force from the end of that path: {}",
+            f.message
+        );
+        fail(why, from)
+    })
+}
+
+/// How the continuation in the excitation level of [`start_point`] ended.
+struct LevelEnd<S> {
+    /// At λ = 1: the end (Q, force memory); else why the last attempt failed.
+    end: std::result::Result<(Vec<f64>, S), String>,
+    /// The start level λ₀ of the last attempt.
+    from: f64,
+}
+
+/// The continuation in the excitation level of [`start_point`].
+fn level_continuation<F: HarmonicForce>(
+    system: &HbmSystem<'_, F>,
+    opts: &ContinuationOptions,
+) -> LevelEnd<F::State> {
+    let lp = LevelPath {
+        system,
+        omega: opts.start,
+    };
+    let mut level = 0.5;
+    let mut tried = level;
+    let mut why = String::new();
+    while level >= SMALLEST_START_LEVEL {
+        tried = level;
+        let mut lopts = ContinuationOptions::new(level, 1.0, (1.0 - level) / 20.0);
+        lopts.max_step = Some((1.0 - level) / 5.0);
+        // explicit: the default (initial step / 1000 in scaled arc length) is inflated when ‖Q‖
+        // at a small start level makes the first tangent nearly parallel to Q
+        lopts.min_step = Some((1.0 - level) / 2e4);
+        lopts.max_points = 2000;
+        lopts.newton = opts.newton;
+        match trace(&lp, &lopts, &mut |_| {}) {
+            Ok(path) => match path.end {
+                PathEnd::ReachedEnd => match path.points.into_iter().last() {
+                    Some(last) => {
+                        return LevelEnd {
+                            end: Ok((last.x, last.state)),
+                            from: level,
+                        }
+                    }
+                    None => why = "the level path has no points".into(),
+                },
+                // a smaller start level lets the path go further back through a fold in λ
+                PathEnd::LeftRange => why = "the level path turned back below its start".into(),
+                // the obstacle lies on the path itself: a smaller start level meets it again
+                PathEnd::Failed(m) => {
+                    why = m;
+                    break;
+                }
+                PathEnd::MaxPoints => {
+                    why = format!("the level path took more than {} points", lopts.max_points);
+                    break;
+                }
+            },
+            // the start did not converge: a smaller level is nearer the linear solution
+            Err(e) => why = e.to_string(),
+        }
+        level *= 0.5;
+    }
+    LevelEnd {
+        end: Err(why),
+        from: tried,
+    }
 }
 
 /// The continuation settings of a case's `[continuation]` table (rad/s).
