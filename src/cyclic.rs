@@ -573,7 +573,7 @@ pub fn axis_basis(geom: &CyclicGeometry, k: usize) -> Vec<[c64; 3]> {
 ///
 /// A node on the axis (a pair with `low == high`) keeps, instead of its 3 rows, the amplitudes
 /// of the [`axis_basis`] vectors b_j (0, 1 or 2 coordinates): `T_k[row_c, j] = b_j[c]`. Each
-/// such coordinate takes the place (in `kept`) of the node's row of the largest |b_j[c]|, so
+/// such coordinate takes the place (in `kept`) of the node's row of the largest |b_j\[c\]|, so
 /// that its label is that component.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CyclicTransform {
@@ -690,8 +690,8 @@ impl CyclicTransform {
         self.kept.len()
     }
 
-    /// The nonzero entries (reduced column j, value T_k[r, j]) of row `r` of T_k: q[r] =
-    /// Σ value · q_k[j] (one unit entry for a kept row, e^{iφ_k} R_α[c][d] for a high row).
+    /// The nonzero entries (reduced column j, value T_k[r, j]) of row `r` of T_k: q\[r\] =
+    /// Σ value · q_k\[j\] (one unit entry for a kept row, e^{iφ_k} R_α\[c\]\[d\] for a high row).
     pub fn row(&self, r: usize) -> &[(usize, c64)] {
         &self.rows[r]
     }

@@ -19,7 +19,7 @@
 //!   depend on the start state at all (Φ = 0), so this equals the chain through the periods;
 //! * a direction stuck all the last period (Φ = 1, end state = start state for every input):
 //!   ∂w_start is ∂w carried through the transient periods from ∂w_in = 0
-//!   ([`march_transient_chain`]) — zero when one period was marched (w_in already periodic:
+//!   (`march_transient_chain`) — zero when one period was marched (w_in already periodic:
 //!   the fast path), the slip-set slider derivative after a shakedown (a transient slip set
 //!   w = u − μ f_n/k_t; treating the stuck slider as fixed would give the static slope k_t
 //!   where the map's is 0). The chain is marched again only in this case (rare, cheap).

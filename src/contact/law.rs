@@ -41,7 +41,7 @@ pub struct ContactParams {
 }
 
 impl ContactParams {
-    /// Checked parameters; `context` names where they come from (e.g. "[[element]] 3" or
+    /// Checked parameters; `context` names where they come from (e.g. `"[[element]] 3"` or
     /// "contact pair 12") and is put into the error message.
     pub fn new(kt: f64, kn: f64, mu: f64, n0: f64, context: &str) -> Result<Self> {
         let p = ContactParams { kt, kn, mu, n0 };

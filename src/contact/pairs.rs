@@ -10,7 +10,7 @@
 //! return to the nodes through the transpose, and the Jacobian is Lᵀ J_local L (eq. 26 with the
 //! kinematic map L in place of eq. 27's R).
 //!
-//! Pairs are evaluated in parallel and summed by [`super::assembly`] (the result does not
+//! Pairs are evaluated in parallel and summed by the private `assembly` module (the result does not
 //! depend on the number of threads).
 
 use std::sync::Arc;

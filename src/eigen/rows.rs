@@ -138,8 +138,8 @@ fn axpy(y: &mut [f64], alpha: f64, x: &[f64]) {
 }
 
 /// A sparse Cholesky factor `P A Pᵀ = L Lᵀ` (faer's symbolic analysis and values, supernodal
-/// or simplicial) with the row-stored solves of this module; owned by [`ShiftInvert`] and
-/// detachable from it ([`ShiftInvert::into_factor`]).
+/// or simplicial) with the row-stored solves of this module; owned by [`super::ShiftInvert`] and
+/// detachable from it ([`super::ShiftInvert::into_factor`]).
 pub struct CholeskyFactor {
     pub(super) symbolic: SymbolicCholesky<usize>,
     pub(super) l_values: Vec<f64>,

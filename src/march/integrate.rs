@@ -126,7 +126,7 @@ impl MarchSettings {
 /// Every accepted step (index 0 is the initial state at t = 0).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MarchHistory {
-    /// Time (s), [T].
+    /// Time (s), \[T\].
     pub time: Vec<f64>,
     /// Displacements, [T × n] row-major.
     pub q: Vec<f64>,
@@ -138,7 +138,7 @@ pub struct MarchHistory {
     pub force: Vec<f64>,
     /// Per element state code (0 separated, 1 stick, 2 slip+, 3 slip−), [T × E].
     pub state: Vec<u8>,
-    /// Corrector iterations of each step (0 for the initial state), [T].
+    /// Corrector iterations of each step (0 for the initial state), \[T\].
     pub iterations: Vec<u32>,
 }
 
@@ -203,7 +203,7 @@ pub struct MarchOutcome {
     /// tolerance, if any.
     pub steady_period: Option<usize>,
     /// Harmonics n = 0..=H of each DOF over the last marched period, complex (re, im) per
-    /// `conventions.md` §4, [n_dof][H+1].
+    /// `conventions.md` §4, \[n_dof\]\[H+1\].
     pub harmonics: Vec<Vec<(f64, f64)>>,
     /// Time steps taken (accepted).
     pub steps: usize,

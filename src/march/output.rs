@@ -1,17 +1,17 @@
 //! The `/march/` group of the results file (`interface.md`, "Results (HDF5)"): a march as the
 //! [`MarchData`] of [`crate::output::results`], whose [`write_results`] owns the file. The layout's
 //! datasets (`time`, `response` [T, R], `response_dofs`, `contact_force` [T, E, 2] and
-//! `contact_state` [T, E] per element, `element_names`, `first_harmonic_last_period` [R],
-//! `iterations_per_step` [T]; attributes `scheme`, `wall_seconds`, `omega`, `frequency_hz`, `steps`)
+//! `contact_state` [T, E] per element, `element_names`, `first_harmonic_last_period` \[R\],
+//! `iterations_per_step` \[T\]; attributes `scheme`, `wall_seconds`, `omega`, `frequency_hz`, `steps`)
 //! are `MarchData`'s fields; the march adds, in [`MarchData::extra`]:
 //!
 //! | dataset | shape | unit | content |
 //! |---|---|---|---|
-//! | `response_names` | [R] | – | names of the reported DOF (`u`, `w`, `phi` for the damper) |
+//! | `response_names` | \[R\] | – | names of the reported DOF (`u`, `w`, `phi` for the damper) |
 //! | `contact_displacement` | [T, E, 2] | m | (u_t, v) per element: hysteresis-loop abscissae |
-//! | `iteration_histogram` | [K] | – | steps that took k iterations (paper Fig. 5) |
-//! | `periodicity_error` | [P] | – | end-of-period state change (NaN for period 1) |
-//! | `state_changes` | [P] | – | instants per period at which a contact state changed |
+//! | `iteration_histogram` | \[K\] | – | steps that took k iterations (paper Fig. 5) |
+//! | `periodicity_error` | \[P\] | – | end-of-period state change (NaN for period 1) |
+//! | `state_changes` | \[P\] | – | instants per period at which a contact state changed |
 //! | `harmonics_last_period` | [R, H+1] | m | complex harmonics 0..H (`conventions.md` §4) |
 //!
 //! and the attributes `steady_period` (−1: not reached), `time_step_min`, `time_step_max` (s),

@@ -5,22 +5,22 @@
 //! one [`ContactData`] per contact interface, and a [`MarchData`] for a time-marching run;
 //! [`write_results`] checks the sizes and writes the layout below atomically.
 //!
-//! | path | type [shape] | unit | content |
+//! | path | type \[shape\] | unit | content |
 //! |---|---|---|---|
 //! | `/frf/<i>` attributes | | | `harmonics` H, `sweep_parameters` (names), one attribute per sweep parameter (its value) |
-//! | `/frf/<i>/omega` | f64 [P] | rad/s | excitation frequency of each point, path order |
-//! | `/frf/<i>/frequency_hz` | f64 [P] | Hz | ω/2π |
+//! | `/frf/<i>/omega` | f64 \[P\] | rad/s | excitation frequency of each point, path order |
+//! | `/frf/<i>/frequency_hz` | f64 \[P\] | Hz | ω/2π |
 //! | `/frf/<i>/amplitude` | f64 [P, R] | m | first-harmonic amplitude abs(Q⁽¹⁾) of each response DOF |
 //! | `/frf/<i>/peak` | f64 [P, R] | m | max over the period of abs(q(t)) |
 //! | `/frf/<i>/harmonics` | complex [P, R, H+1] | m | Q⁽ⁿ⁾, q(τ) = Re Σ Q⁽ⁿ⁾ e^{inτ} (`conventions.md` §4) |
-//! | `/frf/<i>/response_dofs` | compound [R] {kind enum(node, row), node_tag u64, component i64} | 1 | node tag and component 0/1/2, or matrix row (component −1) |
-//! | `/frf/<i>/arc_length` | f64 [P] | 1 | continuation arc length |
-//! | `/frf/<i>/newton_iterations` | u64 [P] | 1 | Newton iterations of each point |
-//! | `/frf/<i>/stable` | i64 [P] | 1 | 1 stable, 0 unstable (only when computed) |
+//! | `/frf/<i>/response_dofs` | compound \[R\] {kind enum(node, row), node_tag u64, component i64} | 1 | node tag and component 0/1/2, or matrix row (component −1) |
+//! | `/frf/<i>/arc_length` | f64 \[P\] | 1 | continuation arc length |
+//! | `/frf/<i>/newton_iterations` | u64 \[P\] | 1 | Newton iterations of each point |
+//! | `/frf/<i>/stable` | i64 \[P\] | 1 | 1 stable, 0 unstable (only when computed) |
 //! | `/contact` attributes | | | `names`: the interfaces in the order of the points' contact fractions |
 //! | `/contact/<name>` attributes | | | `model`, `coupling` (array, interpolated), `element`, `sigma`, `mu` |
-//! | `/contact/<name>/pairs` | compound [E] {contact_node u64, target_node u64} | 1 | the node-to-node elements (c, t_j) |
-//! | `/contact/<name>/weights`, `kt`, `kn`, `preload` | f64 [E] | 1, N/m, N/m, N | w_j, k_tj, k_nj, n0_j of each element (SAMA eq. 29–31) |
+//! | `/contact/<name>/pairs` | compound \[E\] {contact_node u64, target_node u64} | 1 | the node-to-node elements (c, t_j) |
+//! | `/contact/<name>/weights`, `kt`, `kn`, `preload` | f64 \[E\] | 1, N/m, N/m, N | w_j, k_tj, k_nj, n0_j of each element (SAMA eq. 29–31) |
 //! | `/contact/<name>/frames` | f64 [E, 3, 3] | 1 | local frame, rows t1, t2, n (global axes) |
 //! | `/contact/<name>/state_fractions/<i>` | f64 [P, 3] | 1 | per point of `/frf/<i>`: fractions of the period in stick, slip, separation, averaged over the elements |
 //! | `/contact/<name>/virtual_points` | f64 [E, 3] | m | virtual node t_v of each element's contact node (on the placed target surface) |
@@ -29,14 +29,14 @@
 //! | `/contact/<name>/elements/<i>/loop_u`, `loop_force` | f64 [E, N_t, 2] | m, N | hysteresis loops at point `loop_point` (attribute; the resonance peak): u1, u2 and f1, f2 over the last period |
 //! | `/contact/<name>/elements/<i>/loop_approach`, `loop_normal_force` | f64 [E, N_t] | m, N | normal approach v and normal force f_n at the same point |
 //! | `/march` attributes | | | `scheme`, `wall_seconds`, `omega` (rad/s), `frequency_hz`, `steps` |
-//! | `/march/time` | f64 [T] | s | instants |
+//! | `/march/time` | f64 \[T\] | s | instants |
 //! | `/march/response` | f64 [T, R] | m | response DOFs (`/march/response_dofs`) |
-//! | `/march/response_dofs` | compound [R] | 1 | as `/frf/<i>/response_dofs` |
+//! | `/march/response_dofs` | compound \[R\] | 1 | as `/frf/<i>/response_dofs` |
 //! | `/march/contact_force` | f64 [T, E, 2] | N | per element (f_t, f_n) |
 //! | `/march/contact_state` | i64 [T, E] | 1 | per element 0 separated, 1 stick, 2 slip +, 3 slip − |
-//! | `/march/element_names` | strings [E] | 1 | the friction elements |
-//! | `/march/first_harmonic_last_period` | f64 [R] | m | abs(Q⁽¹⁾) of each response DOF over the last period |
-//! | `/march/iterations_per_step` | u64 [T] | 1 | corrector iterations of each step |
+//! | `/march/element_names` | strings \[E\] | 1 | the friction elements |
+//! | `/march/first_harmonic_last_period` | f64 \[R\] | m | abs(Q⁽¹⁾) of each response DOF over the last period |
+//! | `/march/iterations_per_step` | u64 \[T\] | 1 | corrector iterations of each step |
 //! | `/march/<other>` | | | [`MarchData::extra`]: the marcher's further datasets and attributes |
 
 use std::collections::BTreeMap;
@@ -263,9 +263,9 @@ pub struct MarchData {
     pub contact_force: Vec<f64>,
     /// Per element state code (0 separated, 1 stick, 2 slip+, 3 slip−), [T × E].
     pub contact_state: Vec<u8>,
-    /// abs(Q⁽¹⁾) of each response DOF over the last period (m), [R].
+    /// abs(Q⁽¹⁾) of each response DOF over the last period (m), \[R\].
     pub first_harmonic_last_period: Vec<f64>,
-    /// Corrector iterations of each step, [T].
+    /// Corrector iterations of each step, \[T\].
     pub iterations_per_step: Vec<u64>,
     /// Further datasets and attributes of `/march` beyond the layout above (the marcher's loops,
     /// histograms, periodicity record, …), written and read back verbatim; their names must not

@@ -6,14 +6,14 @@
 //! | path | type, shape | content |
 //! |---|---|---|
 //! | `/` attrs | | `program`, `version`, `file_kind = "rom"`, `title`, `case_text`, `created` |
-//! | `/rom` attrs | | `key` (str), `full_dofs`, `interface_modes` (u64), `harmonic_indices` (u64 [·]), `cyclic` (i64 0/1); when cyclic: `sectors` (u64), `axis_origin` (f64 [3], m), `axis_direction` (f64 [3]), `sector_angle` (f64, rad) |
-//! | `/rom/interface_frequencies_hz` | f64 [n_if] | CB fixed-interface eigenfrequencies (Hz) |
-//! | `/rom/nodes` | compound [n_nodes] {tag u64, x, y, z f64} | master nodes, ascending tag, positions (m) |
+//! | `/rom` attrs | | `key` (str), `full_dofs`, `interface_modes` (u64), `harmonic_indices` (u64 [·]), `cyclic` (i64 0/1); when cyclic: `sectors` (u64), `axis_origin` (f64 \[3\], m), `axis_direction` (f64 \[3\]), `sector_angle` (f64, rad) |
+//! | `/rom/interface_frequencies_hz` | f64 \[n_if\] | CB fixed-interface eigenfrequencies (Hz) |
+//! | `/rom/nodes` | compound \[n_nodes\] {tag u64, x, y, z f64} | master nodes, ascending tag, positions (m) |
 //! | `/rom/groups/<name>` | u64 [·] | master node tags of the group |
 //! | `/rom/k<K>` attrs | | `harmonic_index` (u64), `real` (i64 0/1) |
 //! | `/rom/k<K>/stiffness`, `mass`, `damping` | f64 or complex {r, i} [n, n] | K_k (N/m), M_k (kg), C_k (N·s/m, only when defined); f64 when `real` |
-//! | `/rom/k<K>/dofs` | compound [n] {kind enum(physical, interface, modal), node_tag u64, component u8, role enum(low_frontier, high_frontier, contact, target, keep, none), index u64} | what each reduced coordinate is |
-//! | `/rom/k<K>/frequencies_hz` | f64 [m] | lowest eigenfrequencies of (K_k, M_k) (Hz) |
+//! | `/rom/k<K>/dofs` | compound \[n\] {kind enum(physical, interface, modal), node_tag u64, component u8, role enum(low_frontier, high_frontier, contact, target, keep, none), index u64} | what each reduced coordinate is |
+//! | `/rom/k<K>/frequencies_hz` | f64 \[m\] | lowest eigenfrequencies of (K_k, M_k) (Hz) |
 //! | `/rom/k<K>/gsi` attrs, `/rom/k<K>/gsi/dropped` | u64 [·] | present when GSI was applied: `modes_used`, `retained`; dropped mode indices |
 //!
 //! A real matrix is stored as f64 only when every imaginary part is +0.0, so that reading it back

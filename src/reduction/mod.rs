@@ -4,7 +4,7 @@
 //! | module | what it holds |
 //! |---|---|
 //! | [`masters`] | master/interior partition of the free DOF |
-//! | [`craig_bampton`] | the CB model with streamed static modes |
+//! | [`craig_bampton`](mod@craig_bampton) | the CB model with streamed static modes |
 //! | [`dense`] | dense Hermitian generalized eigenproblems of the reduced models |
 //! | [`gsi`] | Gram–Schmidt interface reduction of the low frontier |
 //!
