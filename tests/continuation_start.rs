@@ -49,7 +49,9 @@ fn every_missed_start_of_a_sweep_is_reached() {
                 let frf =
                     frequency_response(&system, &opts, &ResponseOptions::default(), &mut |_| {});
                 match frf {
-                    Ok(frf) if frf.end == PathEnd::ReachedEnd => reached += 1,
+                    Ok(frf) if frf.end == PathEnd::ReachedEnd && frf.start_level.is_some() => {
+                        reached += 1
+                    }
                     other => println!("c {c}, f {f}, ω {w}: {:?}", other.map(|f| f.end)),
                 }
             }
@@ -83,6 +85,7 @@ fn a_start_newton_misses_is_reached_through_the_excitation_level() {
     let opts = ContinuationOptions::new(omega, 1.65, 0.01);
     let frf = frequency_response(&system, &opts, &ResponseOptions::default(), &mut |_| {}).unwrap();
     assert_eq!(frf.end, PathEnd::ReachedEnd);
+    assert!(frf.start_level.is_some());
     let start = &frf.points[0];
     assert_eq!(start.omega, omega);
 
@@ -114,6 +117,11 @@ fn a_start_newton_misses_is_reached_through_the_excitation_level() {
     );
     let best = errors.iter().cloned().fold(f64::INFINITY, f64::min);
     assert!(best <= 1e-7, "{errors:?}");
+
+    // where Newton from the linear solution converges, no level continuation is reported
+    let above = ContinuationOptions::new(2.4, 2.3, 0.01);
+    let frf = frequency_response(&system, &above, &ResponseOptions::default(), &mut |_| {});
+    assert_eq!(frf.unwrap().start_level, None);
 }
 
 /// When neither Newton from the linear solution nor the level continuation reaches the start

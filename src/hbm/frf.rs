@@ -41,6 +41,9 @@ pub struct Frf<S> {
     pub end: PathEnd,
     /// Steps rejected and retried with half the step.
     pub retries: usize,
+    /// `Some(λ₀)` when Newton from the linear solution missed the start point and it was reached
+    /// by continuation in the excitation level from λ₀ × the force (see [`start_point`]).
+    pub start_level: Option<f64>,
 }
 
 /// Traces the frequency response of `system` (excitation level 1) and recovers the outputs.
@@ -59,7 +62,8 @@ pub fn frequency_response<F: HarmonicForce>(
     }
     opts.validate()?;
     let fp = FrequencyPath { system, level: 1.0 };
-    let path = trace_from(&fp, opts, start_point(system, opts)?, on_point)?;
+    let (start, start_level) = start_point(system, opts)?;
+    let path = trace_from(&fp, opts, start, on_point)?;
     let points = path
         .points
         .into_iter()
@@ -84,6 +88,7 @@ pub fn frequency_response<F: HarmonicForce>(
         points,
         end: path.end,
         retries: path.retries,
+        start_level,
     })
 }
 
@@ -102,15 +107,17 @@ const SMALLEST_START_LEVEL: f64 = 1.0 / 1024.0;
 /// stops on the way is not retried (a smaller λ₀ would meet the same point). Newton at λ = 1 from
 /// the end of that path then gives the start point with the frequency path's linearization.
 ///
+/// Returns the start point and, when the level continuation gave it, λ₀.
+///
 /// Errors ([`Error::Compute`]): neither way reaches λ = 1; the message gives both reasons.
 fn start_point<F: HarmonicForce>(
     system: &HbmSystem<'_, F>,
     opts: &ContinuationOptions,
-) -> Result<NewtonSolution<F::State>> {
+) -> Result<(NewtonSolution<F::State>, Option<f64>)> {
     let fp = FrequencyPath { system, level: 1.0 };
     let x0 = vec![0.0; system.dim()];
     let direct = match solve_fixed(&fp, &x0, opts.start, &fp.initial_state(), &opts.newton) {
-        Ok(sol) => return Ok(sol),
+        Ok(sol) => return Ok((sol, None)),
         Err(f) => f.message,
     };
     let fail = |why: String, from: f64| {
@@ -123,13 +130,14 @@ fn start_point<F: HarmonicForce>(
     let level = level_continuation(system, opts);
     let from = level.from;
     let (x, state) = level.end.map_err(|why| fail(why, from))?;
-    solve_fixed(&fp, &x, opts.start, &state, &opts.newton).map_err(|f| {
+    let sol = solve_fixed(&fp, &x, opts.start, &state, &opts.newton).map_err(|f| {
         let why = format!(
             "Newton at the full force from the end of that path: {}",
             f.message
         );
         fail(why, from)
-    })
+    })?;
+    Ok((sol, Some(from)))
 }
 
 /// How the continuation in the excitation level of [`start_point`] ended.

@@ -644,6 +644,12 @@ fn trace_curve<F: HarmonicForce>(
             )),
         ),
         Ok(traced) => {
+            if let Some(level) = traced.start_level {
+                rep.info(&format!(
+                    "{label}: Newton from the linear solution missed the start point at {:.6} Hz; it was reached by continuation in the excitation level from {level} × the force",
+                    opts.start / (2.0 * PI)
+                ));
+            }
             for p in &traced.points {
                 frf.points.push(FrfPoint {
                     omega: p.omega,
