@@ -2,8 +2,7 @@
 //! response recovered at every point, and the continuation settings of a case's
 //! `[continuation]` table.
 
-use super::newton::NewtonOptions;
-use super::newton::{solve_fixed, NewtonSolution};
+use super::newton::{solve_fixed, NewtonOptions, NewtonSolution};
 use super::response::{output_response, OutputResponse, ResponseOptions};
 use super::stability::is_stable;
 use super::system::{FrequencyPath, HbmSystem, LevelPath, ParameterSystem};
