@@ -41,12 +41,15 @@ pub struct Frf<S> {
     /// Steps rejected and retried with half the step.
     pub retries: usize,
     /// `Some(λ₀)` when Newton from the linear solution missed the start point and it was reached
-    /// by continuation in the excitation level from λ₀ × the force (see [`start_point`]).
+    /// by continuation in the excitation level from λ₀ × the force (see [`frequency_response`]).
     pub start_level: Option<f64>,
 }
 
 /// Traces the frequency response of `system` (excitation level 1) and recovers the outputs.
-/// `on_point` sees every converged point (for progress).
+/// `on_point` sees every converged point (for progress). The start point is solved by Newton
+/// from the linear solution or, when that does not converge, reached by continuation in the
+/// excitation level at the start frequency (from λ₀ = ½, ¼, … 2⁻¹⁰ × the force up to 1; the
+/// λ₀ used is [`Frf::start_level`]).
 pub fn frequency_response<F: HarmonicForce>(
     system: &HbmSystem<'_, F>,
     opts: &ContinuationOptions,
