@@ -104,9 +104,10 @@ const SMALLEST_START_LEVEL: f64 = 1.0 / 1024.0;
 /// usually converges. When the excitation is strong enough for friction to slip or contacts to
 /// separate far from that solution, it may not; the start is then reached by continuation in the
 /// excitation level λ at the fixed ω_start ([`LevelPath`], the residual
-/// D̄(ω) Q − λ F̄_e + F_c(Q)) from λ₀ up to λ = 1, through any fold in λ. λ₀ = ½, halved (down
-/// to 2⁻¹⁰) while the start at λ₀ does not converge or the path turns back below λ₀; a path that
-/// stops on the way is not retried (a smaller λ₀ would meet the same point). Newton at λ = 1 from
+/// D̄(ω) Q − λ F̄_e + F_c(Q)) from λ₀ up to λ = 1, through any fold in λ. λ₀ = ½, halved down
+/// to 2⁻¹⁰ while the start at λ₀ does not converge, and down to ⅛ while the path turns back far
+/// below λ₀ (by more than half its range: a path from ⅛ may go back to λ < 0); a path that stops
+/// on the way is not retried (a smaller λ₀ would meet the same point). Newton at λ = 1 from
 /// the end of that path then gives the start point with the frequency path's linearization.
 ///
 /// Returns the start point and, when the level continuation gave it, λ₀.
@@ -182,8 +183,14 @@ fn level_continuation<F: HarmonicForce>(
                     }
                     None => why = "the level path has no points".into(),
                 },
-                // a smaller start level lets the path go further back through a fold in λ
-                PathEnd::LeftRange => why = "the level path turned back below its start".into(),
+                // a smaller start level lets the path go further back through a fold in λ; below
+                // λ₀ = ⅛ it may already go back to λ < 0, so a smaller one would not help
+                PathEnd::LeftRange => {
+                    why = "the level path turned back below its start".into();
+                    if level <= 0.125 {
+                        break;
+                    }
+                }
                 // the obstacle lies on the path itself: a smaller start level meets it again
                 PathEnd::Failed(m) => {
                     why = m;
