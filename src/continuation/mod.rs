@@ -150,8 +150,8 @@ pub fn trace<S: ParameterSystem>(
     on_point: &mut dyn FnMut(&PathPoint<S::State>),
 ) -> Result<Path<S::State>> {
     opts.validate()?;
-    let x0 = vec![0.0; system.dim()];
     let state0 = system.initial_state();
+    let x0 = vec![0.0; system.dim()];
     let start = solve_fixed(system, &x0, opts.start, &state0, &opts.newton).map_err(|f| {
         Error::Compute(format!(
             "the start point at parameter {} did not converge from the linear solution: {} — try another start value, a smaller excitation or more damping",

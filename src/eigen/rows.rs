@@ -222,17 +222,6 @@ impl CholeskyFactor {
         Some(reach)
     }
 
-    /// Number of factor rows (columns of L) in the supernodes `reach`.
-    pub fn reach_rows(&self, reach: &[usize]) -> usize {
-        match self.symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(_) => self.n_dof(),
-            SymbolicCholeskyRaw::Supernodal(s) => {
-                let l = SupernodalLltRef::new(s, &self.l_values);
-                reach.iter().map(|&sn| l.supernode(sn).val().ncols()).sum()
-            }
-        }
-    }
-
     /// Number of rows and columns of the factorised matrix.
     pub fn n_dof(&self) -> usize {
         self.pinv.len()
@@ -559,11 +548,22 @@ mod tests {
         let nonzero = (0..n)
             .filter(|&i| full.row(i).iter().any(|&v| v != 0.0))
             .count();
-        let in_reach = factor.reach_rows(&reach);
+        let in_reach = reach_rows(&factor, &reach);
         assert!(
             nonzero <= in_reach && in_reach < n,
             "{nonzero} {in_reach} {n}"
         );
+    }
+
+    /// Number of factor rows (columns of L) in the supernodes `reach` of a supernodal factor.
+    fn reach_rows(factor: &CholeskyFactor, reach: &[usize]) -> usize {
+        match factor.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(_) => factor.n_dof(),
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let l = SupernodalLltRef::new(s, &factor.l_values);
+                reach.iter().map(|&sn| l.supernode(sn).val().ncols()).sum()
+            }
+        }
     }
 
     // (P A Pᵀ) X in factor order against faer's sparse × dense product in the original order.

@@ -64,7 +64,7 @@ pub fn frequency_response<F: HarmonicForce>(
     }
     opts.validate()?;
     let fp = FrequencyPath { system, level: 1.0 };
-    let (start, start_level) = start_point(system, opts)?;
+    let (start, start_level) = start_point(&fp, opts)?;
     let path = trace_from(&fp, opts, start, on_point)?;
     let points = path
         .points
@@ -114,12 +114,11 @@ const SMALLEST_START_LEVEL: f64 = 1.0 / 1024.0;
 ///
 /// Errors ([`Error::Compute`]): neither way reaches λ = 1; the message gives both reasons.
 fn start_point<F: HarmonicForce>(
-    system: &HbmSystem<'_, F>,
+    fp: &FrequencyPath<'_, '_, F>,
     opts: &ContinuationOptions,
 ) -> Result<(NewtonSolution<F::State>, Option<f64>)> {
-    let fp = FrequencyPath { system, level: 1.0 };
-    let x0 = vec![0.0; system.dim()];
-    let direct = match solve_fixed(&fp, &x0, opts.start, &fp.initial_state(), &opts.newton) {
+    let x0 = vec![0.0; fp.dim()];
+    let direct = match solve_fixed(fp, &x0, opts.start, &fp.initial_state(), &opts.newton) {
         Ok(sol) => return Ok((sol, None)),
         Err(f) => f.message,
     };
@@ -130,10 +129,10 @@ fn start_point<F: HarmonicForce>(
              another start frequency, a smaller excitation or more damping"
         ))
     };
-    let level = level_continuation(system, opts);
+    let level = level_continuation(fp.system, opts);
     let from = level.from;
     let (x, state) = level.end.map_err(|why| fail(why, from))?;
-    let sol = solve_fixed(&fp, &x, opts.start, &state, &opts.newton).map_err(|f| {
+    let sol = solve_fixed(fp, &x, opts.start, &state, &opts.newton).map_err(|f| {
         let why = format!(
             "Newton at the full force from the end of that path: {}",
             f.message
