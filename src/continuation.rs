@@ -3,7 +3,7 @@
 //! to a varying excitation level at fixed ω.
 //!
 //! Method (`methods.md`, "Harmonic balance and continuation"; folds as in the microslip paper,
-//! seed 002, §4.2):
+//! Cigeroglu, An & Menq 2007, §4.2):
 //! - variables scaled, u = x / x_s (x_s = the largest ‖x‖₂ on the path so far, starting from the
 //!   start point's) and μ = λ / λ_s (λ_s = |λ_end − λ_start|); arc length s measured in (u, μ);
 //! - start: Newton at λ_start from x = 0, whose first step solves the linearised (for friction:
@@ -29,10 +29,10 @@
 use faer::Mat;
 
 use crate::error::{Error, Result};
-use crate::hbm::newton::{
-    newton_core, norm, solve_dense, solve_fixed, Iterate, NewtonOptions, NewtonSolution,
+use crate::nonlinear::{
+    newton_core, norm, solve_dense, solve_fixed, Iterate, Linearization, NewtonOptions,
+    NewtonSolution, ParameterSystem,
 };
-use crate::hbm::system::{Linearization, ParameterSystem};
 
 /// Continuation settings (parameter values in the parameter's unit, e.g. rad/s).
 #[derive(Clone, Debug, PartialEq)]
