@@ -51,7 +51,9 @@ fn msh(c: &mut Criterion) {
         .filter(|(_, p)| p.exists())
         .collect();
     if large.is_empty() {
-        eprintln!("large mesh {prefix}.*.msh not found: run tools/meshes/make_large_mesh.py to bench it");
+        eprintln!(
+            "large mesh {prefix}.*.msh not found: run tools/meshes/make_large_mesh.py to bench it"
+        );
     } else {
         bench_files(c, "parse_msh/large_tetra10", &large, 10);
     }
