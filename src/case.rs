@@ -1,4 +1,4 @@
-//! The TOML case file of `interface.md`: what to compute, on which model, with which parameters.
+//! The TOML case file (`docs/case-file.md`): what to compute, on which model, with which parameters.
 //!
 //! [`Case::load`] reads, parses and validates a case; the structs below are its plain data, read
 //! directly by the later stages. Units are SI (m, kg, s, N, Pa), frequencies in Hz or rad/s as the
@@ -124,7 +124,7 @@ pub struct Model {
     #[serde(default)]
     pub mass: Option<PathBuf>,
     /// DOF map (`dofs.csv`) relating the rows of external matrices to mesh nodes; without it, row
-    /// `3*i + c` is component `c` of node index `i` (`conventions.md` §1).
+    /// `3*i + c` is component `c` of node index `i` (`docs/conventions.md` §1).
     #[serde(default)]
     pub dofs: Option<PathBuf>,
     /// Quadrature of the element matrices (`quadrature = { stiffness = 5, mass = 5 }`: polynomial
@@ -133,7 +133,7 @@ pub struct Model {
     pub quadrature: QuadratureDegrees,
 }
 
-/// `[model] quadrature`: the polynomial degrees of the stiffness and mass rules (methods.md: match
+/// `[model] quadrature`: the polynomial degrees of the stiffness and mass rules (`docs/theory.md`: match
 /// the other code's rule when comparing against it).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -225,7 +225,7 @@ impl TryFrom<DampingSpec> for Damping {
     }
 }
 
-/// `[cyclic]`: N identical sectors about an axis (`conventions.md` §2).
+/// `[cyclic]`: N identical sectors about an axis (`docs/conventions.md` §2).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Cyclic {
@@ -642,7 +642,7 @@ impl Default for HarmonicBalance {
 
 impl HarmonicBalance {
     /// The number of AFT time samples: `time_samples` if given, else the smallest power of two
-    /// ≥ 4(H+1) (`conventions.md` §4).
+    /// ≥ 4(H+1) (`docs/conventions.md` §4).
     pub fn samples(&self) -> usize {
         self.time_samples
             .unwrap_or_else(|| (4 * (self.harmonics + 1)).next_power_of_two())

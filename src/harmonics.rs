@@ -1,4 +1,4 @@
-//! Harmonic vectors in the real layout of `conventions.md` §4, and the interface every nonlinear
+//! Harmonic vectors in the real layout of `docs/conventions.md` §4, and the interface every nonlinear
 //! force of the harmonic balance implements.
 //!
 //! A periodic signal of the normalised time τ = ω t (one period = 2π) is
@@ -19,7 +19,7 @@ use crate::error::{Error, Result};
 pub struct HarmonicLayout {
     /// Highest temporal harmonic H ≥ 0 (n = 0 is the static part).
     pub harmonics: usize,
-    /// Samples per period N_t ≥ 2H + 2 (`conventions.md` §4).
+    /// Samples per period N_t ≥ 2H + 2 (`docs/conventions.md` §4).
     pub time_samples: usize,
 }
 
@@ -47,7 +47,7 @@ impl HarmonicLayout {
         }
     }
 
-    /// The smallest power of two ≥ 4(H+1) (`conventions.md` §4).
+    /// The smallest power of two ≥ 4(H+1) (`docs/conventions.md` §4).
     pub fn default_samples(harmonics: usize) -> usize {
         (4 * (harmonics + 1)).next_power_of_two()
     }

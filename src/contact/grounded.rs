@@ -1,4 +1,4 @@
-//! Friction elements on DOF combinations of a matrix-defined system (`interface.md`,
+//! Friction elements on DOF combinations of a matrix-defined system (`docs/case-file.md`,
 //! `[[element]] kind = "friction"`), as one [`HarmonicForce`].
 //!
 //! An element reads a tangential relative displacement u_t = Σ_i w_i q_{d_i} (m) and, optionally,

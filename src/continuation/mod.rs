@@ -2,8 +2,8 @@
 //! frequency responses (λ = ω) through resonances, stick–slip transitions and folds, or responses
 //! to a varying excitation level at fixed ω.
 //!
-//! Method (`methods.md`, "Harmonic balance and continuation"; folds as in the microslip paper,
-//! seed 002, §4.2):
+//! Method (`docs/theory.md`, "Continuation"; folds as in the microslip paper,
+//! Cigeroglu, An & Menq 2007, §4.2):
 //! - variables scaled, u = x / x_s (x_s = the largest ‖x‖₂ on the path so far, starting from the
 //!   start point's) and μ = λ / λ_s (λ_s = |λ_end − λ_start|); arc length s measured in (u, μ);
 //! - start: Newton at λ_start from x = 0, whose first step solves the linearised (for friction:

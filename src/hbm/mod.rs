@@ -2,8 +2,8 @@
 //! DOFs, the residual and its Jacobian in the real layout, Newton, and the recovery of the
 //! response at the output DOFs.
 //!
-//! Source: SAMA paper (seed 004) §2–3, eqs. 10–27; `methods.md` "Harmonic balance and
-//! continuation"; real layout `conventions.md` §4.
+//! Source: SAMA paper (Battiato 2021) §2–3, eqs. 10–27; `docs/theory.md` "Harmonic balance" and
+//! "Continuation"; real layout `docs/conventions.md` §4.
 //!
 //! - [`linear`]: [`LinearModel`] — per harmonic n the dynamic stiffness D⁽ⁿ⁾(ω) of its harmonic
 //!   index, condensed per frequency (eqs. 15–18), with its ω-derivative;

@@ -1,6 +1,6 @@
 //! Contact forces measured from the preloaded static equilibrium.
 //!
-//! The SAMA paper (seed 004, §6.1) computes the forced vibration *about* the static equilibrium
+//! The SAMA paper (Battiato 2021, §6.1) computes the forced vibration *about* the static equilibrium
 //! of the structure: a nonlinear static analysis (centrifugal and thermal loads, shroud
 //! interference) gives the normal preload n0 of every contact, and that static state — the
 //! preload in equilibrium with the pre-stress that produced it — is the configuration from which

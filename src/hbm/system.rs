@@ -1,5 +1,5 @@
 //! The harmonic balance residual r(Q, ω) = D̄(ω) Q − λ F̄_e(ω) + F_nl(Q) (SAMA paper eq. 19) in
-//! the real layout of `conventions.md` §4, with its Jacobian ∂r/∂Q = D̄ + ∂F_nl/∂Q (eq. 21 with the
+//! the real layout of `docs/conventions.md` §4, with its Jacobian ∂r/∂Q = D̄ + ∂F_nl/∂Q (eq. 21 with the
 //! sign convention of [`HarmonicForce`]) and its derivative with respect to the continuation
 //! parameter (ω, the excitation level λ, or the force's own parameter such as the preload n0).
 

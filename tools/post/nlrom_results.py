@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 """Load nlrom HDF5 files (results and ROM) into plain Python dicts of numpy arrays.
 
-Only h5py and numpy: the files need no custom HDF5 code (README "HDF5 files" documents the layout
+Only h5py and numpy: the files need no custom HDF5 code (docs/results-file.md documents the layout
 dataset by dataset). Complex datasets come back as complex128, compound datasets as numpy
 structured arrays, strings as str.
 
-    import sys; sys.path.insert(0, "tools")
+    import sys; sys.path.insert(0, "tools/post")
     import nlrom_results
     r = nlrom_results.load("results/shroud.h5")
     r["attrs"]["title"]                       # root attributes
@@ -16,7 +16,7 @@ structured arrays, strings as str.
     r["contact"]["shroud"]["state_fractions"]["0"]   # [P, 3]: stick, slip, separation
     r["march"]["response"]                    # [T, R] (None without a march)
 
-Command line: `python3 tools/nlrom_results.py FILE.h5 [--plot FRF.png]` prints a summary (and plots
+Command line: `python3 tools/post/nlrom_results.py FILE.h5 [--plot FRF.png]` prints a summary (and plots
 the first-harmonic amplitude of every FRF against the frequency).
 """
 

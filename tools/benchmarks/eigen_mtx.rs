@@ -1,4 +1,4 @@
-//! The lowest modes of a pencil read from Matrix Market files, for `tools/bench_eigen.py`.
+//! The lowest modes of a pencil read from Matrix Market files, for `tools/benchmarks/bench_eigen.py`.
 //!
 //! Usage: `cargo run --release --example eigen_mtx -- DIR [N] [SHIFT]` reads `DIR/K.mtx` (N/m)
 //! and `DIR/M.mtx` (kg), computes the lowest N modes (default 20) with the shift SHIFT (rad²/s²,

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The SAMA paper's experiment (seed 004, §6.2) on the bundled shrouded sector, in one command.
 
-    python3 tools/paper_comparison.py [--modes m1 m2] [--skip-solve] [--out results/paper] [--figures docs/paper]
+    python3 tools/validation/paper_comparison.py [--modes m1 m2] [--skip-solve] [--out results/paper] [--figures docs/paper]
 
 Modes (default: both): M1 = the first stuck-shroud mode of harmonic index 3 (bending, 791 Hz fully
 stuck), M2 = the first torsional blade mode of harmonic index 3 (5126 Hz fully stuck); see
@@ -16,7 +16,7 @@ For every mode (cases/paper/<mode>_{conforming,nonconforming,misaligned}.toml) i
     resonance within 0.5 %, amplitude within 3 %);
   - plots <out>/<mode>_*_frf.png (FRFs per preload, Figs 19-20), <out>/<mode>_frf_compare.png
     (Figs 21-22 / 26-27 at n0 = 113 N) and <out>/<mode>_performance.png (Figs 23-25 / 28-30),
-    using tools/plot_frf.py (same metric definitions as `nlrom solve`);
+    using tools/post/plot_frf.py (same metric definitions as `nlrom solve`);
   - copies the comparison table and the PNGs to --figures (default docs/paper/, committed: the
     README shows them).
 Exit status 1 when, in any mode, a SAMA-vs-conforming difference exceeds the tolerance, a
@@ -34,8 +34,8 @@ import sys
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
-sys.path.insert(0, HERE)
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "tools", "post"))
 import nlrom_results  # noqa: E402
 import plot_frf  # noqa: E402
 
@@ -205,7 +205,7 @@ def main():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    lines = ["# SAMA paper §6.2 on the bundled sector (tools/paper_comparison.py)", ""]
+    lines = ["# SAMA paper §6.2 on the bundled sector (tools/validation/paper_comparison.py)", ""]
     failures = []
     for mode in args.modes:
         failures += same_model_as_m1(mode)

@@ -8,23 +8,23 @@ elements clamped (3 components), lowest 20 eigenfrequencies (Hz).
 
 Command lines (from the repository root; see `--help` for all options):
 
-    python3 tools/skfem_compare.py
+    python3 tools/validation/skfem_compare.py
         Verify the mesh import (below), assemble at --intorder (default 8), print the 20
         frequencies, the eigen-residuals and the timings.
 
-    python3 tools/skfem_compare.py --convergence [--orders 2,3,4,5,6,7,8,9]
+    python3 tools/validation/skfem_compare.py --convergence [--orders 2,3,4,5,6,7,8,9]
         Same, then the frequencies for every listed skfem quadrature order and their relative
         differences to the highest order (9; skfem has no tetrahedron rule above intorder 9):
         shows that the reference is converged in the rule.
 
-    python3 tools/skfem_compare.py --write tests/data/skfem_sector_modes.json [--free]
+    python3 tools/validation/skfem_compare.py --write tests/data/skfem_sector_modes.json [--free]
         Write the reference record {"mesh", "material", "clamp", "intorder", "quadrature_degree",
         "quadrature_points", "frequencies_hz", "residuals", "dofs", "skfem_version", "volume",
         "mass", ...}; with --free also "free_free" (no clamp, informational).
 
-    python3 tools/skfem_compare.py --check [--nlrom target/release/nlrom] [--reference JSON]
+    python3 tools/validation/skfem_compare.py --check [--nlrom target/release/nlrom] [--reference JSON]
                                    [--case-degree D] [--tol 1e-6] [--keep-case FILE.toml]
-        e.g. python3 tools/skfem_compare.py --check --reference tests/data/skfem_sector_modes.json
+        e.g. python3 tools/validation/skfem_compare.py --check --reference tests/data/skfem_sector_modes.json
         Write a temporary case file (temp dir, absolute mesh path)
 
             title = "skfem comparison"
@@ -43,7 +43,7 @@ Command lines (from the repository root; see `--help` for all options):
         relative difference); exit status 1 if any relative difference exceeds --tol (1e-6), if
         the free-DOF counts differ (unless --no-dofs-check) or if nlrom fails.
 
-    python3 tools/skfem_compare.py --free
+    python3 tools/validation/skfem_compare.py --free
         Also the free-free spectrum (no clamp): 6 rigid-body modes near 0 Hz, then elastic ones.
 
 Quadrature. skfem's `intorder` selects a tabulated tetrahedron rule; the degree it integrates
@@ -102,7 +102,7 @@ Timings on the bundled sector (2 shared cores): import + verification 0.5 s; ass
 2.5 s at intorder 2-4, 9 s at 8, 18 s at 9; eigsh 5 s (free-free 10 s); default run ~17 s;
 --free --convergence --write ~115 s.
 
-Requires numpy, scipy, meshio (reading) and scikit-fem (computing) -- tools/requirements.txt.
+Requires numpy, scipy, meshio (reading) and scikit-fem (computing) -- tools/requirements-dev.txt.
 """
 
 from __future__ import annotations
@@ -118,7 +118,7 @@ from pathlib import Path
 
 import numpy as np
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 DEFAULT_MESH = "meshes/sector_conforming.msh"
 DEFAULT_MATERIAL = {"young": 210e9, "poisson": 0.3, "density": 7800.0}
 DEFAULT_CLAMP = ["hub"]
@@ -666,7 +666,7 @@ def main() -> int:
             "total_dofs": r["total_dofs"], "clamped_nodes": r["clamped_nodes"],
             "skfem_version": skfem.__version__,
             "volume": v["volume_numpy"], "mass": r["mass"],
-            "note": "tools/skfem_compare.py: scikit-fem MeshTet2 (isoparametric tetra10), "
+            "note": "tools/validation/skfem_compare.py: scikit-fem MeshTet2 (isoparametric tetra10), "
                     "ElementVector(ElementTetP2), consistent mass, eigsh shift-invert at 0",
         }
         if conv is not None:

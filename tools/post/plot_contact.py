@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 """Contact plots from an nlrom results file: hysteresis loops and a contact-state map.
 
-    python3 tools/plot_contact.py RESULT.h5 [--interface NAME] [--curve I] [--point P]
+    python3 tools/post/plot_contact.py RESULT.h5 [--interface NAME] [--curve I] [--point P]
                                   [--pairs E1,E2,...] [--out DIR]
 
-Reads (h5py only, through tools/nlrom_results.py) `/contact/<name>/elements/<i>/` of a sector
-case solved by `nlrom solve|run` (README "Results file"):
+Reads (h5py only, through tools/post/nlrom_results.py) `/contact/<name>/elements/<i>/` of a sector
+case solved by `nlrom solve|run` (docs/results-file.md):
 - loops.png: the tangential hysteresis loops f1(u1) of chosen elements (default: the four with the
   largest dissipated energy) at the point where the loops were recorded (`loop_point`, the
   resonance peak of the curve), with the energy per cycle of each element in the legend;

@@ -18,7 +18,7 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-#[path = "../benches/common/contact_input.rs"]
+#[path = "../../benches/common/contact_input.rs"]
 mod contact_input;
 use contact_input::{bench_element, input, pair_set};
 use nlrom::contact::aft::Aft;

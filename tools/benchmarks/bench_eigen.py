@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Compare nlrom's sparse eigensolver with scipy's ARPACK (shift-invert) on a Matrix Market pencil.
 
-    python3 tools/bench_eigen.py [DIR] [--n 20] [--sigma 0] [--grid 50 50 48] [--arpack-tol 1e-10]
+    python3 tools/benchmarks/bench_eigen.py [DIR] [--n 20] [--sigma 0] [--grid 50 50 48] [--arpack-tol 1e-10]
                                  [--skip-superlu] [--skip-cholmod]
 
 DIR holds K.mtx and M.mtx (symmetric Matrix Market, as `nlrom export` writes them). Without DIR the
@@ -41,7 +41,7 @@ import numpy as np
 import scipy.io
 import scipy.sparse as sp
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 SPRING = 1.0e6  # N/m
 MASS = 0.5  # kg
 

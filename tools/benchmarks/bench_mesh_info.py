@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Time `nlrom mesh info` against meshio and Gmsh's own reader on a large mesh, all four MSH variants.
 
-    python3 tools/make_large_mesh.py tools/large/box          # once: ~1.7 M tetra10, ~1 GB (not committed)
+    python3 tools/meshes/make_large_mesh.py tools/large/box          # once: ~1.7 M tetra10, ~1 GB (not committed)
     cargo build --release
-    python3 tools/bench_mesh_info.py tools/large/box [--repeat 3] [--nlrom target/release/nlrom]
+    python3 tools/benchmarks/bench_mesh_info.py tools/large/box [--repeat 3] [--nlrom target/release/nlrom]
 
 For each of PREFIX.{v41-binary,v41-ascii,v22-binary,v22-ascii}.msh it measures the wall time of
   * nlrom:  `nlrom mesh info FILE --json` (the whole command: read, parse, group sets, summary),
@@ -11,7 +11,7 @@ For each of PREFIX.{v41-binary,v41-ascii,v22-binary,v22-ascii}.msh it measures t
   * gmsh:   `gmsh.open(FILE)` in a fresh Python process (Gmsh's C++ reader through its Python API),
 and the peak resident memory of each process (`/usr/bin/time -f %M`). The best of --repeat runs is
 reported, after one warm-up read so that the file is in the page cache for everyone. It prints a
-Markdown table with throughput (MB/s of file) and the ratios peer/nlrom, which goes into README.md.
+Markdown table with throughput (MB/s of file) and the ratios peer/nlrom, as in docs/performance.md.
 """
 
 from __future__ import annotations
@@ -60,7 +60,7 @@ def main() -> int:
     for v in VARIANTS:
         f = Path(f"{args.prefix}.{v}.msh")
         if not f.exists():
-            print(f"missing {f}: run tools/make_large_mesh.py first", file=sys.stderr)
+            print(f"missing {f}: run tools/meshes/make_large_mesh.py first", file=sys.stderr)
             return 2
         size_mb = f.stat().st_size / 1e6
         with open(f, "rb") as fh:  # warm the page cache

@@ -1,5 +1,5 @@
-//! Fully stuck natural frequencies of a shroud case for the SAMA couplings (issue 8 diagnosis),
-//! and with `--shapes` what each stuck mode does on the blade (issue 8, choice of M1 and M2).
+//! Fully stuck natural frequencies of a shroud case for the SAMA couplings, and with `--shapes`
+//! what each stuck mode does on the blade (how M1 and M2 of docs/validation.md were chosen).
 //!
 //!     cargo run --release --example stuck_frequencies -- CASE.toml [KT_SCALE] [MAX_HZ] [--shapes]
 //!

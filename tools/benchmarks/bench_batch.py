@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Batch speed-up of `nlrom batch`: the same cases with --jobs 1 and --jobs 2 (issue 8 goal: ≥ 1.7×).
 
-    python3 tools/bench_batch.py [--case cases/demo.toml] [--copies 8] [--rounds 2]
+    python3 tools/benchmarks/bench_batch.py [--case cases/demo.toml] [--copies 8] [--rounds 2]
                                  [--nlrom target/release/nlrom] [--keep DIR]
 
 Writes --copies copies of the case into a temporary directory (every relative path in the case that
@@ -26,7 +26,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def absolutise(text: str, case_dir: Path) -> str:

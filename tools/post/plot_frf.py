@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Plot nlrom frequency responses: FRFs and the performance curves of the SAMA paper.
 
-    python3 tools/plot_frf.py RESULT.h5 [RESULT2.h5 ...] --out DIR [--labels A B ...] [--dof R]
+    python3 tools/post/plot_frf.py RESULT.h5 [RESULT2.h5 ...] --out DIR [--labels A B ...] [--dof R]
 
 writes, into DIR (created if needed):
   <stem>_frf.png          per result file: first-harmonic amplitude vs frequency, one curve per

@@ -1,13 +1,13 @@
 #!/usr/bin/env python3
-"""Target-face mesh study of the SAMA experiment (issue 8; README "The SAMA paper's experiment").
+"""Target-face mesh study of the SAMA experiment (docs/validation.md, "The SAMA paper's experiment").
 
 How far the non-conforming (SAMA, ``coupling = "interpolated"``) model of mode M1 lies from the
 conforming node-to-node benchmark, as a function of the size of the target-face mesh relative to
 the (fixed, structured) contact face. For every size factor the sector is meshed again with
-``tools/make_meshes.py`` (contact face identical to the conforming model's, asserted), and
+``tools/meshes/make_meshes.py`` (contact face identical to the conforming model's, asserted), and
 
 * the fully stuck k = 3 frequency of the ROM + one spring per contact node on the interpolated
-  target point (``examples/stuck_frequencies.rs``, independent of the harmonic balance), and
+  target point (``tools/validation/stuck_frequencies.rs``, independent of the harmonic balance), and
 * at each requested preload, the FRF of ``cases/paper/m1_nonconforming.toml`` with the mesh
   replaced (``nlrom solve``): resonance frequency and peak amplitude,
 
@@ -16,8 +16,8 @@ are compared with the conforming case (``cases/paper/m1_conforming.toml``, same 
 Usage::
 
     cargo build --release --examples
-    python3 tools/target_mesh_study.py                       # factors 0.6 ... 2, n0 = 113 and 250 N
-    python3 tools/target_mesh_study.py --factors 0.6 2 --preloads 50 113 300 --stuck-only
+    python3 tools/validation/target_mesh_study.py                       # factors 0.6 ... 2, n0 = 113 and 250 N
+    python3 tools/validation/target_mesh_study.py --factors 0.6 2 --preloads 50 113 300 --stuck-only
 
 Prints a Markdown table and writes it with the raw numbers (JSON) to --out.
 """
@@ -31,8 +31,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(REPO / "tools"))
+REPO = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(REPO / "tools" / "meshes"))
 
 import make_meshes  # noqa: E402  (tools/ is not a package)
 

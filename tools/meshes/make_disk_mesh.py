@@ -1,14 +1,14 @@
 #!/usr/bin/env python3
 """A sector of a solid disk (no hole): nodes on the cyclic symmetry axis, for tests/cyclic_axis.rs.
 
-    python3 tools/make_disk_mesh.py [--out meshes/disk8.msh]
+    python3 tools/meshes/make_disk_mesh.py [--out meshes/disk8.msh]
 
 One N = 8 sector (45°) of a steel-sized disk of radius 0.1 m and thickness 0.01 m about the z
 axis, 10-node tetrahedra (size 0.02 m), meshed periodically (Gmsh `setPeriodic`, rotation by
 +45° about z from "low" to "high") so that every high-frontier node is the rotation of a low one.
 The z-axis edge belongs to both frontiers. Physical groups: "volume" (3-D), "low" (the y = 0
 face), "high" (the 45° face), "rim" (the cylindrical face r = 0.1 m, clamped in the test).
-Written as MSH 4.1 ASCII. gmsh version pinned in tools/requirements.txt.
+Written as MSH 4.1 ASCII. gmsh version pinned in tools/requirements-dev.txt.
 """
 
 from __future__ import annotations

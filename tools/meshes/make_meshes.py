@@ -3,10 +3,10 @@
 
 Usage::
 
-    python3 tools/make_meshes.py            # all models
-    python3 tools/make_meshes.py --only sector_conforming cube_tet4
-    python3 tools/make_meshes.py --only sector8
-    python3 tools/make_meshes.py --list
+    python3 tools/meshes/make_meshes.py            # all models
+    python3 tools/meshes/make_meshes.py --only sector_conforming cube_tet4
+    python3 tools/meshes/make_meshes.py --only sector8
+    python3 tools/meshes/make_meshes.py --list
 
 Every model is written in four variants:
 
@@ -21,7 +21,7 @@ otherwise duplicate its elements). Physical tags are unique across dimensions.
 
 The output is deterministic: one thread, a fixed random seed and every mesh option that matters
 set explicitly (see ``reset_options``), so a re-run reproduces the files byte for byte with the
-same Gmsh version (tools/requirements.txt pins it).
+same Gmsh version (tools/requirements-dev.txt pins it).
 
 The sector models follow docs conventions section 2 (cyclic symmetry): N sectors about the z axis
 through the origin, the sector spans theta in [0, alpha], alpha = 2 pi / N; the high frontier
@@ -43,7 +43,7 @@ import numpy as np
 
 import gmsh
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 MESH_DIR = REPO / "meshes"
 
 # (suffix, MshFileVersion, Binary)

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Plot the /march/ group of nlrom results files (`nlrom march CASE -o RESULT.h5`).
 
-    python3 tools/plot_march.py RESULT.h5 [MORE.h5 ...] [-o march.png] [--last-period]
+    python3 tools/post/plot_march.py RESULT.h5 [MORE.h5 ...] [-o march.png] [--last-period]
 
 One figure with four panels, every file overlaid (label = its `scheme` attribute):
   1. the reported DOF against time;

@@ -1,5 +1,5 @@
-//! Harmonic balance speed on the bundled sector and on a large synthetic contact model (issue 7
-//! speed reports; numbers in README "Performance / Harmonic balance").
+//! Harmonic balance speed on the bundled sector and on a large synthetic contact model (the
+//! numbers of docs/performance.md, "Harmonic balance").
 //!
 //! ```text
 //! cargo run --release --example hbm_speed -- sector CASE.toml [H] [POINTS]

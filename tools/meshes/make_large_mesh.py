@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Generate a large second-order tetrahedral mesh for parser benchmarks (output is NOT committed).
 
-    python3 tools/make_large_mesh.py OUT_PREFIX [--tets 1600000]
+    python3 tools/meshes/make_large_mesh.py OUT_PREFIX [--tets 1600000]
 
 Writes OUT_PREFIX.v41-ascii.msh, OUT_PREFIX.v41-binary.msh, OUT_PREFIX.v22-ascii.msh and
 OUT_PREFIX.v22-binary.msh: a box [0, 1] x [0, 0.5] x [0, 0.25] meshed with 10-node tetrahedra,

@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
 """Cross-check nlrom's Gmsh reader against meshio on every bundled mesh.
 
-    python3 tools/meshio_compare.py --write tests/data/meshio_counts.json
+    python3 tools/validation/meshio_compare.py --write tests/data/meshio_counts.json
         Read every .msh in meshes/ and meshes/formats/ with meshio and write the reference counts.
 
-    python3 tools/meshio_compare.py --check [--nlrom target/release/nlrom] [--reference JSON] [FILE ...]
+    python3 tools/validation/meshio_compare.py --check [--nlrom target/release/nlrom] [--reference JSON] [FILE ...]
         Run `nlrom mesh info FILE --json` on every mesh (or the FILEs given) and compare the node
         count, the element count per type, the physical groups (name, dim, tag, elements, nodes),
         the format/binary flags and the bounding box against meshio (read now, or taken from
@@ -38,7 +38,7 @@ import sys
 import warnings
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 DEFAULT_NLROM = REPO / "target" / "release" / "nlrom"
 
 # meshio cell type -> (nlrom type name, dimension)
