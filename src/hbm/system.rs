@@ -71,7 +71,8 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
     }
 
     /// Evaluates at (Q, ω) with excitation factor `level`: `out.residual` = r,
-    /// `out.jacobian` = ∂r/∂Q, `out.d_parameter` = ∂r/∂ω; and `level_derivative` (if given) =
+    /// `out.jacobian` = ∂r/∂Q, `out.d_parameter` = ∂r/∂ω (with ∂F_nl/∂ω of a force that reads
+    /// velocities, [`HarmonicForce::evaluate_at`]); and `level_derivative` (if given) =
     /// ∂r/∂level = −F̄_e. Returns the end-of-period force state.
     pub fn evaluate(
         &self,
@@ -87,12 +88,14 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         out.d_parameter.iter_mut().for_each(|v| *v = 0.0);
         out.jacobian.fill(0.0);
         let mut end_state = state.clone();
-        self.force.evaluate(
+        self.force.evaluate_at(
             &self.layout,
             q,
+            omega,
             &mut end_state,
             &mut out.residual,
             Some(out.jacobian.as_mut()),
+            Some(&mut out.d_parameter),
         )?;
         let mut level_derivative = level_derivative;
         if let Some(d) = level_derivative.as_deref_mut() {
