@@ -7,7 +7,7 @@
 //!    inflates far less than the wall time;
 //! 3. criterion's wall-time estimates (`damper_200hz_one_period/<scheme>`).
 //!
-//! `cargo bench --bench march` — the printed table goes in the README next to the paper's Fig. 8.
+//! `cargo bench --bench march` — the printed table is the one of docs/performance.md, next to the paper's Fig. 8.
 
 use std::path::Path;
 use std::time::Instant;

@@ -1,7 +1,7 @@
 //! MSH parsing throughput (criterion): `parse_msh` on a file held in memory, per MSH variant.
 //!
 //! Always: the bundled conforming sector (`meshes/`), four variants. With the large generated mesh
-//! present (`python3 tools/make_large_mesh.py tools/large/box`, ~1.7 M tetra10, not committed) or
+//! present (`python3 tools/meshes/make_large_mesh.py tools/large/box`, ~1.7 M tetra10, not committed) or
 //! `NLROM_BENCH_MESH=PREFIX` set, also PREFIX.{v41-binary,v41-ascii,v22-binary,v22-ascii}.msh.
 //! Run: `cargo bench --bench msh_parse`. Throughput is reported in bytes of file per second.
 
@@ -51,7 +51,9 @@ fn msh(c: &mut Criterion) {
         .filter(|(_, p)| p.exists())
         .collect();
     if large.is_empty() {
-        eprintln!("large mesh {prefix}.*.msh not found: run tools/make_large_mesh.py to bench it");
+        eprintln!(
+            "large mesh {prefix}.*.msh not found: run tools/meshes/make_large_mesh.py to bench it"
+        );
     } else {
         bench_files(c, "parse_msh/large_tetra10", &large, 10);
     }

@@ -5,7 +5,7 @@
 //! Default: the bundled sector (cases/sector_modes.toml: 753 master DOF — both frontiers, shroud
 //! contact and target, excitation — 10 878 interior DOF) with 100 interface modes. With
 //! `NLROM_BENCH_REDUCE_CASE=tools/large/reduce/case.toml` (made by
-//! `python3 tools/bench_reduce.py mesh`: ~116 000 free DOF, 2 964 master DOF, 100 interface
+//! `python3 tools/benchmarks/bench_reduce.py mesh`: ~116 000 free DOF, 2 964 master DOF, 100 interface
 //! modes from its `[reduction]` table, masters from `reduction.keep`) the issue-4 benchmark.
 //! Run: `cargo bench --bench reduce` (10 samples).
 

@@ -1,5 +1,5 @@
 //! SAMA projection speed (criterion): 100 000 contact points projected onto a target surface of
-//! about one million flat triangles (issue 6 acceptance: under 2 s on 2 cores).
+//! about one million flat triangles (goal: under 2 s on 2 cores).
 //!
 //! The target is a wavy height field z = 0.02 sin(7x) cos(5y) over [0, 1]², 708 × 708 cells of two
 //! triangle3 faces each (1 002 528 triangles, jittered vertices); the points are uniformly random

@@ -1,4 +1,4 @@
-//! The command line (`interface.md`, "Commands").
+//! The command line (`docs/user-guide.md`, "Commands").
 //!
 //! Every command has `--help`; commands that report take `--json` and then print one JSON object
 //! on stdout (logs and progress on stderr). Exit status: 0 success, 1 failed computation, 2 bad
@@ -335,7 +335,7 @@ fn mesh_info(path: &Path, as_json: bool) -> Result<()> {
     Ok(())
 }
 
-/// The `mesh info` JSON object of `interface.md`.
+/// The `mesh info` JSON object of `docs/user-guide.md`.
 pub fn mesh_summary(mesh: &Mesh) -> Value {
     let elements: serde_json::Map<String, Value> = mesh
         .element_counts()
@@ -478,7 +478,7 @@ fn modes(a: &ModesArgs) -> Result<()> {
     Ok(())
 }
 
-/// What `nlrom modes` reports (interface.md JSON keys).
+/// What `nlrom modes` reports (the JSON keys of `docs/user-guide.md`).
 struct ModesReport {
     stage: &'static str,
     harmonic: Option<usize>,
@@ -642,7 +642,7 @@ fn contact(case_path: &Path, as_json: bool) -> Result<()> {
     let case = Case::load(case_path)?;
     if case.contact.is_empty() {
         return Err(Error::input(format!(
-            "{}: the case has no [[contact]] table; add one with `contact`, `target`, `mu`, `kt`, `kn`, `n0` (see interface.md)",
+            "{}: the case has no [[contact]] table; add one with `contact`, `target`, `mu`, `kt`, `kn`, `n0` (see docs/case-file.md)",
             case_path.display()
         )));
     }

@@ -1,7 +1,7 @@
 //! Cyclic symmetry, geometry part: the sector rotation, the pairing of the low and high frontier
 //! nodes, and the harmonic indices an engine-order excitation needs.
 //!
-//! Conventions (`conventions.md` §2):
+//! Conventions (`docs/conventions.md` §2):
 //!
 //! * N identical sectors about an axis (a point `origin` on it, unit `axis` direction); the sector
 //!   angle is α = 2π/N (rad) and `R_α` is the 3×3 rotation by +α about `axis` (right-hand rule).
@@ -35,7 +35,7 @@ pub const MATCH_TOLERANCE: f64 = 1e-6;
 /// How many unmatched nodes an error message lists.
 const MAX_LISTED: usize = 10;
 
-/// The geometry of a cyclic-symmetric model (`conventions.md` §2).
+/// The geometry of a cyclic-symmetric model (`docs/conventions.md` §2).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CyclicGeometry {
     /// Number of sectors N ≥ 2.
@@ -144,7 +144,7 @@ impl CyclicGeometry {
     }
 }
 
-/// The node pairing of the two frontiers (`conventions.md` §2).
+/// The node pairing of the two frontiers (`docs/conventions.md` §2).
 ///
 /// `high[i]` is the image of `low[i]` under `R_α`: `R_α X_low[i] = X_high[i]` within the matching
 /// tolerance. Pairs are in ascending `low` order; all entries are compact node indices.
@@ -435,7 +435,7 @@ pub fn check_frontier_clamps(
 }
 
 /// Harmonic index of each temporal harmonic n = 0..=H under engine order m:
-/// k_n = (n·m) mod N (`conventions.md` §2). Entry n is k_n; n = 0 always gives k = 0.
+/// k_n = (n·m) mod N (`docs/conventions.md` §2). Entry n is k_n; n = 0 always gives k = 0.
 pub fn harmonic_indices(sectors: usize, engine_order: usize, harmonics: usize) -> Vec<usize> {
     if sectors == 0 {
         return vec![0; harmonics + 1];
@@ -566,7 +566,7 @@ pub fn axis_basis(geom: &CyclicGeometry, k: usize) -> Vec<[c64; 3]> {
     }
 }
 
-/// The cyclic transform of harmonic index k (`conventions.md` §2): q = T_k q_k, where q holds
+/// The cyclic transform of harmonic index k (`docs/conventions.md` §2): q = T_k q_k, where q holds
 /// all `n_full` rows of a sector model and q_k all rows except the high-frontier ones (same order),
 /// and every high row is `u_high = e^{iφ_k} R_α u_low`:
 /// `T_k[high_c, low_d] = e^{iφ_k} R_α[c][d]`, identity on the kept rows.

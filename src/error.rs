@@ -1,6 +1,6 @@
 //! The one error type of the library and its mapping to the exit status of the CLI.
 //!
-//! `interface.md`: exit status 0 success, 1 failure in the computation (no convergence, not yet
+//! `docs/user-guide.md`: exit status 0 success, 1 failure in the computation (no convergence, not yet
 //! implemented), 2 bad input (unreadable file, unknown group, invalid case). Every message names the
 //! file and, where it applies, the line/byte, group or key.
 
@@ -35,7 +35,7 @@ pub enum Error {
 }
 
 impl Error {
-    /// Exit status per `interface.md`: 2 for bad input, 1 for a failed computation.
+    /// Exit status per `docs/user-guide.md`: 2 for bad input, 1 for a failed computation.
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Io { .. } | Error::Msh(_) | Error::Input(_) => 2,

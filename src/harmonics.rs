@@ -1,4 +1,4 @@
-//! Harmonic vectors in the real layout of `conventions.md` §4, and the interface every nonlinear
+//! Harmonic vectors in the real layout of `docs/conventions.md` §4, and the interface every nonlinear
 //! force of the harmonic balance implements.
 //!
 //! A periodic signal of the normalised time τ = ω t (one period = 2π) is
@@ -19,7 +19,7 @@ use crate::error::{Error, Result};
 pub struct HarmonicLayout {
     /// Highest temporal harmonic H ≥ 0 (n = 0 is the static part).
     pub harmonics: usize,
-    /// Samples per period N_t ≥ 2H + 2 (`conventions.md` §4).
+    /// Samples per period N_t ≥ 2H + 2 (`docs/conventions.md` §4).
     pub time_samples: usize,
 }
 
@@ -47,7 +47,7 @@ impl HarmonicLayout {
         }
     }
 
-    /// The smallest power of two ≥ 4(H+1) (`conventions.md` §4).
+    /// The smallest power of two ≥ 4(H+1) (`docs/conventions.md` §4).
     pub fn default_samples(harmonics: usize) -> usize {
         (4 * (harmonics + 1)).next_power_of_two()
     }
@@ -103,6 +103,30 @@ pub trait HarmonicForce: Send + Sync {
         force: &mut [f64],
         jacobian: Option<MatMut<'_, f64>>,
     ) -> Result<()>;
+
+    /// Whether F_nl reads velocities q̇ = ω ∂q/∂τ and so depends on the frequency ω (then it is
+    /// evaluated with [`HarmonicForce::evaluate_at`]). Default: false.
+    fn reads_velocity(&self) -> bool {
+        false
+    }
+
+    /// As [`HarmonicForce::evaluate`] at the fundamental frequency `omega` (rad/s), adding also
+    /// ∂F_nl/∂ω to `d_omega` when given. The default is for forces of displacements only: it
+    /// calls `evaluate` and adds nothing to `d_omega`.
+    #[allow(clippy::too_many_arguments)]
+    fn evaluate_at(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        omega: f64,
+        state: &mut Self::State,
+        force: &mut [f64],
+        jacobian: Option<MatMut<'_, f64>>,
+        d_omega: Option<&mut [f64]>,
+    ) -> Result<()> {
+        let _ = (omega, d_omega);
+        self.evaluate(layout, q, state, force, jacobian)
+    }
 
     /// Adds ∂F_nl/∂p to `out` (length `layout.len(n_dofs())`) for the force's own scalar
     /// parameter p (for the contact elements: the static normal load n0, see the implementor),

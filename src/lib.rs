@@ -21,12 +21,10 @@
 //! | 4 | [`continuation`] | pseudo-arc-length continuation in ω (or the excitation level) through folds |
 //! | 4–5 | [`pipeline`] | the commands `reduce`, `solve`, `run`, `batch`, `demo`: ROM reuse, sweeps in parallel, results file, summary (resonance, Q) |
 //! | 4 | [`solve`] | the harmonic balance problem of a reduced sector: ROM per k_n, contact pairs, engine-order excitation |
-//! | — | [`case`] | the TOML case file of `interface.md` |
+//! | — | [`case`] | the TOML case file (`docs/case-file.md`) |
 //! | — | [`cli`] | the command line |
 //!
-//! Later stages (Craig–Bampton reduction, cyclic symmetry, contact, SAMA, harmonic balance,
-//! continuation, time stepping, HDF5 output) get one module each as they land; the README's
-//! status table says what works today.
+//! The user documentation (case file, results file, theory, validation) is in `docs/`.
 
 pub mod case;
 pub mod cli;
@@ -42,6 +40,7 @@ pub mod march;
 pub mod matrix_io;
 pub mod mesh;
 pub mod model;
+pub mod nonlinear;
 pub mod output;
 pub mod pipeline;
 pub mod reduction;

@@ -11,7 +11,7 @@
 //! never sees a half-written file.
 //!
 //! The DOF map relates matrix rows to mesh nodes: `dofs.csv` has the header `row,node_tag,component`
-//! and one line per row, component 0/1/2 for x/y/z (`conventions.md` §1).
+//! and one line per row, component 0/1/2 for x/y/z (`docs/conventions.md` §1).
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -765,7 +765,7 @@ pub struct DofMap {
 }
 
 impl DofMap {
-    /// The map of `conventions.md` §1 for nodes with these tags (ascending): row `3*i + c` is
+    /// The map of `docs/conventions.md` §1 for nodes with these tags (ascending): row `3*i + c` is
     /// component `c` of node `i`.
     pub fn structural(node_tags: &[u64]) -> DofMap {
         let entries = node_tags

@@ -2,7 +2,7 @@
 //! [`crate::fe`], or read from external Matrix Market files; clamped DOF eliminated.
 //!
 //! External matrices relate to the mesh through the DOF map (`dofs.csv`, row → node tag and
-//! component); without one, row `3i + c` is component `c` of node index `i` (`conventions.md` §1).
+//! component); without one, row `3i + c` is component `c` of node index `i` (`docs/conventions.md` §1).
 //! A model defined by matrices alone (no mesh) has no groups and therefore no clamp.
 
 use std::path::Path;

@@ -2,7 +2,7 @@
 //! matrices of one sector and the description of every reduced coordinate.
 //!
 //! This is the data contract between the reduction (`nlrom reduce`, [`crate::reduction`]), the ROM
-//! file (`/rom/k<K>/` of `interface.md`) and the solver. Conventions: `conventions.md` §1–2.
+//! file (`/rom/k<K>/` of `docs/results-file.md`) and the solver. Conventions: `docs/conventions.md` §1–2.
 //!
 //! Reduced coordinates of harmonic index k, in order:
 //! 1. physical master DOFs kept as they are (node-major, components x, y, z): the low frontier
@@ -13,7 +13,7 @@
 //!
 //! Physical displacements of the reference sector at a physical master DOF are read directly
 //! (`q_k` at its row); for k ≠ 0, N/2 the coordinates are complex and the physical field of the
-//! reference sector at temporal harmonic n is Re(Q e^{inτ}) (`conventions.md` §2, §4).
+//! reference sector at temporal harmonic n is Re(Q e^{inτ}) (`docs/conventions.md` §2, §4).
 
 use std::collections::BTreeMap;
 
@@ -51,7 +51,7 @@ pub enum ReducedDof {
     Modal { mode: usize },
 }
 
-/// What the GSI reduction of one harmonic index kept and dropped (methods.md).
+/// What the GSI reduction of one harmonic index kept and dropped (`docs/theory.md`).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct GsiReport {
     /// Number of CB+CS modes used to build the basis (n_g).

@@ -1,6 +1,6 @@
 //! Natural frequencies of assembled models against independent references: Euler–Bernoulli
 //! cantilever frequencies, six rigid-body modes of a free–free body, tetra4 refinement converging
-//! to tetra10, and scikit-fem's P2 frequencies of the bundled sector (tools/skfem_compare.py).
+//! to tetra10, and scikit-fem's P2 frequencies of the bundled sector (tools/validation/skfem_compare.py).
 
 use std::path::Path;
 
@@ -164,7 +164,7 @@ fn tetra4_refinement_converges_to_tetra10() {
 
 #[test]
 fn sector_matches_scikit_fem() {
-    // tools/skfem_compare.py: scikit-fem 12.0.2, ElementTetP2 on MeshTet2 (isoparametric), the
+    // tools/validation/skfem_compare.py: scikit-fem 12.0.2, ElementTetP2 on MeshTet2 (isoparametric), the
     // same mesh, E = 210 GPa, ν = 0.3, ρ = 7800, hub clamped, quadrature exact to degree 7.
     let text = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/skfem_sector_modes.json"),

@@ -1,6 +1,6 @@
 //! The bundled models parse identically in all four MSH variants, and agree with meshio.
 //!
-//! Reference: `tests/data/meshio_counts.json`, written by `python3 tools/meshio_compare.py --write`
+//! Reference: `tests/data/meshio_counts.json`, written by `python3 tools/validation/meshio_compare.py --write`
 //! from `meshio.read` of every bundled file (node count, element counts by type, per physical group
 //! the element and node counts, bounding box).
 
@@ -143,7 +143,7 @@ fn counts_agree_with_meshio() {
         .expect("meshio_counts.json");
     let expected: serde_json::Value = serde_json::from_str(&text).expect("valid JSON");
     let files = expected.as_object().expect("object");
-    // Every model in four variants, and disk8.msh (tools/make_disk_mesh.py) in MSH 4.1 ASCII only.
+    // Every model in four variants, and disk8.msh (tools/meshes/make_disk_mesh.py) in MSH 4.1 ASCII only.
     assert_eq!(
         files.len(),
         4 * MODELS.len() + 1,

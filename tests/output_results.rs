@@ -1,5 +1,5 @@
 //! The results file (`nlrom::output::results`): exact round trip, size checks naming the
-//! curve / dataset, and `tools/nlrom_results.py` (h5py only) loading it, with the derived
+//! curve / dataset, and `tools/post/nlrom_results.py` (h5py only) loading it, with the derived
 //! datasets (amplitude = abs(Q1), frequency_hz = ω/2π) recomputed in numpy.
 
 mod common;
@@ -266,7 +266,7 @@ fn reading_a_rom_file_as_results_is_refused() {
     );
 }
 
-/// `tools/nlrom_results.py` loads the file with h5py; numpy recomputes amplitude = abs(Q1) and
+/// `tools/post/nlrom_results.py` loads the file with h5py; numpy recomputes amplitude = abs(Q1) and
 /// frequency_hz = ω/2π from the stored harmonics and ω.
 #[test]
 fn python_tool_loads_results() {
@@ -276,7 +276,7 @@ fn python_tool_loads_results() {
     let script = r#"
 import sys, json
 import numpy as np
-sys.path.insert(0, "tools")
+sys.path.insert(0, "tools/post")
 import nlrom_results
 r = nlrom_results.load(sys.argv[1])
 f0 = r["frf"][0]

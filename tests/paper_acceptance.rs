@@ -4,7 +4,7 @@
 //! (`cases/paper/m1_conforming.toml`), mode M1, n0 = 113 N, each solved end to end by
 //! `nlrom solve` (mesh, assembly, CB + cyclic reduction, SAMA, HB with continuation).
 //! Goal: resonance frequency within 0.5 %, peak amplitude within 3 %. Every preload of both
-//! modes is checked by `python3 tools/paper_comparison.py` (README, "The SAMA paper's experiment").
+//! modes is checked by `python3 tools/validation/paper_comparison.py` (README, "The SAMA paper's experiment").
 
 mod common;
 

@@ -7,7 +7,7 @@
 //! - each element's dissipated energy per cycle (the law's Σ f_t Δw) equals the area of its
 //!   hysteresis loop ∮ f·du computed here from the stored samples (trapezoidal rule), an
 //!   independent quantity, within 3 % (the difference is O(Δf²/k_t) per sample step, 32 samples);
-//! - `tools/plot_contact.py` reads the file with h5py and writes both PNGs.
+//! - `tools/post/plot_contact.py` reads the file with h5py and writes both PNGs.
 
 mod common;
 
@@ -104,7 +104,7 @@ fn per_element_state_and_loops_at_the_peak() {
     let plots = dir.path().join("plots");
     let printed = run_python(
         "import sys, runpy; sys.argv = ['plot_contact.py', sys.argv[1], '--out', sys.argv[2]]; \
-         runpy.run_path('tools/plot_contact.py', run_name='__main__')",
+         runpy.run_path('tools/post/plot_contact.py', run_name='__main__')",
         &[&out, &plots],
     );
     assert!(printed.contains("loop area"), "{printed}");

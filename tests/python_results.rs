@@ -1,6 +1,6 @@
 //! Issue 8: a results file written by `nlrom solve` read in Python with h5py only — the
 //! documented datasets exist with the documented shapes and units (README "Results file",
-//! interface.md "Results (HDF5)"), and the FRF peak computed in Python by `tools/plot_frf.py`
+//! interface.md "Results (HDF5)"), and the FRF peak computed in Python by `tools/post/plot_frf.py`
 //! from the file equals the summary `nlrom solve --json` printed.
 
 mod common;
@@ -26,11 +26,11 @@ fn nlrom(args: &[&str]) -> String {
 }
 
 /// The Python side: loads the file with h5py (no nlrom code), checks names, shapes, units and
-/// attributes, and prints the resonance metrics of tools/plot_frf.py as JSON.
+/// attributes, and prints the resonance metrics of tools/post/plot_frf.py as JSON.
 const CHECK: &str = r#"
 import json, sys
 import h5py, numpy as np
-sys.path.insert(0, "tools")
+sys.path.insert(0, "tools/post")
 import plot_frf, nlrom_results
 
 path = sys.argv[1]

@@ -49,7 +49,7 @@ fn relative_errors(approx: &[f64], exact: &[f64]) -> Vec<f64> {
 }
 
 /// The interior eigenvalues λ (rad²/s²) of tests/data/sector_interior_modes.json (scipy eigsh,
-/// `python3 tools/bench_reduce.py reference`).
+/// `python3 tools/benchmarks/bench_reduce.py reference`).
 fn scipy_interior_eigenvalues() -> Vec<f64> {
     let text = std::fs::read_to_string(root().join("tests/data/sector_interior_modes.json"))
         .expect("reference");
@@ -63,7 +63,7 @@ fn scipy_interior_eigenvalues() -> Vec<f64> {
 }
 
 /// With `NLROM_CB_DUMP=DIR`: K.mtx, M.mtx and masters.txt (0-based free rows) for
-/// `tools/bench_reduce.py` (the scipy reference of the interior modes and the scipy CB).
+/// `tools/benchmarks/bench_reduce.py` (the scipy reference of the interior modes and the scipy CB).
 fn dump_for_scipy(model: &StructuralModel, rows: &[usize]) {
     let Ok(dir) = std::env::var("NLROM_CB_DUMP") else {
         return;
@@ -120,7 +120,7 @@ fn error_table(cb: &CraigBampton, f_full: &[f64], n_interior: usize) -> (Vec<f64
 
 // Acceptance of issue 4 (CB): the lowest 10 frequencies of the CB model against the full model.
 //
-// Finding (checked independently with scipy, tools/bench_reduce.py on the same K, M and master
+// Finding (checked independently with scipy, tools/benchmarks/bench_reduce.py on the same K, M and master
 // rows, dense eigh of the reduced matrices): nlrom's static-mode blocks agree with scipy's
 // K_bb + K_ibᵀΨ to 2e-16 and M_bb + M_ibᵀΨ + Ψᵀ(M_ib + M_iiΨ) to 1.5e-13, its 40 fixed-interface
 // eigenvalues with eigsh's to 4e-13 (the lowest 40, no gap), and scipy's own CB gives the same

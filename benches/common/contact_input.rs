@@ -1,5 +1,5 @@
 //! The inputs of the contact benchmarks, shared by `benches/contact.rs` and
-//! `examples/contact_cost.rs`.
+//! `tools/benchmarks/contact_cost.rs`.
 
 use nlrom::contact::element::LocalElement;
 use nlrom::contact::law::{ContactParams, Variant};

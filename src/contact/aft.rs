@@ -1,6 +1,6 @@
 //! Alternating frequency/time (AFT) transforms of one periodic signal with `realfft`
 //! (Cameron & Griffin 1989; SAMA paper §3, Fig. 4), in the real harmonic layout of
-//! `conventions.md` §4.
+//! `docs/conventions.md` §4.
 //!
 //! A signal's coefficients are stored contiguously in *signal order*
 //! `[Q⁽⁰⁾, Re Q⁽¹⁾, Im Q⁽¹⁾, …, Re Q⁽ᴴ⁾, Im Q⁽ᴴ⁾]` (length m = 2H + 1) for
@@ -52,7 +52,7 @@ pub struct AftScratch {
 }
 
 impl Aft {
-    /// Plans the transforms; errors when N_t < 2H + 2 (`conventions.md` §4).
+    /// Plans the transforms; errors when N_t < 2H + 2 (`docs/conventions.md` §4).
     pub fn new(layout: HarmonicLayout) -> Result<Self> {
         let layout = HarmonicLayout::new(layout.harmonics, layout.time_samples)?;
         let n = layout.time_samples;

@@ -1,6 +1,6 @@
 //! One contact element over one period: AFT evaluation of the time-discrete law of [`law`] on
 //! local harmonic coefficients, periodic marching of the slider state, the analytic Jacobian and
-//! the per-element state report (SAMA paper, Battiato 2021, §3 eqs 13–14 and 25; `methods.md`).
+//! the per-element state report (SAMA paper, Battiato 2021, §3 eqs 13–14 and 25; `docs/theory.md`).
 //!
 //! Local coefficients are stored signal by signal (each in the signal order of [`aft`]):
 //! `[U1; U2; V]` (m each, m = 2H+1) where U1, U2 are the tangential relative displacements (m)
@@ -13,7 +13,7 @@
 //! [`MAX_PERIODS`]); the forces are those of the last period. The Jacobian is the exact
 //! derivative of this map F(Q; w_in), in which the caller's start state w_in is a parameter
 //! (Newton needs ∂F/∂Q of exactly the map it evaluates): ∂w/∂Q is carried through the samples of
-//! the last period (`methods.md`) with two extra columns for ∂w_start, closed per direction:
+//! the last period (`docs/theory.md`) with two extra columns for ∂w_start, closed per direction:
 //! * a direction that slips or separates in the last period: by periodicity w_start = w_end —
 //!   a perturbed input is marched on to its own periodic state, and the 1-D end state does not
 //!   depend on the start state at all (Φ = 0), so this equals the chain through the periods;
@@ -82,7 +82,7 @@ pub struct Marching {
     pub converged: bool,
 }
 
-/// Per-element state over the last period (`interface.md` contact-state output).
+/// Per-element state over the last period (`docs/results-file.md`, `/contact/<name>/elements`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ElementReport {
     /// Fraction of the period's samples in stick (every tangential direction sticks).
@@ -1075,7 +1075,7 @@ fn periodic_start(
 /// (2×2 blocks of (Re, Im) rows and columns; c_{−p} = c_p, s_{−p} = −s_p). `signed` is scratch
 /// for the sums of orders q = −2H..=2H, (c_q, s_q) at index q + 2H, so that a block row reads
 /// contiguous runs of orders. A constant weight (s_p = c_p = 0 for p ≥ 1) adds c_0 I.
-fn add_multiplication_block(
+pub(crate) fn add_multiplication_block(
     h: usize,
     sums: &[f64],
     signed: &mut Vec<[f64; 2]>,

@@ -1,5 +1,5 @@
 //! Relative kinematics of a contact pair in the real harmonic layout, including the inter-sector
-//! rotation and per-harmonic phase of cyclic symmetry (`conventions.md` §2–3; SAMA paper eq. 33
+//! rotation and per-harmonic phase of cyclic symmetry (`docs/conventions.md` §2–3; SAMA paper eq. 33
 //! and the relative-to-absolute transformation of eqs 26–27).
 //!
 //! For temporal harmonic n the target displacement seen from the contact node's sector is

@@ -1,8 +1,8 @@
 //! The time-discrete friction contact law of one node-to-node element with normal load variation,
 //! evaluated at a single time sample (SAMA paper, Battiato 2021, §3 eqs 13–14; the algorithm of
-//! `methods.md`, "Node-to-node contact element with normal load variation").
+//! `docs/theory.md`, "The friction contact element").
 //!
-//! Local coordinates of an element (`conventions.md` §3): tangential relative displacements
+//! Local coordinates of an element (`docs/conventions.md` §3): tangential relative displacements
 //! u = (u1, u2) (m) along t1, t2, normal approach v (m, v > 0 closes the gap), slider positions
 //! w = (w1, w2) (m). Parameters: tangential stiffness k_t (N/m), normal stiffness k_n (N/m),
 //! friction coefficient μ (–), static normal load n0 (N; n0 < 0 is an initial gap −n0/k_n).
@@ -206,7 +206,7 @@ pub struct SampleTangent {
     pub dslider_dw: [[f64; 2]; 2],
 }
 
-/// [`sample`] with its partial derivatives (`methods.md`: separation ∂w' = ∂u; stick
+/// [`sample`] with its partial derivatives (`docs/theory.md`: separation ∂w' = ∂u; stick
 /// ∂f_t = k_t (∂u − ∂w), ∂w' = ∂w; slip ∂f_t = sgn μ ∂f_n (1-D) or the radial-return tangent
 /// (2-D), ∂w' = ∂u − ∂f_t/k_t). Where the law is not differentiable (exactly on a regime
 /// boundary) the derivative of the regime selected by [`sample`] is returned.

@@ -38,7 +38,7 @@ pub struct ContactPair {
     /// Rows of the target node's x, y, z displacement; `None`: the target is the ground.
     pub target: Option<[usize; 3]>,
     /// Local frame, rows t1, t2, n (unit vectors in the global axes; n points from the target
-    /// towards the contact body, `conventions.md` §3).
+    /// towards the contact body, `docs/conventions.md` §3).
     pub frame: Mat3,
     /// Inter-sector rotation of the target: σ ∈ {−1, 0, 1} (0: same sector).
     pub sigma: i32,
@@ -50,7 +50,7 @@ pub struct ContactPair {
     pub preload_rate: f64,
 }
 
-/// Cyclic symmetry data for pairs with σ ≠ 0 (`conventions.md` §2).
+/// Cyclic symmetry data for pairs with σ ≠ 0 (`docs/conventions.md` §2).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SectorCoupling {
     /// Number of sectors N.

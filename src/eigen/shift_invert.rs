@@ -384,7 +384,7 @@ fn analyse_with(
 /// Symbolic Cholesky analyses of `a` with nested dissection and with AMD; keeps the one with
 /// the smaller factor (stored values, supernodal blocks counted in full), which is nested
 /// dissection on 3-D meshes and lattices (0.65× AMD's on the 30³ lattice; 38.1 M values on the
-/// 50×50×48 one, see the README) and may be AMD on thin or small models. The symbolic analyses cost little next to
+/// 50×50×48 one, `docs/performance.md`) and may be AMD on thin or small models. The symbolic analyses cost little next to
 /// the numeric factorisation.
 fn symbolic_analysis(
     a: SparseColMatRef<'_, usize, f64>,

@@ -30,7 +30,7 @@ use crate::error::{Error, Result};
 use crate::matrix_io::DofMap;
 use crate::mesh::{ElementBlock, ElementType, Mesh};
 
-/// The assembled structural matrices over all 3·n_nodes DOF (DOF 3i + c, `conventions.md` §1),
+/// The assembled structural matrices over all 3·n_nodes DOF (DOF 3i + c, `docs/conventions.md` §1),
 /// both stored with both triangles (full symmetric storage). M's pattern is the subset of K's with
 /// row ≡ column (mod 3) (see the module documentation); K − σM has K's pattern.
 #[derive(Clone, Debug)]

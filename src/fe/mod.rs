@@ -4,10 +4,10 @@
 //! The weak form of elastodynamics, discretised with isoparametric Lagrange/serendipity elements,
 //! gives M q̈ + K q = f with
 //! K = Σₑ ∫ Bᵀ D B dV (N/m) and M = Σₑ ∫ ρ Nᵀ N dV (kg) (consistent mass), D the isotropic
-//! elasticity matrix of [`Material`] (Lamé λ, μ). DOF are those of `conventions.md` §1: node index
+//! elasticity matrix of [`Material`] (Lamé λ, μ). DOF are those of `docs/conventions.md` §1: node index
 //! i in ascending Gmsh tag order, DOF 3i + c (c = x, y, z), global Cartesian frame. The geometry is
-//! interpolated from all nodes, so Gmsh's curved second-order elements stay curved (`methods.md`,
-//! "FE assembly notes").
+//! interpolated from all nodes, so Gmsh's curved second-order elements stay curved (`docs/theory.md`,
+//! "Finite elements").
 //!
 //! | module | what it holds |
 //! |---|---|
@@ -28,7 +28,7 @@
 //! 2 × order) and for the stiffness on straight-sided elements (tetrahedra and prisms with affine
 //! geometry, parallelepiped hexahedra); on tetra10 both use the 14-point degree-5 rule to be safe on
 //! curved elements (the integrand is then rational; a 4-point stiffness rule differs by ~1e-5 in
-//! frequency on a coarse curved sector, `methods.md`).
+//! frequency on a coarse curved sector, `docs/theory.md`).
 //!
 //! | type | stiffness: degree, points | mass: degree, points |
 //! |---|---|---|

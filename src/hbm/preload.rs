@@ -1,6 +1,6 @@
 //! Contact forces measured from the preloaded static equilibrium.
 //!
-//! The SAMA paper (seed 004, §6.1) computes the forced vibration *about* the static equilibrium
+//! The SAMA paper (Battiato 2021, §6.1) computes the forced vibration *about* the static equilibrium
 //! of the structure: a nonlinear static analysis (centrifugal and thermal loads, shroud
 //! interference) gives the normal preload n0 of every contact, and that static state — the
 //! preload in equilibrium with the pre-stress that produced it — is the configuration from which
@@ -43,7 +43,8 @@ impl<F: HarmonicForce> FromStaticEquilibrium<F> {
         let zero = vec![0.0; len];
         let mut state = inner.initial_state();
         let mut at_rest = vec![0.0; len];
-        inner.evaluate(layout, &zero, &mut state, &mut at_rest, None)?;
+        // At rest every velocity is zero, whatever ω.
+        inner.evaluate_at(layout, &zero, 0.0, &mut state, &mut at_rest, None, None)?;
         let mut rate = vec![0.0; len];
         let at_rest_rate = inner
             .parameter_derivative(layout, &zero, &inner.initial_state(), &mut rate)
@@ -82,6 +83,28 @@ impl<F: HarmonicForce> HarmonicForce for FromStaticEquilibrium<F> {
         jacobian: Option<MatMut<'_, f64>>,
     ) -> Result<()> {
         self.inner.evaluate(layout, q, state, force, jacobian)?;
+        for (f, r) in force.iter_mut().zip(&self.at_rest) {
+            *f -= r;
+        }
+        Ok(())
+    }
+
+    fn reads_velocity(&self) -> bool {
+        self.inner.reads_velocity()
+    }
+
+    fn evaluate_at(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        omega: f64,
+        state: &mut Self::State,
+        force: &mut [f64],
+        jacobian: Option<MatMut<'_, f64>>,
+        d_omega: Option<&mut [f64]>,
+    ) -> Result<()> {
+        self.inner
+            .evaluate_at(layout, q, omega, state, force, jacobian, d_omega)?;
         for (f, r) in force.iter_mut().zip(&self.at_rest) {
             *f -= r;
         }

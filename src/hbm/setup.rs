@@ -1,4 +1,4 @@
-//! The linear part of a matrix-defined case (`interface.md`: `[model] stiffness/mass/damping`,
+//! The linear part of a matrix-defined case (`docs/case-file.md`: `[model] stiffness/mass/damping`,
 //! `[excitation] dofs/force`, `[response] dofs`, `[[element]]` on DOF combinations): dense K, M,
 //! C over the free rows, the excitation on harmonic 1, the nonlinear rows (every row an element
 //! reads) and the output rows.

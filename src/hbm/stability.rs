@@ -1,6 +1,5 @@
 //! Stability of a harmonic balance solution by Hill's method on the uncondensed model
-//! (issue 7 item 6; `methods.md`: "Optional stability by Hill's method on the uncondensed
-//! model").
+//! (`docs/theory.md`, "Stability: Hill's method").
 //!
 //! Method (von Groll & Ewins, J. Sound Vib. 241 (2001) 223–233; in the quadratic form of
 //! Detroux, Renson, Masset & Kerschen, CMAME 296 (2015) 18–38, §3): a perturbation

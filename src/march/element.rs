@@ -4,12 +4,12 @@
 //! prescribed input (the platform motion of the underplatform damper, Gastaldi & Berruti 2018
 //! eqs 2–4):
 //! - tangential u_t(q, t) = g_tᵀ q + p_t(t),
-//! - normal approach v(q, t) = g_nᵀ q + p_n(t) (v > 0 closes the gap; `conventions.md` §3).
+//! - normal approach v(q, t) = g_nᵀ q + p_n(t) (v > 0 closes the gap; `docs/conventions.md` §3).
 //!
 //! The time-discrete law ([`law`]) gives the normal force f_n = max(n0 + k_n v, 0) and the friction
-//! force f_t with the slider memory w (`methods.md`, "Node-to-node contact element"). The element
+//! force f_t with the slider memory w (`docs/theory.md`, "The friction contact element"). The element
 //! acts on the structure with the generalized force f_c = −g_t f_t − g_n f_n (the force "acts back
-//! along the same weights", `interface.md` `[[element]]`; eq. 3 of the paper for the damper).
+//! along the same weights", `docs/case-file.md` `[[element]]`; eq. 3 of the paper for the damper).
 //!
 //! Within one contact state the force is affine in q (paper §3, eq. 5 and Table 1):
 //! f_c = −K_c q + r_c, see [`Element::add_linear_piece`]. This is what the piecewise-linear Newmark

@@ -203,7 +203,7 @@ pub struct MarchOutcome {
     /// tolerance, if any.
     pub steady_period: Option<usize>,
     /// Harmonics n = 0..=H of each DOF over the last marched period, complex (re, im) per
-    /// `conventions.md` §4, \[n_dof\]\[H+1\].
+    /// `docs/conventions.md` §4, \[n_dof\]\[H+1\].
     pub harmonics: Vec<Vec<(f64, f64)>>,
     /// Time steps taken (accepted).
     pub steps: usize,

@@ -1,5 +1,5 @@
 //! The march's view of the time-discrete friction law of [`crate::contact::law`] (the same law and
-//! parameters as the harmonic balance; `methods.md`, "Node-to-node contact element"): one
+//! parameters as the harmonic balance; `docs/theory.md`, "The friction contact element"): one
 //! tangential direction with normal load variation, and the contact state of Gastaldi & Berruti
 //! 2018 Table 1 (lift-off, stick, slip with its sign) that the piecewise-linear schemes predict and
 //! verify.

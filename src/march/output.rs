@@ -1,4 +1,4 @@
-//! The `/march/` group of the results file (`interface.md`, "Results (HDF5)"): a march as the
+//! The `/march/` group of the results file (`docs/results-file.md`): a march as the
 //! [`MarchData`] of [`crate::output::results`], whose [`write_results`] owns the file. The layout's
 //! datasets (`time`, `response` [T, R], `response_dofs`, `contact_force` [T, E, 2] and
 //! `contact_state` [T, E] per element, `element_names`, `first_harmonic_last_period` \[R\],
@@ -12,7 +12,7 @@
 //! | `iteration_histogram` | \[K\] | – | steps that took k iterations (paper Fig. 5) |
 //! | `periodicity_error` | \[P\] | – | end-of-period state change (NaN for period 1) |
 //! | `state_changes` | \[P\] | – | instants per period at which a contact state changed |
-//! | `harmonics_last_period` | [R, H+1] | m | complex harmonics 0..H (`conventions.md` §4) |
+//! | `harmonics_last_period` | [R, H+1] | m | complex harmonics 0..H (`docs/conventions.md` §4) |
 //!
 //! and the attributes `steady_period` (−1: not reached), `time_step_min`, `time_step_max` (s),
 //! `rejected_steps`, `total_iterations`, `factorisations`.

@@ -4,7 +4,7 @@
 //! Periodicity: the state at the end of period p is compared with the end of period p − 1,
 //! e_p = max(|Δq|_∞ / A, |Δq̇|_∞ / (ω A)) with A the largest half peak-to-peak displacement of a DOF
 //! in period p. Harmonics: Q⁽⁰⁾ = (1/T)∫q dt, Q⁽ⁿ⁾ = (2/T)∫q e^{−inωt} dt (n ≥ 1), so that
-//! q(t) = Re Σ Q⁽ⁿ⁾ e^{inωt} (`conventions.md` §4); the integrals by the trapezoidal rule over the
+//! q(t) = Re Σ Q⁽ⁿ⁾ e^{inωt} (`docs/conventions.md` §4); the integrals by the trapezoidal rule over the
 //! recorded (possibly non-uniform) instants.
 
 use super::dense::norm_inf;

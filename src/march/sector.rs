@@ -5,7 +5,7 @@
 //! ROM of [`crate::pipeline::solve`] (read from `[rom] file` when its key matches, else reduced),
 //! the contact pairs of [`crate::sama::build_interfaces`] on the ROM's physical master rows, the
 //! excitation and response groups. A time-domain model of the reference sector is real when its
-//! ROM is (`conventions.md` §2):
+//! ROM is (`docs/conventions.md` §2):
 //! - no `[cyclic]`: the Craig–Bampton structure, frontiers as they are;
 //! - harmonic index k = 0 (engine order m ≡ 0 mod N, all sectors in phase): the target of a pair
 //!   with σ ≠ 0 moves as R_α^σ u_t;
@@ -17,7 +17,7 @@
 //!
 //! A travelling wave (k ≠ 0, N/2) has a complex ROM and is an input error.
 //!
-//! Contact (SAMA paper, Battiato 2021, §3 and eq. 33; `methods.md`): each node-to-node pair
+//! Contact (SAMA paper, Battiato 2021, §3 and eq. 33; `docs/theory.md`): each node-to-node pair
 //! (u1, u2, v) = P (u_c − e^{iσφ_k} R_α^σ u_t), P = [t1; t2; −n], becomes two 1-D elements of the
 //! time-discrete law of [`crate::contact::law`] (t1 and t2, each with its own slider and the limit
 //! μ f_n of the pair's normal force, which the first applies). The forces are measured from the

@@ -1,6 +1,6 @@
 //! Meshes: the data model shared by every stage, read from Gmsh MSH files ([`msh`]).
 //!
-//! Conventions (`conventions.md` §1): nodes get a compact 0-based index in ascending Gmsh node-tag
+//! Conventions (`docs/conventions.md` §1): nodes get a compact 0-based index in ascending Gmsh node-tag
 //! order; the tag is kept for output. Elements are stored in blocks of one type that share their
 //! elementary entity and physical tags, with connectivity as node *indices* in Gmsh's node ordering
 //! (see [`element`]). Physical groups are resolved to element blocks, and from them to node sets,

@@ -6,7 +6,7 @@
 //! check integer `1` that follows the format line (both little- and big-endian are read).
 //!
 //! Node tags and element tags may be non-contiguous and unsorted; nodes are re-indexed in ascending
-//! tag order (`conventions.md` §1). In 4.1 files, parametric node coordinates (`u`, `v`, `w`) are
+//! tag order (`docs/conventions.md` §1). In 4.1 files, parametric node coordinates (`u`, `v`, `w`) are
 //! read past and dropped. Physical groups are resolved per element: in 2.2 from the element's first
 //! tag, in 4.1 from the physical tags of the element block's entity in `$Entities`.
 //!

@@ -2,7 +2,7 @@
 //! is serialised in one piece and written atomically, and a reader that loads such a file back
 //! into the same tree.
 //!
-//! What it writes (`conventions.md` §5, `dependencies.md`):
+//! What it writes (`docs/conventions.md` §5):
 //!
 //! * datasets of `f64`, `i64`, `u64` of any shape (row-major, shape `[]` is a scalar);
 //! * complex datasets as the compound `{r: f64, i: f64}`, which h5py reads as `complex128`;
@@ -469,7 +469,7 @@ fn validate_dataset(dataset: &Dataset, path: &str) -> Result<()> {
     for required in [UNIT, DESCRIPTION] {
         if !matches!(dataset.attrs.get(required), Some(Attr::Str(_))) {
             return Err(Error::Compute(format!(
-                "HDF5 output: dataset {path} has no string attribute {required:?} (conventions.md §5)"
+                "HDF5 output: dataset {path} has no string attribute {required:?} (docs/conventions.md §5)"
             )));
         }
     }

@@ -3,16 +3,16 @@
 //! * [`h5`]: a small, format-level layer — an in-memory tree of groups, datasets (f64, i64, u64,
 //!   complex as compound `{r, i}`, compound records, strings) and attributes, written atomically,
 //!   and a reader for what it writes.
-//! * [`rom_file`]: [`write_rom`] / [`read_rom`], the `/rom/` layout of `interface.md`.
+//! * [`rom_file`]: [`write_rom`] / [`read_rom`], the `/rom/` layout of `docs/results-file.md`.
 //! * [`results`]: the data types the solvers fill ([`ResultsFile`], [`FrfData`], [`ContactData`],
 //!   [`MarchData`]) and [`write_results`] / [`read_results`], the `/frf/`, `/contact/`, `/march/`
-//!   layout of `interface.md` "Results (HDF5)".
+//!   layout of `docs/results-file.md`.
 //!
-//! Every file carries the root attributes of `interface.md` ([`file_attributes`]): `program`
+//! Every file carries the root attributes of `docs/results-file.md` ([`file_attributes`]): `program`
 //! (`"nlrom"`), `version` (the crate version), `file_kind` (`"rom"` or `"results"`), `title`,
 //! `case_text` (the case file text) and `created` (UTC, ISO 8601). Every dataset carries `unit` and
-//! `description` (`conventions.md` §5). The layout is documented dataset by dataset in README.md,
-//! "Results file" and "ROM file".
+//! `description` (`docs/conventions.md` §5). The layout is documented dataset by dataset in
+//! `docs/results-file.md`.
 
 pub mod h5;
 pub mod results;

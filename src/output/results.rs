@@ -1,4 +1,4 @@
-//! The results file of `nlrom solve`, `march` and `run` (`interface.md` "Results (HDF5)"): plain
+//! The results file of `nlrom solve`, `march` and `run` (`docs/results-file.md`): plain
 //! data types the solvers fill, a writer and a reader.
 //!
 //! The solvers fill a [`ResultsFile`]: one [`FrfData`] per sweep point (one without a sweep),
@@ -12,7 +12,7 @@
 //! | `/frf/<i>/frequency_hz` | f64 \[P\] | Hz | ω/2π |
 //! | `/frf/<i>/amplitude` | f64 [P, R] | m | first-harmonic amplitude abs(Q⁽¹⁾) of each response DOF |
 //! | `/frf/<i>/peak` | f64 [P, R] | m | max over the period of abs(q(t)) |
-//! | `/frf/<i>/harmonics` | complex [P, R, H+1] | m | Q⁽ⁿ⁾, q(τ) = Re Σ Q⁽ⁿ⁾ e^{inτ} (`conventions.md` §4) |
+//! | `/frf/<i>/harmonics` | complex [P, R, H+1] | m | Q⁽ⁿ⁾, q(τ) = Re Σ Q⁽ⁿ⁾ e^{inτ} (`docs/conventions.md` §4) |
 //! | `/frf/<i>/response_dofs` | compound \[R\] {kind enum(node, row), node_tag u64, component i64} | 1 | node tag and component 0/1/2, or matrix row (component −1) |
 //! | `/frf/<i>/arc_length` | f64 \[P\] | 1 | continuation arc length |
 //! | `/frf/<i>/newton_iterations` | u64 \[P\] | 1 | Newton iterations of each point |
@@ -110,7 +110,7 @@ pub struct ContactPairData {
     pub target_node: u64,
     /// SAMA weight w_j (eq. 29; 1 for node-to-node).
     pub weight: f64,
-    /// Local frame, rows t1, t2, n (`conventions.md` §3).
+    /// Local frame, rows t1, t2, n (`docs/conventions.md` §3).
     pub frame: [[f64; 3]; 3],
     /// Tangential stiffness k_tj (N/m).
     pub kt: f64,
@@ -164,7 +164,7 @@ pub struct ContactData {
     pub coupling: String,
     /// `"1d"` or `"2d"`.
     pub element: String,
-    /// Sector offset σ of the target (`conventions.md` §3).
+    /// Sector offset σ of the target (`docs/conventions.md` §3).
     pub sigma: i64,
     /// Friction coefficient μ.
     pub mu: f64,

@@ -1,7 +1,7 @@
 //! The ROM file: a [`Rom`] (`src/rom.rs`) in HDF5, written by `nlrom reduce` and read by `solve`
-//! and `run` (`interface.md`, `/rom/k<K>/`).
+//! and `run` (`docs/results-file.md`, `/rom/k<K>/`).
 //!
-//! Layout (every dataset has `unit` and `description` attributes; README "ROM file"):
+//! Layout (every dataset has `unit` and `description` attributes; `docs/results-file.md`, "ROM file"):
 //!
 //! | path | type, shape | content |
 //! |---|---|---|

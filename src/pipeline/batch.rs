@@ -1,4 +1,4 @@
-//! `nlrom batch CASE_OR_MESH... [--jobs J] [--out DIR] [--case TEMPLATE]` (issue 8): many cases,
+//! `nlrom batch CASE_OR_MESH... [--jobs J] [--out DIR] [--case TEMPLATE]`: many cases,
 //! or many meshes run with one template case (its `[model] mesh` replaced), each solved like
 //! `nlrom run` (the ROM of a sector case cached as `DIR/<name>.rom.h5`), one results file
 //! `DIR/<name>.h5` each. The jobs run in a rayon pool of J threads; the sweep points and the

@@ -1,7 +1,7 @@
 //! `nlrom demo [--out DIR]`: the bundled demo case (`cases/demo.toml`) end to end — reduction
 //! (cached in `DIR/demo.rom.h5`), contact pairs, harmonic balance with continuation — written to
-//! `DIR/demo.h5`, then `python3 tools/plot_frf.py DIR/demo.h5 --out DIR` (the FRF) and
-//! `python3 tools/plot_contact.py DIR/demo.h5 --out DIR` (hysteresis loops and the shroud's
+//! `DIR/demo.h5`, then `python3 tools/post/plot_frf.py DIR/demo.h5 --out DIR` (the FRF) and
+//! `python3 tools/post/plot_contact.py DIR/demo.h5 --out DIR` (hysteresis loops and the shroud's
 //! contact-state map at the resonance) when python3 and the scripts exist (skipped with a note
 //! otherwise); prints where the results and plots are.
 
@@ -18,7 +18,7 @@ use crate::error::{Error, Result};
 /// The demo case, relative to the crate root.
 pub const DEMO_CASE: &str = "cases/demo.toml";
 /// The plotting scripts, relative to the crate root, each run as `python3 SCRIPT RESULT --out DIR`.
-pub const PLOT_SCRIPTS: [&str; 2] = ["tools/plot_frf.py", "tools/plot_contact.py"];
+pub const PLOT_SCRIPTS: [&str; 2] = ["tools/post/plot_frf.py", "tools/post/plot_contact.py"];
 
 /// The crate root (where `cases/` and `tools/` are): the current directory when it holds the
 /// demo case (a clone run with `cargo run`), else the directory the binary was built from.
@@ -80,7 +80,7 @@ pub fn demo_command(out: &Path, rep: &Reporter, as_json: bool) -> Result<()> {
             Plots::Skipped(note) => println!("plots:   not made ({note})"),
         }
         println!(
-            "read it in Python: python3 tools/nlrom_results.py {}",
+            "read it in Python: python3 tools/post/nlrom_results.py {}",
             output.display()
         );
     }

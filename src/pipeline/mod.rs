@@ -1,4 +1,4 @@
-//! The user-facing pipeline commands (`interface.md` "Commands"; issues 7 and 8): `nlrom reduce`,
+//! The user-facing pipeline commands (`docs/user-guide.md`): `nlrom reduce`,
 //! `solve`, `run`, `batch` and `demo` joined from the library's stages.
 //!
 //! * [`solve`]: one case end to end — the ROM (read when its key matches, else reduced), the

@@ -1,6 +1,6 @@
 //! Stage 4 of a case, end to end: the frequency response of every sweep point (SAMA paper, seed
 //! 004, §2–3: harmonic balance with condensation on the contact DOFs and arc-length continuation),
-//! traced in parallel (rayon) and gathered into a [`ResultsFile`] (`interface.md` "Results").
+//! traced in parallel (rayon) and gathered into a [`ResultsFile`] (`docs/results-file.md`).
 //!
 //! Two kinds of case:
 //! - *matrix cases* (no mesh, or `[[element]]` friction elements on DOF combinations): the dense

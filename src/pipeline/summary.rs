@@ -1,5 +1,5 @@
 //! The scalar summary of one frequency response curve: resonance frequency, peak amplitude and
-//! Q-factor (the performance curves of the SAMA paper, seed 004, §6.2, Figs 23–25 and 28–30).
+//! Q-factor (the performance curves of the SAMA paper, Battiato 2021, §6.2, Figs 23–25 and 28–30).
 //!
 //! Definitions (used by `nlrom solve --json`, `nlrom batch` and its `summary.csv`):
 //! - the *response DOF of the curve* is the response DOF whose first-harmonic amplitude

@@ -1,4 +1,4 @@
-//! Craig–Bampton reduction with streamed static modes (methods.md, "Craig–Bampton"; Craig &
+//! Craig–Bampton reduction with streamed static modes (`docs/theory.md`, "Craig–Bampton reduction"; Craig &
 //! Bampton, AIAA J. 6 (1968) 1313).
 //!
 //! Symbols: K, M the free (clamped) stiffness (N/m) and mass (kg) matrices, partitioned into

@@ -1,4 +1,4 @@
-//! Gram–Schmidt interface (GSI) reduction of the low cyclic frontier (methods.md, "Gram–Schmidt
+//! Gram–Schmidt interface (GSI) reduction of the low cyclic frontier (`docs/theory.md`, "Gram–Schmidt
 //! interface (GSI) reduction"; the recipe adopted in place of Battiato et al., CMAME 2018).
 //!
 //! For one harmonic index k, with the CB+CS model (K_k, M_k) whose first `n_f` coordinates are the

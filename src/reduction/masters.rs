@@ -1,4 +1,4 @@
-//! Master (boundary) and interior DOF of the Craig–Bampton partition (methods.md, "Craig–Bampton").
+//! Master (boundary) and interior DOF of the Craig–Bampton partition (`docs/theory.md`, "Craig–Bampton reduction").
 //!
 //! Masters are the free DOF of the nodes of: the low and high cyclic frontiers, the contact and
 //! target groups of every `[[contact]]`, the `reduction.keep` groups, and — so that the solver can

@@ -1,5 +1,5 @@
 //! Stage 2: Craig–Bampton reduction, cyclic symmetry per harmonic index and Gram–Schmidt
-//! interface reduction (methods.md; conventions.md §2), producing the [`Rom`] of a case.
+//! interface reduction (`docs/theory.md`; `docs/conventions.md` §2), producing the [`Rom`] of a case.
 //!
 //! | module | what it holds |
 //! |---|---|
@@ -185,7 +185,7 @@ impl Sector {
         }
     }
 
-    /// The CB+CS model of harmonic index k (`conventions.md` §2), then GSI when `gsi_modes` is
+    /// The CB+CS model of harmonic index k (`docs/conventions.md` §2), then GSI when `gsi_modes` is
     /// given. A model without `[cyclic]` has only k = 0, the CB model itself.
     ///
     /// Errors ([`Error::Input`]): k ≥ N (or k ≠ 0 without `[cyclic]`), GSI without frontier or

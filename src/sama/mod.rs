@@ -7,7 +7,7 @@
 //! 1. **places the target surface** — the outward faces of the `target` group — in the position
 //!    of the sector it belongs to: rotated by R_α^σ about the cyclic axis, σ ∈ {0, +1, −1} being
 //!    the rotation under which the most contact nodes project onto it (ties: the smaller mean
-//!    distance) — found from the geometry, never asked of the user (`conventions.md` §3). A case
+//!    distance) — found from the geometry, never asked of the user (`docs/conventions.md` §3). A case
 //!    without `[cyclic]` uses σ = 0. The static misalignment of the contact (`misalignment =
 //!    { rotate, translate }`, paper §6.2) is applied next, to the placed surface, i.e. in the
 //!    contact face's coordinates: rotation about `rotate.origin` first, then translation;
@@ -31,7 +31,7 @@
 //!    Fig. 8; a coincident node still gets weight 1 alone), which may be negative (corner nodes
 //!    of quadratic faces);
 //! 4. **parameters** per pair c–t_j (eq 31): k_tj = w_j k_t, k_nj = w_j k_n, n0_j = w_j n0_c,
-//!    where k_t, k_n are per contact node (`interface.md`) and n0_c is the contact node's share of
+//!    where k_t, k_n are per contact node (`docs/case-file.md`) and n0_c is the contact node's share of
 //!    the interface's total preload n0, in proportion to its tributary area on the contact faces
 //!    (HRZ lumping, [`weights::tributary_areas`]) among the *paired* contact nodes, so that
 //!    Σ_c n0_c = n0. Then eq 32 holds per contact node: Σ_j k_tj = k_t, Σ_j k_nj = k_n,
@@ -49,7 +49,7 @@
 //! r = u_c − e^{iσφ_k} R_α^σ Σ_j N_j u_tj: the element reads a *virtual node* whose rows the
 //! [`crate::contact::mapped::DofMap`] fills with Σ_j N_j u_tj ([`ContactInterface::elements_with`]).
 //!
-//! Why the choice matters (measured on the bundled shroud, `examples/stuck_frequencies.rs`): the
+//! Why the choice matters (measured on the bundled shroud, `tools/validation/stuck_frequencies.rs`): the
 //! array's pairs c–t_j join points up to one target element apart, so a rigid rotation θ of both
 //! faces stretches them by θ × (x_c − x_tj) and the target face's own deformation within an
 //! element is resisted by Σ_j w_j k_t — spurious stiffness that raised the fully stuck frequency
@@ -97,7 +97,7 @@ pub struct ContactPair {
     pub target_indices: Vec<u32>,
     /// Weights w_j (eq 29), in [0, 1], Σ w_j = 1 (eq 30).
     pub weights: Vec<f64>,
-    /// Local frame at t_v, rows t1, t2, n (`conventions.md` §3), in the contact sector's axes.
+    /// Local frame at t_v, rows t1, t2, n (`docs/conventions.md` §3), in the contact sector's axes.
     pub frame: [[f64; 3]; 3],
     /// Tag of the target face element that contains t_v.
     pub face: u64,

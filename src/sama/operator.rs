@@ -1,13 +1,13 @@
 //! The relative-displacement operator of a contact pair c–t_j and its adjoint (force assembly).
 //!
 //! For temporal harmonic n on harmonic index k_n, the target node's displacement as seen from the
-//! contact sector is e^{iσφ} R_α^σ u_t (`conventions.md` §3; paper eq 33 with σ = ±1), φ = φ_{k_n}
+//! contact sector is e^{iσφ} R_α^σ u_t (`docs/conventions.md` §3; paper eq 33 with σ = ±1), φ = φ_{k_n}
 //! = 2πk_n/N the inter-sector phase (rad). The local relative displacement of the pair is
 //!
 //!   r_loc = F (u_c − e^{iσφ} R_α^σ u_t) = A_c u_c + A_t u_t,  A_c = F,  A_t = −e^{iσφ} F R_α^σ,
 //!
 //! F = the pair's frame (rows t1, t2, n), so r_loc = (u1, u2, r·n); the normal approach of
-//! `conventions.md` §3 is v = −r·n. A local force f_loc acting on the contact node (f_n along +n
+//! `docs/conventions.md` §3 is v = −r·n. A local force f_loc acting on the contact node (f_n along +n
 //! pushes c away from the target) acts on the nodes as f_c = A_cᴴ f_loc and f_t = A_tᴴ f_loc (the
 //! adjoint, so that δr_locᴴ f_loc = δu_cᴴ f_c + δu_tᴴ f_t: virtual work is preserved). For σ = 0 or
 //! φ = 0 everything is real. The weights enter the pair's parameters (eq 31), not this operator.

@@ -1,5 +1,5 @@
 //! Projection of a contact node onto the target surface (SAMA paper §4, step 1; Fig. 6): the
-//! virtual node t_v, the target face containing it, and the local frame there (`conventions.md` §3).
+//! virtual node t_v, the target face containing it, and the local frame there (`docs/conventions.md` §3).
 //!
 //! The BVH of the flat search mesh gives the nearest sub-triangle; its barycentric coordinates give
 //! a first (u, v) on the face, refined on the face's isoparametric map x(u, v) = Σ N_i(u, v) x_i by
@@ -170,7 +170,7 @@ fn along_border(kind: ElementType, xs: &[[f64; 3]], x: [f64; 3], uv: [f64; 2]) -
     best.1
 }
 
-/// The local frame (rows t1, t2, n) of a face at reference point `uv` (`conventions.md` §3).
+/// The local frame (rows t1, t2, n) of a face at reference point `uv` (`docs/conventions.md` §3).
 pub fn local_frame(kind: ElementType, xs: &[[f64; 3]], uv: [f64; 2]) -> [[f64; 3]; 3] {
     let [_, xu, xv] = evaluate(kind, xs, uv);
     frame_from_tangents(xu, xv, sub(xs[1], xs[0]))

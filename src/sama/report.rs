@@ -1,4 +1,4 @@
-//! The `nlrom contact` report (`interface.md`): JSON object and text table of the interfaces.
+//! The `nlrom contact` report (`docs/user-guide.md`): JSON object and text table of the interfaces.
 
 use serde_json::{json, Value};
 
@@ -22,7 +22,7 @@ pub fn coupling_name(coupling: SamaCoupling) -> &'static str {
     }
 }
 
-/// One interface as the JSON object of `interface.md` (`contact` output), with extra keys: per
+/// One interface as the JSON object of `docs/user-guide.md` (`nlrom contact`), with extra keys: per
 /// pair the frame rows `t1`, `t2`, the `virtual_point`, signed `gap`, target `face` tag and its
 /// reference coordinates, tributary `area`, the pair parameters `kt`, `kn`, `n0` (eq 31) and the
 /// node's preload share `n0_node` and, for a node paired on the target's border, its

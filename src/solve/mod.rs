@@ -1,5 +1,5 @@
 //! Stage 4 on a mesh case: the harmonic balance problem of one reduced sector with its friction
-//! interfaces (SAMA paper, seed 004, §2 eqs 10–12 and §5 eqs 33–34).
+//! interfaces (SAMA paper, Battiato 2021, §2 eqs 10–12 and §5 eqs 33–34).
 //!
 //! [`sector::SectorProblem`] ties the ROM of every harmonic index k_n = n·m mod N
 //! ([`crate::rom::Rom`]), the contact pairs of every `[[contact]]` ([`crate::sama`]) and the

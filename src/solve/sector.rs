@@ -1,5 +1,5 @@
-//! The harmonic balance problem of a reduced sector with friction contacts (SAMA paper, seed 004,
-//! §2 eqs 10–12; cyclic relative displacement §5 eqs 33–34; `conventions.md` §2–4).
+//! The harmonic balance problem of a reduced sector with friction contacts (SAMA paper, Battiato 2021,
+//! §2 eqs 10–12; cyclic relative displacement §5 eqs 33–34; `docs/conventions.md` §2–4).
 //!
 //! Temporal harmonic n = 0..H of the response of the reference sector lives on the harmonic index
 //! k_n = n·m mod N (m the engine order); its linear part is the ROM of k_n,
@@ -8,7 +8,7 @@
 //! the DOF order of the [`PairSet`], whose pairs see the target displacement as
 //! e^{iσφ_{k_n}} R_α^σ u_t (eq 33). The excitation of engine order m acts on harmonic n = 1: the
 //! case's force on every node of the excitation group of the reference sector. In the ROM
-//! coordinates of k_1 it is f_k = T_kᴴ f (`conventions.md` §2), which on a physical master row
+//! coordinates of k_1 it is f_k = T_kᴴ f (`docs/conventions.md` §2), which on a physical master row
 //! that is not on the (eliminated) high frontier is f itself.
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -304,7 +304,7 @@ fn block(h: &HarmonicRom, nonlinear: &[DofLabel], outputs: &[DofLabel]) -> Resul
 }
 
 /// F_e⁽¹⁾ in the ROM coordinates of k_1: `force` (N, x y z) at the physical rows of every
-/// excitation node of the reference sector (f_k = T_kᴴ f = f there, `conventions.md` §2).
+/// excitation node of the reference sector (f_k = T_kᴴ f = f there, `docs/conventions.md` §2).
 pub(crate) fn excitation_vector(
     h: &HarmonicRom,
     nodes: &[u64],

@@ -1,0 +1,474 @@
+//! Pseudo-arc-length continuation of the solutions of r(x, λ) = 0 (a [`ParameterSystem`]):
+//! frequency responses (λ = ω) through resonances, stick–slip transitions and folds, or responses
+//! to a varying excitation level at fixed ω.
+//!
+//! Method (`docs/theory.md`, "Continuation"; folds as in the microslip paper,
+//! Cigeroglu, An & Menq 2007, §4.2):
+//! - variables scaled, u = x / x_s (x_s = the largest ‖x‖₂ on the path so far, starting from the
+//!   start point's) and μ = λ / λ_s (λ_s = |λ_end − λ_start|); arc length s measured in (u, μ);
+//! - start: Newton at λ_start from x = 0, whose first step solves the linearised (for friction:
+//!   stuck) system — the linear solution ([`trace`]); or a start solved otherwise
+//!   ([`trace_from`]: a frequency response whose start Newton misses gets it by a continuation in
+//!   the excitation level, `hbm::frf`);
+//! - tangent predictor: t solves [∂r/∂u  ∂r/∂μ; t_prevᵀ] t = [0; 1], normalised, so that
+//!   t · t_prev > 0: the orientation is carried over and folds (where dλ/ds changes sign) are
+//!   passed;
+//! - corrector: Newton on the bordered system r(x, λ) = 0, t · (y − y_pred) = 0 (the
+//!   hyperplane through the predicted point, orthogonal to the tangent); a corrected point
+//!   farther than one step from the prediction is rejected (a jump to another branch) — except
+//!   at the minimum step, where up to one initial step is accepted: the offset of the corrected
+//!   point is step · tan θ at a corner turning by θ, independent of the step, so smaller steps
+//!   cannot help there (a non-smooth point of contact: stick, slip or separation setting in
+//!   within one AFT sample), and a segment shorter than the initial step is not skipped;
+//! - step: s ← s · clamp(n_target / n_iter, ½, 2) after a converged point; on a failed
+//!   corrector, or a tangent turning by more than 60°, the step is halved and the point retried
+//!   (never skipped) — below the minimum step the path stops with a reported failure and the
+//!   points converged so far;
+//! - end: the first point beyond λ_end is replaced by the solution at exactly λ_end.
+
+use faer::Mat;
+
+use crate::error::{Error, Result};
+use crate::nonlinear::{
+    newton_core, norm, solve_dense, solve_fixed, Iterate, Linearization, NewtonOptions,
+    NewtonSolution, ParameterSystem,
+};
+
+/// Continuation settings (parameter values in the parameter's unit, e.g. rad/s).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContinuationOptions {
+    /// First parameter value λ_start.
+    pub start: f64,
+    /// Last parameter value λ_end (the path may run downwards).
+    pub end: f64,
+    /// Initial step in λ (> 0): the first predictor moves λ by about this much.
+    pub initial_step: f64,
+    /// Smallest step in λ units of arc length; `None`: initial step / 1000.
+    pub min_step: Option<f64>,
+    /// Largest step in λ units of arc length; `None`: |λ_end − λ_start| / 20 (at least the
+    /// initial step).
+    pub max_step: Option<f64>,
+    /// Most points on the path.
+    pub max_points: usize,
+    /// Newton iterations per point the step adaptation aims at.
+    pub target_iterations: usize,
+    /// Newton settings of the start point and the corrector.
+    pub newton: NewtonOptions,
+}
+
+impl ContinuationOptions {
+    /// Defaults for the range `start..end` with an initial step.
+    pub fn new(start: f64, end: f64, initial_step: f64) -> ContinuationOptions {
+        ContinuationOptions {
+            start,
+            end,
+            initial_step,
+            min_step: None,
+            max_step: None,
+            max_points: 20_000,
+            target_iterations: 4,
+            newton: NewtonOptions::default(),
+        }
+    }
+
+    /// Checks the settings: finite start ≠ end, a step > 0, at least one point and one target
+    /// iteration ([`Error::Input`] otherwise).
+    pub fn validate(&self) -> Result<()> {
+        let finite = [self.start, self.end, self.initial_step]
+            .iter()
+            .all(|v| v.is_finite());
+        if !finite || self.start == self.end || self.initial_step <= 0.0 {
+            return Err(Error::input(format!(
+                "continuation: the range {} .. {} with step {} is invalid (need finite start ≠ end and a step > 0)",
+                self.start, self.end, self.initial_step
+            )));
+        }
+        if self.max_points == 0 || self.target_iterations == 0 {
+            return Err(Error::input(
+                "continuation: max_points and target_iterations must be ≥ 1",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// One converged point of the path.
+#[derive(Clone, Debug)]
+pub struct PathPoint<S> {
+    /// The unknowns x (the harmonic vector of the condensed DOFs).
+    pub x: Vec<f64>,
+    /// The parameter λ (ω in rad/s for a frequency response).
+    pub parameter: f64,
+    /// Arc length from the start, in the scaled variables.
+    pub arc_length: f64,
+    /// Newton iterations of this point.
+    pub iterations: usize,
+    /// dλ/ds of the unit tangent (scaled): its sign changes at a fold.
+    pub tangent_parameter: f64,
+    /// The force memory at the end of the converged period.
+    pub state: S,
+}
+
+/// Why the path ended.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PathEnd {
+    /// The end parameter value was reached (the last point is at exactly λ_end).
+    ReachedEnd,
+    /// `max_points` points were computed first.
+    MaxPoints,
+    /// The path turned back and left the range on the start side.
+    LeftRange,
+    /// The corrector failed at the minimum step; the message says where and why.
+    Failed(String),
+}
+
+/// A traced path: the converged points in path order and how it ended.
+#[derive(Clone, Debug)]
+pub struct Path<S> {
+    /// Points in path order (λ goes back and forth at folds).
+    pub points: Vec<PathPoint<S>>,
+    /// How the path ended.
+    pub end: PathEnd,
+    /// Steps that were rejected and retried with half the step.
+    pub retries: usize,
+}
+
+/// Scaling of the unknowns and the parameter.
+#[derive(Clone, Copy, Debug)]
+struct Scales {
+    x: f64,
+    lambda: f64,
+    residual: f64,
+}
+
+/// Traces the path of `system` from `opts.start` to `opts.end`, the start point solved by Newton
+/// from x = 0 (whose first step is the linear solution). `on_point` is called for every
+/// converged point (progress reports). Fails only when the start point does not converge.
+pub fn trace<S: ParameterSystem>(
+    system: &S,
+    opts: &ContinuationOptions,
+    on_point: &mut dyn FnMut(&PathPoint<S::State>),
+) -> Result<Path<S::State>> {
+    opts.validate()?;
+    let state0 = system.initial_state();
+    let x0 = vec![0.0; system.dim()];
+    let start = solve_fixed(system, &x0, opts.start, &state0, &opts.newton).map_err(|f| {
+        Error::Compute(format!(
+            "the start point at parameter {} did not converge from the linear solution: {} — try another start value, a smaller excitation or more damping",
+            opts.start, f.message
+        ))
+    })?;
+    trace_from(system, opts, start, on_point)
+}
+
+/// As [`trace`] from a start point already solved at `opts.start` (its linearization must be
+/// that of `system`: ∂r/∂λ is the tangent's parameter column).
+pub fn trace_from<S: ParameterSystem>(
+    system: &S,
+    opts: &ContinuationOptions,
+    start: NewtonSolution<S::State>,
+    on_point: &mut dyn FnMut(&PathPoint<S::State>),
+) -> Result<Path<S::State>> {
+    opts.validate()?;
+    if start.x.len() != system.dim() || start.parameter != opts.start {
+        return Err(Error::input(format!(
+            "continuation: the start point has {} unknowns at parameter {}; the system has {} and the path starts at {}",
+            start.x.len(),
+            start.parameter,
+            system.dim(),
+            opts.start
+        )));
+    }
+    let range = (opts.end - opts.start).abs();
+    let direction = (opts.end - opts.start).signum();
+    let x_norm = norm(&start.x);
+    let mut scales = Scales {
+        x: if x_norm > 0.0 { x_norm } else { 1.0 },
+        lambda: range,
+        residual: system.residual_scale(),
+    };
+    let mut tangent =
+        initial_tangent(&start.linearization, &scales, direction).ok_or_else(|| {
+            Error::Compute(format!(
+            "the Jacobian at the start point (parameter {}) is singular; try another start value",
+            opts.start
+        ))
+        })?;
+    let mut step = opts.initial_step / range / tangent[tangent.len() - 1].abs().max(1e-3);
+    let min_step = opts.min_step.map_or(step / 1000.0, |m| m / range);
+    let max_step = opts
+        .max_step
+        .map_or((step).max(1.0 / 20.0), |m| m / range)
+        .max(min_step);
+    step = step.clamp(min_step, max_step);
+    let initial_step = step;
+    let mut path = Path {
+        points: vec![],
+        end: PathEnd::MaxPoints,
+        retries: 0,
+    };
+    let mut current = point_from(start, 0.0, tangent[tangent.len() - 1]);
+    on_point(&current);
+    path.points.push(current.clone());
+    while path.points.len() < opts.max_points {
+        let y = scaled(&current, &scales);
+        let predicted: Vec<f64> = y.iter().zip(&tangent).map(|(y, t)| y + step * t).collect();
+        // the corrector's largest offset from the prediction in steps: one, or at the minimum
+        // step (a corner) one initial step
+        let allowance = if step <= 2.0 * min_step {
+            (initial_step / step).max(1.0)
+        } else {
+            1.0
+        };
+        let outcome = correct(
+            system,
+            &current.state,
+            &predicted,
+            &tangent,
+            (step, allowance),
+            &scales,
+            opts,
+        );
+        let (sol, new_tangent) = match outcome {
+            Ok((sol, Some(t))) if dot(&t, &tangent) >= 0.5 || step <= 2.0 * min_step => (sol, t),
+            other => {
+                let why = match other {
+                    Err(f) => f,
+                    Ok((_, None)) => "singular bordered Jacobian at the corrected point".into(),
+                    Ok(_) => "the tangent turned by more than 60°".into(),
+                };
+                step *= 0.5;
+                path.retries += 1;
+                if step < min_step {
+                    path.end = PathEnd::Failed(format!(
+                        "continuation stopped after the point at parameter {:.9e}: {why} even with the minimum step {:.3e} (λ units); the {} points converged so far are kept",
+                        current.parameter,
+                        min_step * range,
+                        path.points.len()
+                    ));
+                    return Ok(path);
+                }
+                continue;
+            }
+        };
+        let iterations = sol.iterations;
+        let arc = current.arc_length + step;
+        let mut next = point_from(sol, arc, new_tangent[new_tangent.len() - 1]);
+        if direction * (next.parameter - opts.end) >= 0.0 {
+            next = end_point(system, &current, next, opts).unwrap_or_else(|p| p);
+            on_point(&next);
+            path.points.push(next);
+            path.end = PathEnd::ReachedEnd;
+            return Ok(path);
+        }
+        if direction * (opts.start - next.parameter) > 0.5 * range {
+            on_point(&next);
+            path.points.push(next);
+            path.end = PathEnd::LeftRange;
+            return Ok(path);
+        }
+        on_point(&next);
+        path.points.push(next.clone());
+        current = next;
+        tangent = rescale(new_tangent, &mut scales, norm(&current.x));
+        let factor = (opts.target_iterations as f64 / iterations.max(1) as f64).clamp(0.5, 2.0);
+        step = (step * factor).clamp(min_step, max_step);
+    }
+    Ok(path)
+}
+
+/// The point at exactly λ_end, by Newton at fixed λ from the linear interpolation between the
+/// last point before the end and the first beyond it. `Err(beyond)` if that fails.
+fn end_point<S: ParameterSystem>(
+    system: &S,
+    before: &PathPoint<S::State>,
+    beyond: PathPoint<S::State>,
+    opts: &ContinuationOptions,
+) -> std::result::Result<PathPoint<S::State>, PathPoint<S::State>> {
+    let span = beyond.parameter - before.parameter;
+    let w = if span != 0.0 {
+        ((opts.end - before.parameter) / span).clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    let guess: Vec<f64> = before
+        .x
+        .iter()
+        .zip(&beyond.x)
+        .map(|(a, b)| a + w * (b - a))
+        .collect();
+    match solve_fixed(system, &guess, opts.end, &before.state, &opts.newton) {
+        Ok(sol) => {
+            let arc = before.arc_length + w * (beyond.arc_length - before.arc_length);
+            Ok(point_from(sol, arc, beyond.tangent_parameter))
+        }
+        Err(_) => Err(beyond),
+    }
+}
+
+fn point_from<T>(sol: NewtonSolution<T>, arc_length: f64, tangent_parameter: f64) -> PathPoint<T> {
+    PathPoint {
+        x: sol.x,
+        parameter: sol.parameter,
+        arc_length,
+        iterations: sol.iterations,
+        tangent_parameter,
+        state: sol.state,
+    }
+}
+
+/// Raises the unknowns' scale x_s to ‖x‖ when the path has grown beyond it (so that the arc
+/// length keeps weighing amplitude and parameter alike through a resonance) and converts the
+/// unit tangent to the new scale.
+fn rescale(tangent: Vec<f64>, scales: &mut Scales, x_norm: f64) -> Vec<f64> {
+    if x_norm <= scales.x {
+        return tangent;
+    }
+    let ratio = scales.x / x_norm;
+    scales.x = x_norm;
+    let n = tangent.len() - 1;
+    let t: Vec<f64> = tangent
+        .iter()
+        .enumerate()
+        .map(|(i, v)| if i < n { v * ratio } else { *v })
+        .collect();
+    let len = norm(&t);
+    t.iter().map(|v| v / len).collect()
+}
+
+/// (u, μ) = (x / x_s, λ / λ_s).
+fn scaled<T>(p: &PathPoint<T>, s: &Scales) -> Vec<f64> {
+    let mut y: Vec<f64> = p.x.iter().map(|x| x / s.x).collect();
+    y.push(p.parameter / s.lambda);
+    y
+}
+
+/// The scaled Jacobian [∂r/∂u  ∂r/∂μ] / r_s as the first `dim` rows of a (dim+1)² matrix whose
+/// last row is `border`.
+fn bordered(lin: &Linearization, s: &Scales, border: &[f64]) -> Mat<f64> {
+    let n = lin.residual.len();
+    let cx = s.x / s.residual;
+    let cl = s.lambda / s.residual;
+    Mat::from_fn(n + 1, n + 1, |i, j| {
+        if i == n {
+            border[j]
+        } else if j == n {
+            lin.d_parameter[i] * cl
+        } else {
+            lin.jacobian[(i, j)] * cx
+        }
+    })
+}
+
+/// The unit tangent at the start, oriented so that λ moves towards the end.
+fn initial_tangent(lin: &Linearization, s: &Scales, direction: f64) -> Option<Vec<f64>> {
+    let n = lin.residual.len();
+    let mut border = vec![0.0; n + 1];
+    border[n] = direction;
+    tangent_with(lin, s, &border)
+}
+
+/// Solves [∂r/∂u ∂r/∂μ; bᵀ] t = [0; 1] and normalises t (so that t·b > 0).
+fn tangent_with(lin: &Linearization, s: &Scales, border: &[f64]) -> Option<Vec<f64>> {
+    let a = bordered(lin, s, border);
+    let mut rhs = vec![0.0; border.len()];
+    rhs[border.len() - 1] = 1.0;
+    let t = solve_dense(&a, &rhs)?;
+    let len = norm(&t);
+    (len > 0.0 && len.is_finite()).then(|| t.iter().map(|v| v / len).collect())
+}
+
+/// The corrector from the predicted point; returns the solution and the new tangent (oriented
+/// along `tangent`).
+///
+/// The corrected point must lie within `allowance` steps of the prediction (`(step,
+/// allowance)`; see the module documentation): the hyperplane
+/// t · (y − y_pred) = 0 reaches arbitrarily far, and near a sharp fold (e.g. where contact
+/// separation sets in within a few AFT samples) Newton can converge on it to a point of another
+/// branch — a jump that would skip the segment in between. Such a point is rejected like a failed
+/// corrector (the step is halved).
+#[allow(clippy::type_complexity)]
+fn correct<S: ParameterSystem>(
+    system: &S,
+    state: &S::State,
+    predicted: &[f64],
+    tangent: &[f64],
+    (step, allowance): (f64, f64),
+    s: &Scales,
+    opts: &ContinuationOptions,
+) -> std::result::Result<(NewtonSolution<S::State>, Option<Vec<f64>>), String> {
+    let done = correct_on(system, state, predicted, tangent, tangent, s, opts)?;
+    let mut y: Vec<f64> = done.0.x.iter().map(|x| x / s.x).collect();
+    y.push(done.0.parameter / s.lambda);
+    let off: Vec<f64> = y.iter().zip(predicted).map(|(a, b)| a - b).collect();
+    if norm(&off) <= allowance * step {
+        Ok(done)
+    } else {
+        Err(format!(
+            "the corrector moved {:.3e} from the prediction, farther than {:.3e} (towards another branch)",
+            norm(&off),
+            allowance * step
+        ))
+    }
+}
+
+/// Newton on r(x, λ) = 0, `border` · (y − y_pred) = 0 from the predicted point; the new tangent
+/// is oriented along `tangent`.
+#[allow(clippy::type_complexity)]
+fn correct_on<S: ParameterSystem>(
+    system: &S,
+    state: &S::State,
+    predicted: &[f64],
+    border: &[f64],
+    tangent: &[f64],
+    s: &Scales,
+    opts: &ContinuationOptions,
+) -> std::result::Result<(NewtonSolution<S::State>, Option<Vec<f64>>), String> {
+    let n = system.dim();
+    let mut eval = |z: &[f64]| -> Result<Iterate<(Linearization, S::State)>> {
+        let x: Vec<f64> = z[..n].iter().map(|u| u * s.x).collect();
+        let lambda = z[n] * s.lambda;
+        let mut lin = Linearization::zeros(n);
+        let end = system.evaluate(&x, lambda, state, &mut lin)?;
+        let mut g: Vec<f64> = lin.residual.iter().map(|r| r / s.residual).collect();
+        g.push(dot(
+            border,
+            &z.iter()
+                .zip(predicted)
+                .map(|(a, b)| a - b)
+                .collect::<Vec<_>>(),
+        ));
+        Ok(Iterate {
+            z: z.to_vec(),
+            g,
+            matrix: bordered(&lin, s, border),
+            extra: (lin, end),
+        })
+    };
+    // a corrector that needs far more iterations than the target is better retried with a
+    // smaller step than pushed on
+    let newton = NewtonOptions {
+        max_iterations: opts.newton.max_iterations.min(3 * opts.target_iterations),
+        max_halvings: opts.newton.max_halvings.min(2),
+        ..opts.newton
+    };
+    let (it, iterations) =
+        newton_core(predicted.to_vec(), &mut eval, 1.0, &newton).map_err(|f| f.message)?;
+    let residual = norm(&it.g[..n]);
+    let z = it.z;
+    let (lin, end) = it.extra;
+    let new_tangent = tangent_with(&lin, s, tangent);
+    let sol = NewtonSolution {
+        x: z[..n].iter().map(|u| u * s.x).collect(),
+        parameter: z[n] * s.lambda,
+        state: end,
+        iterations,
+        residual,
+        linearization: lin,
+    };
+    Ok((sol, new_tangent))
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}

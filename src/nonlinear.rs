@@ -1,0 +1,277 @@
+//! Nonlinear systems r(x, λ) = 0 and their Newton solution, independent of harmonic balance:
+//! [`ParameterSystem`] (the residual, its Jacobian ∂r/∂x and parameter derivative ∂r/∂λ at a point,
+//! with memory carried from one converged point to the next), Newton–Raphson with the analytic
+//! Jacobian (Battiato 2021, eqs. 20–21), dense LU (faer, partial pivoting), backtracking step
+//! damping, and convergence on both the scaled residual and the increment.
+//!
+//! [`newton_core`] iterates on any square system g(z) = 0 given g and ∂g/∂z; [`solve_fixed`]
+//! applies it to a [`ParameterSystem`] at a fixed parameter. The continuation corrector
+//! ([`crate::continuation`]) uses the same core on the bordered system; the harmonic balance
+//! ([`crate::hbm`]) implements [`ParameterSystem`].
+
+use faer::linalg::solvers::Solve;
+use faer::{Col, Mat};
+
+use crate::error::Result;
+
+/// The residual of a parameter-dependent system at one point, its Jacobian and its parameter
+/// derivative.
+#[derive(Clone, Debug)]
+pub struct Linearization {
+    /// r(x, λ), length `dim`.
+    pub residual: Vec<f64>,
+    /// ∂r/∂x, `dim` × `dim`.
+    pub jacobian: Mat<f64>,
+    /// ∂r/∂λ, length `dim`.
+    pub d_parameter: Vec<f64>,
+}
+
+impl Linearization {
+    /// Zeroed storage for a system of `dim` unknowns.
+    pub fn zeros(dim: usize) -> Linearization {
+        Linearization {
+            residual: vec![0.0; dim],
+            jacobian: Mat::zeros(dim, dim),
+            d_parameter: vec![0.0; dim],
+        }
+    }
+}
+
+/// A nonlinear system r(x, λ) = 0 in `dim` real unknowns x and one parameter λ, with memory
+/// (`State`) carried from one converged point to the next. This is what Newton
+/// ([`solve_fixed`]) and the continuation ([`crate::continuation`]) solve.
+pub trait ParameterSystem: Sync {
+    /// Memory of the nonlinear force (e.g. slider positions at the start of the period).
+    type State: Clone + Send + Sync + std::fmt::Debug;
+
+    /// Number of unknowns.
+    fn dim(&self) -> usize;
+
+    /// The force level the residual norm is compared with (N): Newton converges when
+    /// ‖r‖₂ ≤ tolerance · `residual_scale()`.
+    fn residual_scale(&self) -> f64;
+
+    /// The state before the first point.
+    fn initial_state(&self) -> Self::State;
+
+    /// Fills `out` at (x, λ) starting from the memory `state`; returns the end-of-period memory.
+    fn evaluate(
+        &self,
+        x: &[f64],
+        lambda: f64,
+        state: &Self::State,
+        out: &mut Linearization,
+    ) -> Result<Self::State>;
+}
+
+/// Newton settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NewtonOptions {
+    /// Converged when ‖r‖₂ ≤ `tolerance` · (force level), see
+    /// [`ParameterSystem::residual_scale`] ...
+    pub tolerance: f64,
+    /// ... and the last increment ‖Δx‖₂ ≤ `increment_tolerance` · max(‖x‖₂, floor).
+    pub increment_tolerance: f64,
+    /// Most Newton steps (linear solves).
+    pub max_iterations: usize,
+    /// Most step halvings per iteration when the residual grows.
+    pub max_halvings: usize,
+}
+
+impl Default for NewtonOptions {
+    fn default() -> Self {
+        NewtonOptions {
+            tolerance: 1e-8,
+            increment_tolerance: 1e-6,
+            max_iterations: 20,
+            max_halvings: 4,
+        }
+    }
+}
+
+/// One evaluated iterate of [`newton_core`].
+#[derive(Clone, Debug)]
+pub struct Iterate<E> {
+    /// The unknowns z.
+    pub z: Vec<f64>,
+    /// g(z), already scaled so that convergence means ‖g‖₂ ≤ tolerance.
+    pub g: Vec<f64>,
+    /// ∂g/∂z.
+    pub matrix: Mat<f64>,
+    /// Whatever else the evaluation produced (state, unscaled linearization).
+    pub extra: E,
+}
+
+impl<E> Iterate<E> {
+    /// ‖g‖₂.
+    pub fn norm(&self) -> f64 {
+        norm(&self.g)
+    }
+}
+
+/// Why Newton stopped without converging.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NewtonFailure {
+    /// What happened, for the user.
+    pub message: String,
+    /// Steps taken.
+    pub iterations: usize,
+}
+
+/// Newton on g(z) = 0 from `z0`. `eval(z)` returns the iterate at z (an `Err` counts as a failed
+/// iteration, e.g. a singular condensation); `floor` is the smallest ‖z‖ the increment test is
+/// relative to. Returns the converged iterate and the number of steps.
+pub fn newton_core<E>(
+    z0: Vec<f64>,
+    eval: &mut dyn FnMut(&[f64]) -> Result<Iterate<E>>,
+    floor: f64,
+    opts: &NewtonOptions,
+) -> std::result::Result<(Iterate<E>, usize), NewtonFailure> {
+    let fail = |message: String, iterations: usize| NewtonFailure {
+        message,
+        iterations,
+    };
+    let mut current = eval(&z0).map_err(|e| fail(e.to_string(), 0))?;
+    if !current.norm().is_finite() {
+        return Err(fail("the residual at the start is not finite".into(), 0));
+    }
+    for it in 1..=opts.max_iterations {
+        let step = solve_dense(&current.matrix, &current.g)
+            .ok_or_else(|| fail(format!("singular Jacobian at iteration {it}"), it))?;
+        let (next, taken) = damped_step(&current, &step, eval, opts)
+            .map_err(|e| fail(format!("iteration {it}: {e}"), it))?;
+        let z_norm = norm(&next.z).max(floor);
+        let converged = next.norm() <= opts.tolerance && taken <= opts.increment_tolerance * z_norm;
+        current = next;
+        if converged {
+            return Ok((current, it));
+        }
+        if !current.norm().is_finite() || current.norm() > 1e12 {
+            return Err(fail(
+                format!(
+                    "diverged (scaled residual {:.3e} at iteration {it})",
+                    current.norm()
+                ),
+                it,
+            ));
+        }
+    }
+    Err(fail(
+        format!(
+            "no convergence in {} iterations (scaled residual {:.3e}, tolerance {:.1e})",
+            opts.max_iterations,
+            current.norm(),
+            opts.tolerance
+        ),
+        opts.max_iterations,
+    ))
+}
+
+/// z − α Δ with α = 1, ½, ¼, … (at most `max_halvings` halvings) until the residual decreases
+/// or is within the tolerance; the best trial when none does. Returns the iterate and ‖α Δ‖.
+fn damped_step<E>(
+    current: &Iterate<E>,
+    step: &[f64],
+    eval: &mut dyn FnMut(&[f64]) -> Result<Iterate<E>>,
+    opts: &NewtonOptions,
+) -> Result<(Iterate<E>, f64)> {
+    let max_halvings = opts.max_halvings;
+    let r0 = current.norm();
+    let mut alpha = 1.0;
+    let mut best: Option<(Iterate<E>, f64)> = None;
+    for _ in 0..=max_halvings {
+        let z: Vec<f64> = current
+            .z
+            .iter()
+            .zip(step)
+            .map(|(z, d)| z - alpha * d)
+            .collect();
+        let trial = eval(&z)?;
+        let taken = alpha * norm(step);
+        let better = trial.norm() < r0 || trial.norm() <= opts.tolerance;
+        let best_so_far = best.as_ref().is_none_or(|(b, _)| trial.norm() < b.norm());
+        if better {
+            return Ok((trial, taken));
+        }
+        if best_so_far && trial.norm().is_finite() {
+            best = Some((trial, taken));
+        }
+        alpha *= 0.5;
+    }
+    best.ok_or_else(|| {
+        crate::error::Error::Compute("the residual is not finite along the Newton step".into())
+    })
+}
+
+/// Solves A x = b by dense LU with partial pivoting; `None` when A is (numerically) singular.
+pub fn solve_dense(a: &Mat<f64>, b: &[f64]) -> Option<Vec<f64>> {
+    let lu = a.partial_piv_lu();
+    let u = lu.U();
+    let diag = (0..u.nrows()).map(|i| u[(i, i)].abs());
+    let (min, max) = diag.fold((f64::INFINITY, 0.0_f64), |(lo, hi), d| {
+        (lo.min(d), hi.max(d))
+    });
+    let regular = min > 1e-15 * max;
+    if !regular {
+        return None;
+    }
+    let mut x = Col::from_fn(b.len(), |i| b[i]);
+    lu.solve_in_place(x.as_mut());
+    let x: Vec<f64> = (0..b.len()).map(|i| x[i]).collect();
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// Euclidean norm.
+pub fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// A converged point of a [`ParameterSystem`].
+#[derive(Clone, Debug)]
+pub struct NewtonSolution<S> {
+    /// The unknowns x.
+    pub x: Vec<f64>,
+    /// The parameter λ.
+    pub parameter: f64,
+    /// The force memory at the end of the converged period.
+    pub state: S,
+    /// Newton steps taken.
+    pub iterations: usize,
+    /// ‖r‖₂ / residual scale at the solution.
+    pub residual: f64,
+    /// r, ∂r/∂x, ∂r/∂λ at the solution (unscaled).
+    pub linearization: Linearization,
+}
+
+/// Newton at the fixed parameter λ from `x0`, every evaluation starting from the memory `state`.
+pub fn solve_fixed<S: ParameterSystem>(
+    system: &S,
+    x0: &[f64],
+    lambda: f64,
+    state: &S::State,
+    opts: &NewtonOptions,
+) -> std::result::Result<NewtonSolution<S::State>, NewtonFailure> {
+    let scale = system.residual_scale();
+    let mut eval = |z: &[f64]| -> Result<Iterate<(Linearization, S::State)>> {
+        let mut lin = Linearization::zeros(system.dim());
+        let end = system.evaluate(z, lambda, state, &mut lin)?;
+        Ok(Iterate {
+            z: z.to_vec(),
+            g: lin.residual.iter().map(|r| r / scale).collect(),
+            matrix: &lin.jacobian * (1.0 / scale),
+            extra: (lin, end),
+        })
+    };
+    let floor = norm(x0).max(f64::MIN_POSITIVE);
+    let (it, iterations) = newton_core(x0.to_vec(), &mut eval, floor, opts)?;
+    let residual = it.norm();
+    let (linearization, end) = it.extra;
+    Ok(NewtonSolution {
+        x: it.z,
+        parameter: lambda,
+        state: end,
+        iterations,
+        residual,
+        linearization,
+    })
+}

@@ -1,0 +1,260 @@
+//! Harmonic balance speed on the bundled sector and on a large synthetic contact model (the
+//! numbers of docs/performance.md, "Harmonic balance").
+//!
+//! ```text
+//! cargo run --release --example hbm_speed -- sector CASE.toml [H] [POINTS]
+//! cargo run --release --example hbm_speed -- synthetic [CONTACT_DOFS] [H] [SAMPLES]
+//! ```
+//!
+//! `sector`: the case's sector problem (reduction, SAMA interfaces, preload balance) with H
+//! harmonics (default 3; the case's AFT samples), a continuation of POINTS points (default 8) from
+//! the case's start frequency: wall time per point and per Newton iteration (corrector
+//! iterations; the predictor's tangent solves are included in the per-point time), then the
+//! split of one Newton iteration at the last point.
+//!
+//! `synthetic`: CONTACT_DOFS / 6 node-to-node pairs (frames along x, y, z; k_t = k_n = 1 N/m,
+//! μ = 0.5, n0 = 1 N, 1-D friction) on a chain of CONTACT_DOFS unit masses and unit springs
+//! (C = 0.01 K), every DOF nonlinear, forced on harmonic 1 so that the pairs stick, slip and
+//! separate; H (default 3) and SAMPLES (default 4(H+1) rounded up to a power of two): the split
+//! of one Newton iteration.
+//!
+//! The split (best of `REPEAT` runs, wall clock, `faer::get_global_parallelism` threads):
+//! condensation of the linear part at ω; AFT = contact forces alone (inverse DFT, contact law
+//! march, DFT); contact Jacobian = forces with the analytic Jacobian minus forces alone;
+//! linear assembly = the whole residual + Jacobian evaluation minus the contact part; dense LU
+//! = faer's partial-pivoting LU and solve of the Jacobian (`nonlinear::solve_dense`).
+
+use std::f64::consts::PI;
+use std::path::Path;
+use std::time::Instant;
+
+use faer::Mat;
+use nlrom::case::Case;
+use nlrom::contact::law::{ContactParams, Variant};
+use nlrom::contact::pairs::{ContactPair, PairSet};
+use nlrom::continuation::trace;
+use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
+use nlrom::hbm::frf::case_continuation;
+use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel};
+use nlrom::nonlinear::{solve_dense, Linearization, ParameterSystem};
+use nlrom::reduction::reduce;
+use nlrom::sama::build_interfaces;
+use nlrom::solve::SectorProblem;
+use nlrom::{model, Result};
+
+const REPEAT: usize = 2;
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let num = |i: usize, default: usize| {
+        args.get(i)
+            .map(|s| s.parse().expect("a number"))
+            .unwrap_or(default)
+    };
+    eprintln!(
+        "faer parallelism: {:?}; rayon threads: {}",
+        faer::get_global_parallelism(),
+        rayon::current_num_threads()
+    );
+    match args.first().map(String::as_str) {
+        Some("sector") => sector(Path::new(&args[1]), num(2, 3), num(3, 8)),
+        Some("synthetic") => {
+            let h = num(2, 3);
+            let samples = num(3, (4 * (h + 1)).next_power_of_two());
+            synthetic(num(1, 1500), h, samples)
+        }
+        _ => {
+            eprintln!("usage: hbm_speed sector CASE.toml [H] [POINTS] | synthetic [CONTACT_DOFS] [H] [SAMPLES]");
+            Ok(())
+        }
+    }
+}
+
+/// CPU time (user + system, all threads) of this process so far (s), from /proc/self/stat
+/// (clock ticks of 10 ms); 0 where unavailable.
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let after = stat.rsplit(')').next().unwrap_or("");
+    let f: Vec<f64> = after
+        .split_whitespace()
+        .map(|v| v.parse().unwrap_or(0.0))
+        .collect();
+    // fields 14 (utime) and 15 (stime) of proc(5); `after` starts at field 3
+    f.get(11)
+        .zip(f.get(12))
+        .map_or(0.0, |(u, s)| (u + s) / 100.0)
+}
+
+/// Best wall time (s) of `REPEAT` runs of `f`, and the CPU time of that run.
+fn best<T>(mut f: impl FnMut() -> T) -> (f64, f64) {
+    (0..REPEAT)
+        .map(|_| {
+            let (t, c) = (Instant::now(), cpu_seconds());
+            std::hint::black_box(f());
+            (t.elapsed().as_secs_f64(), cpu_seconds() - c)
+        })
+        .fold((f64::INFINITY, 0.0), |a, b| if b.0 < a.0 { b } else { a })
+}
+
+fn sector(path: &Path, h: usize, points: usize) -> Result<()> {
+    let mut case = Case::load(path)?;
+    case.harmonic_balance.harmonics = h;
+    let t = Instant::now();
+    let sm = model::build(&case, &mut |_| {})?;
+    let rom = reduce(&case, &sm, &mut |_| {})?;
+    let mesh = sm.mesh.as_ref().expect("a sector case has a mesh");
+    let interfaces = build_interfaces(&case, mesh, rom.cyclic.as_ref())?;
+    let problem = SectorProblem::build(&case, &rom, mesh, &interfaces)?;
+    let system = problem.system()?;
+    eprintln!(
+        "setup (model, reduction, interfaces) {:.1} s; H = {h}, N_t = {}, {} contact DOF, {} unknowns",
+        t.elapsed().as_secs_f64(),
+        problem.layout.time_samples,
+        problem.linear.n_condensed(),
+        system.dim()
+    );
+    let fp = FrequencyPath {
+        system: &system,
+        level: 1.0,
+    };
+    let mut opts = case_continuation(&case)?;
+    opts.max_points = points;
+    let (t, c) = (Instant::now(), cpu_seconds());
+    let path = trace(&fp, &opts, &mut |_| {})?;
+    let (wall, cpu) = (t.elapsed().as_secs_f64(), cpu_seconds() - c);
+    let iterations: usize = path.points.iter().map(|p| p.iterations).sum();
+    let n = path.points.len();
+    println!(
+        "sector: {n} points ({:.2} → {:.2} Hz, {} retries), {iterations} Newton iterations, {:.3} s per point, {:.4} s per iteration (whole continuation {wall:.2} s, CPU {cpu:.2} s: {:.2} s per point, {:.2} s per iteration)",
+        path.points[0].parameter / (2.0 * PI),
+        path.points[n - 1].parameter / (2.0 * PI),
+        path.retries,
+        wall / n as f64,
+        wall / iterations.max(1) as f64,
+        cpu / n as f64,
+        cpu / iterations.max(1) as f64
+    );
+    let last = &path.points[n - 1];
+    split(&fp, &system, &last.x, last.parameter, &last.state)
+}
+
+/// Times the parts of one Newton iteration at (x, ω) and prints them.
+fn split<F: HarmonicForce>(
+    fp: &FrequencyPath<'_, '_, F>,
+    system: &HbmSystem<'_, F>,
+    x: &[f64],
+    omega: f64,
+    state: &F::State,
+) -> Result<()> {
+    let layout = system.layout();
+    let force = system.force();
+    let nf = x.len();
+    let condense = best(|| system.condense_all(omega).unwrap());
+    let aft = best(|| {
+        let mut s = state.clone();
+        let mut f = vec![0.0; nf];
+        force.evaluate(&layout, x, &mut s, &mut f, None).unwrap();
+    });
+    let mut jac = Mat::<f64>::zeros(nf, nf);
+    let aft_jac = best(|| {
+        let mut s = state.clone();
+        let mut f = vec![0.0; nf];
+        jac.fill(0.0);
+        force
+            .evaluate(&layout, x, &mut s, &mut f, Some(jac.as_mut()))
+            .unwrap();
+    });
+    drop(jac);
+    let mut lin = Linearization::zeros(fp.dim());
+    let whole = best(|| fp.evaluate(x, omega, state, &mut lin).unwrap());
+    let lu = best(|| solve_dense(&lin.jacobian, &lin.residual).unwrap());
+    let par = faer::get_global_parallelism();
+    faer::set_global_parallelism(faer::Par::Seq);
+    let lu_seq = best(|| solve_dense(&lin.jacobian, &lin.residual).unwrap());
+    faer::set_global_parallelism(par);
+    let total = whole.0 + lu.0;
+    let row = |what: &str, t: (f64, f64)| {
+        println!(
+            "  {what:<48} {:>9.4} s {:>5.1} %  (CPU {:.2} s)",
+            t.0,
+            100.0 * t.0 / total,
+            t.1
+        )
+    };
+    let minus = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0, a.1 - b.1);
+    println!("one Newton iteration, {nf} unknowns (best of {REPEAT}, wall): {total:.4} s");
+    row("condensation of the linear part", condense);
+    row("AFT: contact forces", aft);
+    row(
+        "contact Jacobian (forces + Jacobian − forces)",
+        minus(aft_jac, aft),
+    );
+    row(
+        "linear assembly (evaluation − contact − cond.)",
+        minus(minus(whole, aft_jac), condense),
+    );
+    row("dense LU + solve", lu);
+    println!(
+        "  dense LU + solve on 1 thread: {:.4} s (CPU {:.2} s; wall {:.2}× the parallel one); {:.1} GFLOP/s parallel",
+        lu_seq.0,
+        lu_seq.1,
+        lu_seq.0 / lu.0,
+        2.0 / 3.0 * (nf as f64).powi(3) / lu.0 / 1e9
+    );
+    Ok(())
+}
+
+fn synthetic(contact_dofs: usize, h: usize, samples: usize) -> Result<()> {
+    let pairs = contact_dofs / 6;
+    let n = 6 * pairs;
+    let k = Mat::from_fn(n, n, |i, j| match i.abs_diff(j) {
+        0 => 2.0,
+        1 => -1.0,
+        _ => 0.0,
+    });
+    let m = Mat::<f64>::identity(n, n);
+    let c = Mat::from_fn(n, n, |i, j| 0.01 * k[(i, j)]);
+    let force: Vec<f64> = (0..n).map(|i| 0.3 * ((i % 7) as f64 - 3.0)).collect();
+    let linear = LinearModel::from_real(
+        k.as_ref(),
+        m.as_ref(),
+        Some(c.as_ref()),
+        &force,
+        (0..n).collect(),
+        vec![0],
+        h,
+    )?;
+    let params = ContactParams::new(1.0, 1.0, 0.5, 1.0, "synthetic")?;
+    let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let set = PairSet::new(
+        n,
+        Variant::OneD,
+        (0..pairs)
+            .map(|p| ContactPair {
+                contact: [6 * p, 6 * p + 1, 6 * p + 2],
+                target: Some([6 * p + 3, 6 * p + 4, 6 * p + 5]),
+                frame: identity,
+                sigma: 0,
+                params,
+                preload_rate: 1.0,
+            })
+            .collect(),
+        None,
+    )?;
+    let layout = HarmonicLayout::new(h, samples)?;
+    let system = HbmSystem::new(layout, &linear, &set)?;
+    let fp = FrequencyPath {
+        system: &system,
+        level: 1.0,
+    };
+    // harmonic-1 motion of 0.5–2 m per DOF with varied phases: stick, slip and separation mixed
+    let mut x = vec![0.0; system.dim()];
+    for d in 0..n {
+        let c1 = layout.cos_index(1, d, n);
+        let (a, phi) = (0.5 + 1.5 * ((d * 37 % 101) as f64 / 100.0), d as f64 * 0.7);
+        x[c1] = a * phi.cos();
+        x[c1 + 1] = a * phi.sin();
+    }
+    println!("synthetic: {pairs} pairs, {n} contact DOF, H = {h}, N_t = {samples}");
+    split(&fp, &system, &x, 0.8, &set.initial_state())
+}
