@@ -43,6 +43,7 @@ fn frf(n0: f64, points: usize, harmonics: usize, contacts: usize) -> FrfData {
                 peak: (0..r).map(|j| 1e-4 * (p + j) as f64 + 1.0 / 3.0).collect(),
                 arc_length: 0.1 * p as f64,
                 newton_iterations: (p % 4) as u64 + 1,
+                residual: 1e-10 * (p as f64 + 1.0),
                 stable: Some(p % 3 != 1),
                 contact_fractions: (0..contacts)
                     .map(|c| {

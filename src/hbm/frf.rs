@@ -22,6 +22,8 @@ pub struct FrfPoint<S> {
     pub arc_length: f64,
     /// Newton iterations of the point.
     pub iterations: usize,
+    /// The accepted scaled residual ‖r‖₂ / residual scale (≤ the Newton tolerance).
+    pub residual: f64,
     /// The condensed harmonic vector Q_N (real layout).
     pub q: Vec<f64>,
     /// The nonlinear force's memory at the point.
@@ -81,6 +83,7 @@ pub fn frequency_response<F: HarmonicForce>(
                 response: output_response(system, &p.x, p.parameter, 1.0, response)?,
                 arc_length: p.arc_length,
                 iterations: p.iterations,
+                residual: p.residual,
                 q: p.x,
                 state: p.state,
             })

@@ -16,6 +16,7 @@
 //! | `/frf/<i>/response_dofs` | compound \[R\] {kind enum(node, row), node_tag u64, component i64} | 1 | node tag and component 0/1/2, or matrix row (component −1) |
 //! | `/frf/<i>/arc_length` | f64 \[P\] | 1 | continuation arc length |
 //! | `/frf/<i>/newton_iterations` | u64 \[P\] | 1 | Newton iterations of each point |
+//! | `/frf/<i>/residual` | f64 \[P\] | 1 | accepted scaled residual ‖r‖₂/r_s of each point (≤ the tolerance) |
 //! | `/frf/<i>/stable` | i64 \[P\] | 1 | 1 stable, 0 unstable (only when computed) |
 //! | `/contact` attributes | | | `names`: the interfaces in the order of the points' contact fractions |
 //! | `/contact/<name>` attributes | | | `model`, `coupling` (array, interpolated), `element`, `sigma`, `mu` |
@@ -80,6 +81,9 @@ pub struct FrfPoint {
     pub arc_length: f64,
     /// Newton iterations the point took.
     pub newton_iterations: u64,
+    /// The accepted scaled residual ‖r‖₂ / r_s (≤ the Newton tolerance; NaN when read from a
+    /// file written without it).
+    pub residual: f64,
     /// Stability, when computed (the same for all points of a curve: all `Some` or all `None`).
     pub stable: Option<bool>,
     /// Per contact interface (in the order of [`ResultsFile::contacts`]): the fractions of the
@@ -456,6 +460,14 @@ fn frf_group(group: &mut Group, frf: &FrfData) {
             frf.points.iter().map(|q| q.newton_iterations).collect(),
             "1",
             "Newton iterations of each point",
+        ),
+    );
+    group.add(
+        "residual",
+        Dataset::f64s(
+            frf.points.iter().map(|q| q.residual).collect(),
+            "1",
+            "accepted scaled residual of each point",
         ),
     );
     let stable: Option<Vec<i64>> = frf.points.iter().map(|q| q.stable.map(i64::from)).collect();
@@ -907,6 +919,11 @@ fn read_frf(reader: &H5Reader, i: usize, contact_names: &[String]) -> Result<Frf
     let peak = reader.f64s(&format!("{base}/peak"), &[p, r])?;
     let arc = reader.f64s(&format!("{base}/arc_length"), &[p])?;
     let newton = reader.u64s(&format!("{base}/newton_iterations"), &[p])?;
+    let residual = if reader.group(&base)?.datasets.contains_key("residual") {
+        reader.f64s(&format!("{base}/residual"), &[p])?
+    } else {
+        vec![f64::NAN; p]
+    };
     let stable = if reader.group(&base)?.datasets.contains_key("stable") {
         Some(reader.i64s(&format!("{base}/stable"), &[p])?)
     } else {
@@ -923,6 +940,7 @@ fn read_frf(reader: &H5Reader, i: usize, contact_names: &[String]) -> Result<Frf
             peak: peak[q * r..(q + 1) * r].to_vec(),
             arc_length: arc[q],
             newton_iterations: newton[q],
+            residual: residual[q],
             stable: stable.as_ref().map(|s| s[q] != 0),
             contact_fractions: fractions
                 .iter()

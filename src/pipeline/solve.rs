@@ -670,6 +670,7 @@ fn trace_curve<F: HarmonicForce>(
                     peak: p.response.peak.clone(),
                     arc_length: p.arc_length,
                     newton_iterations: p.iterations as u64,
+                    residual: p.residual,
                     stable: p.stable,
                     contact_fractions: contact.record_point(&p.q, &p.state, &mut details)?,
                 });
