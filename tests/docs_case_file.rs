@@ -3,7 +3,8 @@
 //!
 //! - every key of the schema appears in it. The keys are derived from the source of the schema
 //!   (`src/case.rs` or `src/case/**/*.rs`): every struct that derives `Deserialize` is a table,
-//!   its fields are keys (`#[serde(rename = "…")]` honoured, `#[serde(skip)]` left out), a field
+//!   its fields are keys (`#[serde(rename = "…")]` honoured, an `alias` is one more key,
+//!   `#[serde(skip)]` left out), a field
 //!   whose type is another such struct — or a type read through `#[serde(try_from = "Spec")]` —
 //!   is a nested table, walked from `Case` down. A key is documented when it is the first cell
 //!   of a table row of the page, written as its full dotted path (`contact.misalignment.rotate.axis`);
@@ -129,7 +130,12 @@ fn parse_schema(source: &str) -> BTreeMap<String, Item> {
                     continue;
                 }
                 let key = attr_value(&fa, "rename").unwrap_or_else(|| ident.to_string());
-                fields.push((key, ty.trim_end_matches(',').to_string()));
+                let ty = ty.trim_end_matches(',').to_string();
+                // `#[serde(alias = "…")]`: another key for the same field.
+                if let Some(alias) = attr_value(&fa, "alias") {
+                    fields.push((alias, ty.clone()));
+                }
+                fields.push((key, ty));
             }
         }
         if deserialized || try_from.is_some() {
@@ -398,7 +404,7 @@ fn every_key_of_the_bundled_cases_is_documented() {
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
 
-/// The parser on a synthetic schema: nesting, arrays, Option, rename, skip, try_from, maps.
+/// The parser on a synthetic schema: nesting, arrays, Option, rename, alias, skip, try_from, maps.
 #[test]
 fn schema_parser_reads_serde_structs() {
     let source = r#"
@@ -439,6 +445,8 @@ struct RangeSpec {
 #[derive(Deserialize)]
 pub struct Part {
     pub name: String,
+    #[serde(alias = "label")]
+    pub tag: String,
 }
 
 pub struct NotSchema {
@@ -455,7 +463,9 @@ pub struct NotSchema {
             "model.range.start_rad_s",
             "model.young-modulus",
             "parts",
+            "parts.label",
             "parts.name",
+            "parts.tag",
             "sweep",
             "title",
         ]
