@@ -21,8 +21,8 @@ use nlrom::contact::grounded::DofElements;
 use nlrom::contact::law::ContactParams;
 use nlrom::continuation::{trace, ContinuationOptions};
 use nlrom::harmonics::HarmonicLayout;
-use nlrom::hbm::newton::solve_dense;
-use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel, Linearization, ParameterSystem};
+use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel};
+use nlrom::nonlinear::{solve_dense, Linearization, ParameterSystem};
 
 fn chain() -> (LinearModel, DofElements) {
     let k = Mat::from_fn(3, 3, |i, j| match (i, j) {

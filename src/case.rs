@@ -478,34 +478,136 @@ pub struct Response {
     pub dofs: Vec<usize>,
 }
 
-/// `[[element]]`: a friction element on DOF combinations of a matrix model.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+/// `[[element]]`: a nonlinear element on DOF combinations of a matrix model. Which keys an
+/// element takes depends on its `kind` ([`ElementKind`]); a key of another kind is an error.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FrictionElement {
-    /// The element kind (only `friction`).
+    /// The element kind.
     pub kind: ElementKind,
-    /// Tangential relative displacement u_t = Σ weights·q\[dofs\]; the force acts back along it.
+    /// The coordinate the element reads, x = Σ weights·q\[dofs\] (m); its force acts back along
+    /// the same weights. `tangential` for the friction kinds, `displacement` (an alias) for the
+    /// spring and damper kinds.
+    #[serde(alias = "displacement")]
     pub tangential: WeightedDofs,
-    /// Normal relative displacement v = Σ weights·q\[dofs\] (optional normal load variation).
+    /// Normal relative displacement v = Σ weights·q\[dofs\] (optional normal load variation;
+    /// `friction` only).
     #[serde(default)]
     pub normal: Option<WeightedDofs>,
-    /// Tangential stiffness (N/m), ≥ 0.
-    pub kt: f64,
+    /// Tangential stiffness (N/m), ≥ 0 (`friction`, required).
+    #[serde(default)]
+    pub kt: Option<f64>,
     /// Normal stiffness (N/m), ≥ 0; default 0 (used only with `normal`).
     #[serde(default)]
     pub kn: f64,
-    /// Friction coefficient μ ≥ 0.
-    pub mu: f64,
-    /// Static normal load (N); without `normal` the slip limit is μ·n0.
-    pub n0: f64,
+    /// Friction coefficient μ ≥ 0 (`friction`, `tanh_friction`, required).
+    #[serde(default)]
+    pub mu: Option<f64>,
+    /// Static normal load (N); without `normal` the slip limit is μ·n0 (`friction`,
+    /// `tanh_friction`, required).
+    #[serde(default)]
+    pub n0: Option<f64>,
+    /// Regularising velocity ε (m/s) > 0 of `tanh_friction`: f = μ n0 tanh(ẋ/ε).
+    #[serde(default)]
+    pub eps: Option<f64>,
+    /// Cubic stiffness k3 (N/m³) of `cubic_spring`: f = k3 x³.
+    #[serde(default)]
+    pub k3: Option<f64>,
+    /// Coefficients c_p (N/m^p) of `polynomial_spring`: f = Σ c_p x^p.
+    #[serde(default)]
+    pub coefficients: Option<Vec<f64>>,
+    /// Integer exponents p ≥ 1 of `polynomial_spring`, one per coefficient.
+    #[serde(default)]
+    pub exponents: Option<Vec<u32>>,
+    /// Stiffness k (N/m) ≥ 0 of `unilateral_spring`: f = k max(x − gap, 0).
+    #[serde(default)]
+    pub k: Option<f64>,
+    /// Gap (m) of `unilateral_spring`: contact while x ≥ gap; default 0.
+    #[serde(default)]
+    pub gap: Option<f64>,
+    /// Damping coefficient c (N·s²/m²) of `quadratic_damper`: f = c ẋ|ẋ|.
+    #[serde(default)]
+    pub c: Option<f64>,
 }
 
-/// Kinds of `[[element]]`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
+/// The largest exponent of a `polynomial_spring`.
+pub const MAX_EXPONENT: u32 = 15;
+
+/// Kinds of `[[element]]` (the element library of Krack & Gross 2019, NLvib, on DOF
+/// combinations x = Σ wᵢ q_{dᵢ}).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ElementKind {
     /// A 1D friction element (Jenkins element with optional normal load variation).
+    #[default]
     Friction,
+    /// f = k3 x³.
+    CubicSpring,
+    /// f = Σ c_p x^p.
+    PolynomialSpring,
+    /// f = k max(x − gap, 0) (normal-only penalty contact).
+    UnilateralSpring,
+    /// f = c ẋ|ẋ|.
+    QuadraticDamper,
+    /// f = μ n0 tanh(ẋ/ε) (regularised Coulomb friction).
+    TanhFriction,
+}
+
+impl ElementKind {
+    /// The name used in case files.
+    pub fn name(self) -> &'static str {
+        match self {
+            ElementKind::Friction => "friction",
+            ElementKind::CubicSpring => "cubic_spring",
+            ElementKind::PolynomialSpring => "polynomial_spring",
+            ElementKind::UnilateralSpring => "unilateral_spring",
+            ElementKind::QuadraticDamper => "quadratic_damper",
+            ElementKind::TanhFriction => "tanh_friction",
+        }
+    }
+
+    /// The keys of this kind besides `kind` and the coordinate: (required, optional).
+    pub fn keys(self) -> (&'static [&'static str], &'static [&'static str]) {
+        match self {
+            ElementKind::Friction => (&["kt", "mu", "n0"], &["normal", "kn"]),
+            ElementKind::CubicSpring => (&["k3"], &[]),
+            ElementKind::PolynomialSpring => (&["coefficients", "exponents"], &[]),
+            ElementKind::UnilateralSpring => (&["k"], &["gap"]),
+            ElementKind::QuadraticDamper => (&["c"], &[]),
+            ElementKind::TanhFriction => (&["mu", "n0", "eps"], &[]),
+        }
+    }
+}
+
+impl FrictionElement {
+    /// Whether the friction parameter `p` (`mu`, `kt`, `kn`, `n0`) belongs to this kind.
+    fn sweepable(&self, p: &str) -> bool {
+        let (required, optional) = self.kind.keys();
+        required.contains(&p) || optional.contains(&p)
+    }
+
+    /// The kind-specific keys given in the case (`kn` counts when nonzero).
+    pub fn given_keys(&self) -> Vec<&'static str> {
+        let mut out = Vec::new();
+        let mut add = |name, given: bool| {
+            if given {
+                out.push(name);
+            }
+        };
+        add("normal", self.normal.is_some());
+        add("kt", self.kt.is_some());
+        add("kn", self.kn != 0.0);
+        add("mu", self.mu.is_some());
+        add("n0", self.n0.is_some());
+        add("eps", self.eps.is_some());
+        add("k3", self.k3.is_some());
+        add("coefficients", self.coefficients.is_some());
+        add("exponents", self.exponents.is_some());
+        add("k", self.k.is_some());
+        add("gap", self.gap.is_some());
+        add("c", self.c.is_some());
+        out
+    }
 }
 
 /// A linear combination Σ weights\[i\]·q\[dofs\[i\]\] of matrix rows.
@@ -1423,12 +1525,90 @@ impl Case {
         for (i, e) in self.element.iter().enumerate() {
             let key = format!("element[{i}]");
             self.check_weighted(&format!("{key}.tangential"), &e.tangential)?;
+            self.check_element_keys(&key, e)?;
             if let Some(n) = &e.normal {
                 self.check_weighted(&format!("{key}.normal"), n)?;
             }
-            self.check_friction(&key, e.mu, e.kt, e.kn, e.n0, e.normal.is_some())?;
+            self.check_element_values(&key, e)?;
         }
         Ok(())
+    }
+
+    /// The keys of `e` fit its kind: every required key given, no key of another kind.
+    fn check_element_keys(&self, key: &str, e: &FrictionElement) -> Result<()> {
+        let (required, optional) = e.kind.keys();
+        let given = e.given_keys();
+        let kind = e.kind.name();
+        if let Some(k) = required.iter().find(|k| !given.contains(k)) {
+            return Err(self.key_error(
+                &KeyPath::parse(&format!("{key}.kind")),
+                format!(
+                    "an element of kind = \"{kind}\" needs the key `{k}` (its keys: {})",
+                    required.join(", ")
+                ),
+            ));
+        }
+        if let Some(k) = given
+            .iter()
+            .find(|k| !required.contains(k) && !optional.contains(k))
+        {
+            return Err(self.key_error(
+                &KeyPath::parse(&format!("{key}.{k}")),
+                format!(
+                    "`{k}` is not a key of kind = \"{kind}\" (its keys: {})",
+                    required
+                        .iter()
+                        .chain(optional)
+                        .copied()
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Ranges of the kind's parameters (the keys are known to be present).
+    fn check_element_values(&self, key: &str, e: &FrictionElement) -> Result<()> {
+        let val = |v: Option<f64>| v.unwrap_or(0.0);
+        match e.kind {
+            ElementKind::Friction => self.check_friction(
+                key,
+                val(e.mu),
+                val(e.kt),
+                e.kn,
+                val(e.n0),
+                e.normal.is_some(),
+            ),
+            ElementKind::CubicSpring => self.finite(&format!("{key}.k3"), &[val(e.k3)]),
+            ElementKind::PolynomialSpring => {
+                let c = e.coefficients.as_deref().unwrap_or_default();
+                let p = e.exponents.as_deref().unwrap_or_default();
+                self.finite(&format!("{key}.coefficients"), c)?;
+                self.require(!c.is_empty() && c.len() == p.len(), &format!("{key}.exponents"), || {
+                    format!(
+                        "`coefficients` ({} entries) and `exponents` ({} entries) must be non-empty lists of equal length",
+                        c.len(),
+                        p.len()
+                    )
+                })?;
+                self.require(
+                    p.iter().all(|&x| (1..=MAX_EXPONENT).contains(&x)),
+                    &format!("{key}.exponents"),
+                    || format!("exponents must be integers from 1 to {MAX_EXPONENT} (found {p:?})"),
+                )
+            }
+            ElementKind::UnilateralSpring => {
+                self.non_negative(&format!("{key}.k"), val(e.k))?;
+                self.finite(&format!("{key}.gap"), &[val(e.gap)])
+            }
+            ElementKind::QuadraticDamper => self.finite(&format!("{key}.c"), &[val(e.c)]),
+            ElementKind::TanhFriction => {
+                self.non_negative(&format!("{key}.mu"), val(e.mu))?;
+                self.non_negative(&format!("{key}.n0"), val(e.n0))?;
+                self.positive(&format!("{key}.eps"), val(e.eps))
+            }
+        }
     }
 
     fn check_weighted(&self, key: &str, w: &WeightedDofs) -> Result<()> {
@@ -1759,7 +1939,8 @@ impl Case {
     ///
     /// Sweepable parameter paths:
     /// - `contact.<name>.mu|kt|kn|n0` — a `[[contact]]` by name;
-    /// - `element.<index>.mu|kt|kn|n0` — an `[[element]]` by 0-based index;
+    /// - `element.<index>.mu|kt|kn|n0` — an `[[element]]` by 0-based index (the parameters of
+    ///   its kind: all four for `friction`, `mu` and `n0` for `tanh_friction`);
     /// - `model.damping.modal` — the modal damping ratio (the case must use modal damping);
     /// - `excitation.force_scale` — a factor on the excitation forces.
     ///
@@ -1828,7 +2009,7 @@ impl Case {
             ["element", idx, p] => idx
                 .parse::<usize>()
                 .ok()
-                .filter(|i| *i < self.element.len())
+                .filter(|i| *i < self.element.len() && self.element[*i].sweepable(p))
                 .zip(param(p))
                 .map(|(i, f)| SweepTarget::Element(i, f)),
             ["model", "damping", "modal"]
@@ -1862,10 +2043,11 @@ impl Case {
                     .map(|(p, _)| format!("contact.{}.{p}", c.name)),
             );
         }
-        for i in 0..self.element.len() {
+        for (i, e) in self.element.iter().enumerate() {
             out.extend(
                 FRICTION_PARAMS
                     .iter()
+                    .filter(|(p, _)| e.sweepable(p))
                     .map(|(p, _)| format!("element.{i}.{p}")),
             );
         }
@@ -1897,7 +2079,12 @@ impl Case {
             }
             SweepTarget::Element(i, f) => {
                 let e = &mut self.element[i];
-                set(f, &mut e.mu, &mut e.kt, &mut e.kn, &mut e.n0);
+                match f {
+                    FrictionParam::Mu => e.mu = Some(v),
+                    FrictionParam::Kt => e.kt = Some(v),
+                    FrictionParam::Kn => e.kn = v,
+                    FrictionParam::N0 => e.n0 = Some(v),
+                }
             }
             SweepTarget::DampingModal => self.model.damping = Some(Damping::Modal(v)),
             SweepTarget::ForceScale => {

@@ -104,6 +104,30 @@ pub trait HarmonicForce: Send + Sync {
         jacobian: Option<MatMut<'_, f64>>,
     ) -> Result<()>;
 
+    /// Whether F_nl reads velocities q̇ = ω ∂q/∂τ and so depends on the frequency ω (then it is
+    /// evaluated with [`HarmonicForce::evaluate_at`]). Default: false.
+    fn reads_velocity(&self) -> bool {
+        false
+    }
+
+    /// As [`HarmonicForce::evaluate`] at the fundamental frequency `omega` (rad/s), adding also
+    /// ∂F_nl/∂ω to `d_omega` when given. The default is for forces of displacements only: it
+    /// calls `evaluate` and adds nothing to `d_omega`.
+    #[allow(clippy::too_many_arguments)]
+    fn evaluate_at(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        omega: f64,
+        state: &mut Self::State,
+        force: &mut [f64],
+        jacobian: Option<MatMut<'_, f64>>,
+        d_omega: Option<&mut [f64]>,
+    ) -> Result<()> {
+        let _ = (omega, d_omega);
+        self.evaluate(layout, q, state, force, jacobian)
+    }
+
     /// Adds ∂F_nl/∂p to `out` (length `layout.len(n_dofs())`) for the force's own scalar
     /// parameter p (for the contact elements: the static normal load n0, see the implementor),
     /// at the periodic solution reached from `state` (which is not changed). The default reports

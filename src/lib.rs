@@ -40,6 +40,7 @@ pub mod march;
 pub mod matrix_io;
 pub mod mesh;
 pub mod model;
+pub mod nonlinear;
 pub mod output;
 pub mod pipeline;
 pub mod reduction;

@@ -1,4 +1,4 @@
-//! Every case file bundled in `cases/` and `cases/paper/` (the cases users start from, and the
+//! Every case file bundled in `cases/`, `cases/paper/` and `cases/nlvib/` (the cases users start from, and the
 //! ones the README's commands run) parses and validates, and every group it names exists in its
 //! mesh.
 
@@ -22,6 +22,10 @@ fn every_bundled_case_loads_and_its_groups_exist() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let mut files = case_files(&root.join("cases"));
     files.extend(case_files(&root.join("cases/paper")));
+    let nlvib = case_files(&root.join("cases/nlvib"));
+    // NLvib's example 07 chain (two variants), the SDOF Jenkins oscillator, the example 08 beam
+    assert!(nlvib.len() >= 4, "{nlvib:?}");
+    files.extend(nlvib);
     // 8 cases in cases/, 3 models × 2 modes + the finer-target variant in cases/paper/
     assert!(files.len() >= 15, "{files:?}");
     let mut with_mesh = 0;

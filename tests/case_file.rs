@@ -235,7 +235,10 @@ fn matrix_example_parses() {
     assert_eq!(e.tangential.dofs, [0, 1]);
     assert_eq!(e.tangential.weights, [-1.0, 1.0]);
     assert!(e.normal.is_none());
-    assert_eq!((e.kt, e.kn, e.mu, e.n0), (20.0, 0.0, 1.0, 1.0));
+    assert_eq!(
+        (e.kt, e.kn, e.mu, e.n0),
+        (Some(20.0), 0.0, Some(1.0), Some(1.0))
+    );
 
     // defaults: one harmonic, AFT samples = smallest power of two >= 4(H+1) = 8
     assert_eq!(case.harmonic_balance.harmonics, 1);
@@ -449,7 +452,7 @@ fn zipped_sweep_of_several_parameters() {
     let case = Case::from_str(&text, Path::new("c.toml")).unwrap();
     let points = case.sweep_points().unwrap();
     assert_eq!(points.len(), 2);
-    assert_eq!(points[1].element[0].mu, 0.2);
+    assert_eq!(points[1].element[0].mu, Some(0.2));
     assert_eq!(points[1].excitation.as_ref().unwrap().force_scale, 3.0);
     assert_eq!(
         points[1].sweep_point.as_ref().unwrap().values,

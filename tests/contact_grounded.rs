@@ -171,7 +171,7 @@ fn jacobian_and_preload_derivative_match_finite_differences() {
         let shifted = |d: f64| {
             let mut e = els.clone();
             for x in e.iter_mut() {
-                x.n0 += d;
+                x.n0 = x.n0.map(|n| n + d);
             }
             forces(&DofElements::from_case(&e, 3).unwrap(), &layout, &q, &state)
         };
@@ -193,10 +193,11 @@ fn bad_elements_are_reported() {
             weights: vec![-1.0, 1.0],
         },
         normal: None,
-        kt: 1.0,
+        kt: Some(1.0),
         kn: 0.0,
-        mu: 0.3,
-        n0: 1.0,
+        mu: Some(0.3),
+        n0: Some(1.0),
+        ..FrictionElement::default()
     };
     let err = |e: FrictionElement| {
         DofElements::from_case(&[base.clone(), e], 2)
@@ -223,12 +224,12 @@ fn bad_elements_are_reported() {
     });
     assert!(msg.contains("element[1].normal"), "{msg}");
     let msg = err(FrictionElement {
-        kt: -1.0,
+        kt: Some(-1.0),
         ..base.clone()
     });
     assert!(msg.contains("element[1]") && msg.contains("kt"), "{msg}");
     let msg = err(FrictionElement {
-        mu: f64::NAN,
+        mu: Some(f64::NAN),
         ..base.clone()
     });
     assert!(msg.contains("mu"), "{msg}");

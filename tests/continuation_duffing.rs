@@ -10,10 +10,8 @@ use hbm_support::{chain4, PolynomialSprings};
 use nlrom::continuation::{trace, ContinuationOptions, PathEnd, PathPoint};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::response::output_response;
-use nlrom::hbm::{
-    FrequencyPath, HbmSystem, LevelPath, LinearModel, Linearization, ParameterSystem,
-    ResponseOptions,
-};
+use nlrom::hbm::{FrequencyPath, HbmSystem, LevelPath, LinearModel, ResponseOptions};
+use nlrom::nonlinear::{Linearization, ParameterSystem};
 use nlrom::{Error, Result};
 
 const K: f64 = 1.0;

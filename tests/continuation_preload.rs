@@ -9,11 +9,8 @@ use hbm_support::{tangential_normal_element, two_oscillators};
 use nlrom::contact::grounded::DofElements;
 use nlrom::continuation::{trace, ContinuationOptions, PathEnd};
 use nlrom::harmonics::HarmonicLayout;
-use nlrom::hbm::newton::norm;
-use nlrom::hbm::{
-    solve_fixed, FrequencyPath, HbmSystem, LinearModel, Linearization, NewtonOptions,
-    ParameterSystem, PreloadPath,
-};
+use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel, PreloadPath};
+use nlrom::nonlinear::{norm, solve_fixed, Linearization, NewtonOptions, ParameterSystem};
 use nlrom::Result;
 
 const OMEGA: f64 = 1.0;

@@ -17,11 +17,9 @@ use hbm_support::{tangential_normal_element, two_oscillators};
 use nlrom::contact::grounded::DofElements;
 use nlrom::continuation::{trace, ContinuationOptions, Path, PathEnd};
 use nlrom::harmonics::HarmonicLayout;
-use nlrom::hbm::newton::{norm, solve_dense};
 use nlrom::hbm::response::output_response;
-use nlrom::hbm::{
-    FrequencyPath, HbmSystem, LinearModel, Linearization, ParameterSystem, ResponseOptions,
-};
+use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel, ResponseOptions};
+use nlrom::nonlinear::{norm, solve_dense, Linearization, ParameterSystem};
 use nlrom::Result;
 
 fn model(h: usize) -> LinearModel {

@@ -11,11 +11,8 @@ use hbm_support::{tangential_normal_element, two_oscillators};
 use nlrom::continuation::{trace, ContinuationOptions, PathEnd};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::frf::frequency_response;
-use nlrom::hbm::newton::norm;
-use nlrom::hbm::{
-    solve_fixed, FrequencyPath, HbmSystem, LinearModel, NewtonOptions, ParameterSystem,
-    ResponseOptions,
-};
+use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel, ResponseOptions};
+use nlrom::nonlinear::{norm, solve_fixed, NewtonOptions, ParameterSystem};
 
 fn model() -> LinearModel {
     two_oscillators(0.01, [0.1, 0.06], 5)

@@ -12,9 +12,8 @@ use nlrom::contact::law::ContactParams;
 use nlrom::continuation::{trace, ContinuationOptions, PathEnd};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::response::output_response;
-use nlrom::hbm::{
-    solve_fixed, FrequencyPath, HbmSystem, LinearModel, NewtonOptions, ResponseOptions,
-};
+use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel, ResponseOptions};
+use nlrom::nonlinear::{solve_fixed, NewtonOptions};
 
 fn sdof(c: f64, f: f64, h: usize) -> LinearModel {
     let one = Mat::from_fn(1, 1, |_, _| 1.0);

@@ -7,10 +7,8 @@ use faer::{c64, Mat};
 use hbm_support::{chain4, complex_solve, Embedded, PolynomialSprings};
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 use nlrom::hbm::response::output_response;
-use nlrom::hbm::{
-    solve_fixed, FrequencyPath, HbmSystem, LinearModel, Linearization, MatrixBlock, NewtonOptions,
-    ParameterSystem, ResponseOptions,
-};
+use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel, MatrixBlock, ResponseOptions};
+use nlrom::nonlinear::{solve_fixed, Linearization, NewtonOptions, ParameterSystem};
 
 fn c(re: f64) -> c64 {
     c64::new(re, 0.0)

@@ -1075,7 +1075,7 @@ fn periodic_start(
 /// (2×2 blocks of (Re, Im) rows and columns; c_{−p} = c_p, s_{−p} = −s_p). `signed` is scratch
 /// for the sums of orders q = −2H..=2H, (c_q, s_q) at index q + 2H, so that a block row reads
 /// contiguous runs of orders. A constant weight (s_p = c_p = 0 for p ≥ 1) adds c_0 I.
-fn add_multiplication_block(
+pub(crate) fn add_multiplication_block(
     h: usize,
     sums: &[f64],
     signed: &mut Vec<[f64; 2]>,

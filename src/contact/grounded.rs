@@ -8,18 +8,24 @@
 //! F_{d_i} += w_i f_t, F_{d'_i} += w'_i f_n (internal-force sign of [`HarmonicForce`]). A DOF
 //! combination with a single DOF is an element to the ground; two DOFs with weights −1, 1 join
 //! them.
+//!
+//! The other `[[element]]` kinds (springs, dampers, tanh friction: [`super::memoryless`]) read
+//! one combination x = Σ_i w_i q_{d_i} and act back along it the same way, F_{d_i} += w_i f; they
+//! carry no state. Elements that read velocities make the force depend on ω
+//! ([`HarmonicForce::evaluate_at`]).
 
 use std::sync::Arc;
 
 use faer::MatMut;
 
-use crate::case::{FrictionElement, WeightedDofs};
+use crate::case::{ElementKind, FrictionElement, WeightedDofs};
 use crate::contact::aft::{check_finite, global_index, Aft, AftCache};
 use crate::contact::assembly::{assemble, Outputs, Slot, SlotStorage, Wanted};
 use crate::contact::element::{
     evaluate as evaluate_element, ElementReport, HysteresisLoop, LocalElement, Workspace,
 };
 use crate::contact::law::{ContactParams, Variant};
+use crate::contact::memoryless::{self, Law, LocalOutputs};
 use crate::error::{Error, Result};
 use crate::harmonics::{HarmonicForce, HarmonicLayout};
 
@@ -50,11 +56,21 @@ impl DofElement {
     }
 }
 
+/// A stateless element ([`super::memoryless`]) on one DOF combination.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MemorylessElement {
+    /// x = Σ weights·q\[dofs\].
+    pub coordinate: WeightedDofs,
+    /// f(x, ẋ).
+    pub law: Law,
+}
+
 /// The `[[element]]` list of a case as one nonlinear force on the `n_dofs` matrix rows.
-/// State: the slider position w (m) of every element.
+/// State: the slider position w (m) of every friction element.
 pub struct DofElements {
     n_dofs: usize,
     elements: Vec<DofElement>,
+    memoryless: Vec<MemorylessElement>,
     aft: AftCache,
     slots: SlotStorage,
 }
@@ -64,25 +80,103 @@ impl std::fmt::Debug for DofElements {
         f.debug_struct("DofElements")
             .field("n_dofs", &self.n_dofs)
             .field("elements", &self.elements)
+            .field("memoryless", &self.memoryless)
             .finish()
     }
 }
 
 impl DofElements {
-    /// Builds the elements of a case's `[[element]]` entries for a system of `n_dofs` rows.
+    /// Builds the elements of a case's `[[element]]` entries for a system of `n_dofs` rows
+    /// (friction elements in [`DofElements::elements`], the other kinds in
+    /// [`DofElements::memoryless`], each list in file order).
     pub fn from_case(elements: &[FrictionElement], n_dofs: usize) -> Result<Self> {
-        let list = elements
-            .iter()
-            .enumerate()
-            .map(|(i, e)| {
-                Ok(DofElement {
-                    tangential: e.tangential.clone(),
-                    normal: e.normal.clone(),
-                    params: ContactParams::new(e.kt, e.kn, e.mu, e.n0, &format!("element[{i}]"))?,
+        let mut friction = Vec::new();
+        let mut others = Vec::new();
+        for (i, e) in elements.iter().enumerate() {
+            let key = format!("element[{i}]");
+            let value = |name: &str, v: Option<f64>| {
+                v.ok_or_else(|| {
+                    Error::input(format!(
+                        "{key}: kind = \"{}\" needs `{name}`",
+                        e.kind.name()
+                    ))
                 })
-            })
-            .collect::<Result<Vec<_>>>()?;
-        Self::new(list, n_dofs)
+            };
+            let law = match e.kind {
+                ElementKind::Friction => {
+                    check_combination(&format!("{key}.tangential"), &e.tangential, n_dofs)?;
+                    if let Some(n) = &e.normal {
+                        check_combination(&format!("{key}.normal"), n, n_dofs)?;
+                    }
+                    friction.push(DofElement {
+                        tangential: e.tangential.clone(),
+                        normal: e.normal.clone(),
+                        params: ContactParams::new(
+                            value("kt", e.kt)?,
+                            e.kn,
+                            value("mu", e.mu)?,
+                            value("n0", e.n0)?,
+                            &key,
+                        )?,
+                    });
+                    continue;
+                }
+                ElementKind::CubicSpring => Law::Cubic {
+                    k3: value("k3", e.k3)?,
+                },
+                ElementKind::PolynomialSpring => {
+                    let c = e.coefficients.as_deref().unwrap_or_default();
+                    let p = e.exponents.as_deref().unwrap_or_default();
+                    if c.is_empty() || c.len() != p.len() || p.contains(&0) {
+                        return Err(Error::input(format!(
+                            "{key}: `coefficients` ({} entries) and `exponents` ({} entries, each ≥ 1) must be non-empty lists of equal length",
+                            c.len(),
+                            p.len()
+                        )));
+                    }
+                    Law::Polynomial {
+                        terms: c.iter().copied().zip(p.iter().copied()).collect(),
+                    }
+                }
+                ElementKind::UnilateralSpring => Law::Unilateral {
+                    k: value("k", e.k)?,
+                    gap: e.gap.unwrap_or(0.0),
+                },
+                ElementKind::QuadraticDamper => Law::QuadraticDamper {
+                    c: value("c", e.c)?,
+                },
+                ElementKind::TanhFriction => Law::TanhFriction {
+                    limit: value("mu", e.mu)? * value("n0", e.n0)?,
+                    eps: value("eps", e.eps)?,
+                },
+            };
+            law.validate(&key)?;
+            check_combination(&format!("{key}.displacement"), &e.tangential, n_dofs)?;
+            others.push(MemorylessElement {
+                coordinate: e.tangential.clone(),
+                law,
+            });
+        }
+        let mut out = Self::new(friction, n_dofs)?;
+        out.memoryless = others;
+        Ok(out)
+    }
+
+    /// Adds stateless elements (springs, dampers, tanh friction) to the force, after checking
+    /// their DOF combinations and parameters (`memoryless[i]` in messages, from 0).
+    pub fn with_memoryless(mut self, elements: Vec<MemorylessElement>) -> Result<Self> {
+        for (i, e) in elements.iter().enumerate() {
+            let key = format!("memoryless[{i}]");
+            e.law.validate(&key)?;
+            check_combination(&key, &e.coordinate, self.n_dofs)?;
+        }
+        self.memoryless.extend(elements);
+        Ok(self)
+    }
+
+    /// The stateless elements.
+    pub fn memoryless(&self) -> &[MemorylessElement] {
+        &self.memoryless
     }
 
     /// Checks every element (non-empty DOF lists of the weights' length, rows < `n_dofs`, finite
@@ -102,6 +196,7 @@ impl DofElements {
         Ok(DofElements {
             n_dofs,
             elements,
+            memoryless: Vec::new(),
             aft: AftCache::default(),
             slots: SlotStorage::default(),
         })
@@ -294,6 +389,78 @@ impl DofElements {
     }
 }
 
+impl DofElements {
+    /// Adds the forces of the stateless elements at ω (rad/s), their Jacobian (J_node =
+    /// w_i w_i' J_local on the DOFs of the combination) and ∂F/∂ω.
+    fn add_memoryless(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        omega: f64,
+        force: &mut [f64],
+        mut jacobian: Option<MatMut<'_, f64>>,
+        mut d_omega: Option<&mut [f64]>,
+    ) -> Result<()> {
+        if self.memoryless.is_empty() {
+            return Ok(());
+        }
+        if q.len() != layout.len(self.n_dofs) || force.len() != q.len() {
+            return Err(Error::Compute(format!(
+                "nonlinear elements: harmonic vectors of length {} and {} for {} DOFs × {} coefficients",
+                q.len(),
+                force.len(),
+                self.n_dofs,
+                layout.coefficients()
+            )));
+        }
+        check_finite(q, "nonlinear elements")?;
+        let aft = self.aft.get(layout)?;
+        let m = layout.coefficients();
+        let mut b = memoryless::Buffers::new(&aft);
+        let (mut x, mut f, mut d) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+        let mut jac = vec![0.0; m * m];
+        for e in &self.memoryless {
+            let c = &e.coordinate;
+            let index = |d: usize, l: usize| global_index(layout, l, d, self.n_dofs);
+            x.fill(0.0);
+            for (&dof, &w) in c.dofs.iter().zip(&c.weights) {
+                for (l, xl) in x.iter_mut().enumerate() {
+                    *xl += w * q[index(dof, l)];
+                }
+            }
+            let velocity = e.law.reads_velocity();
+            let out = LocalOutputs {
+                force: Some(&mut f),
+                jacobian: jacobian.is_some().then_some(&mut jac[..]),
+                d_omega: (velocity && d_omega.is_some()).then_some(&mut d[..]),
+            };
+            memoryless::evaluate(&e.law, &aft, &x, omega, out, &mut b)?;
+            for (&dof, &w) in c.dofs.iter().zip(&c.weights) {
+                for l in 0..m {
+                    force[index(dof, l)] += w * f[l];
+                    if velocity {
+                        if let Some(dw) = d_omega.as_deref_mut() {
+                            dw[index(dof, l)] += w * d[l];
+                        }
+                    }
+                }
+            }
+            if let Some(j) = jacobian.as_mut() {
+                for (&dr, &wr) in c.dofs.iter().zip(&c.weights) {
+                    for (&dc, &wc) in c.dofs.iter().zip(&c.weights) {
+                        for k in 0..m {
+                            for l in 0..m {
+                                j[(index(dr, k), index(dc, l))] += wr * wc * jac[k * m + l];
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Buffers of one thread.
 struct ElementBuffers {
     ws: Workspace,
@@ -334,6 +501,7 @@ impl HarmonicForce for DofElements {
         vec![0.0; self.elements.len()]
     }
 
+    /// Errors when an element reads velocities (those need ω: [`HarmonicForce::evaluate_at`]).
     fn evaluate(
         &self,
         layout: &HarmonicLayout,
@@ -342,12 +510,35 @@ impl HarmonicForce for DofElements {
         force: &mut [f64],
         jacobian: Option<MatMut<'_, f64>>,
     ) -> Result<()> {
+        if self.reads_velocity() {
+            return Err(Error::Compute(
+                "the [[element]] list holds a quadratic_damper or tanh_friction element, whose force depends on the frequency; it is evaluated by the frequency response only (Hill stability and the time-domain tools take displacement elements)".into(),
+            ));
+        }
+        self.evaluate_at(layout, q, 0.0, state, force, jacobian, None)
+    }
+
+    fn reads_velocity(&self) -> bool {
+        self.memoryless.iter().any(|e| e.law.reads_velocity())
+    }
+
+    fn evaluate_at(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        omega: f64,
+        state: &mut Vec<f64>,
+        force: &mut [f64],
+        mut jacobian: Option<MatMut<'_, f64>>,
+        d_omega: Option<&mut [f64]>,
+    ) -> Result<()> {
         let outputs = Outputs {
-            force: Some(force),
+            force: Some(&mut *force),
             dn0: None,
-            jacobian,
+            jacobian: jacobian.as_mut().map(|j| j.as_mut()),
         };
-        self.run(layout, q, state, outputs)
+        self.run(layout, q, state, outputs)?;
+        self.add_memoryless(layout, q, omega, force, jacobian, d_omega)
     }
 
     /// ∂F/∂n0 with the static normal load n0 of every element moving together (∂n0_e/∂p = 1).

@@ -12,6 +12,9 @@
 //!   [`HarmonicForce`](crate::harmonics::HarmonicForce) (parallel over pairs).
 //! * [`grounded`]: [`grounded::DofElements`], the `[[element]]` friction elements on DOF
 //!   combinations of a matrix model as a `HarmonicForce`.
+//! * [`memoryless`]: springs, dampers and regularised friction whose force is a function of one
+//!   coordinate's value and rate (cubic, polynomial, unilateral with gap, quadratic damper, tanh
+//!   friction), used by [`grounded::DofElements`] next to the friction elements.
 //! * `assembly`: the parallel evaluate-and-sum loop shared by the two.
 //! * [`mapped`]: [`mapped::DofMap`], elements reading linear combinations of the solved DOFs
 //!   (SAMA's interpolated virtual target nodes).
@@ -23,4 +26,5 @@ pub mod grounded;
 pub mod kinematics;
 pub mod law;
 pub mod mapped;
+pub mod memoryless;
 pub mod pairs;

@@ -2,14 +2,14 @@
 //! response recovered at every point, and the continuation settings of a case's
 //! `[continuation]` table.
 
-use super::newton::{solve_fixed, NewtonOptions, NewtonSolution};
 use super::response::{output_response, OutputResponse, ResponseOptions};
 use super::stability::is_stable;
-use super::system::{FrequencyPath, HbmSystem, LevelPath, ParameterSystem};
+use super::system::{FrequencyPath, HbmSystem, LevelPath};
 use crate::case::Case;
 use crate::continuation::{trace, trace_from, ContinuationOptions, PathEnd, PathPoint};
 use crate::error::{Error, Result};
 use crate::harmonics::HarmonicForce;
+use crate::nonlinear::{solve_fixed, NewtonOptions, NewtonSolution, ParameterSystem};
 
 /// One point of a frequency response.
 #[derive(Clone, Debug)]

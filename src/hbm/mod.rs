@@ -8,10 +8,9 @@
 //! - [`linear`]: [`LinearModel`] — per harmonic n the dynamic stiffness D⁽ⁿ⁾(ω) of its harmonic
 //!   index, condensed per frequency (eqs. 15–18), with its ω-derivative;
 //! - [`system`]: [`HbmSystem`] — r(Q, ω) = D̄(ω) Q − F̄_e(ω) + F_nl(Q) (eq. 19) and ∂r/∂Q (eq. 21),
-//!   and the [`ParameterSystem`] views [`FrequencyPath`] (λ = ω), [`LevelPath`]
+//!   and the [`ParameterSystem`](crate::nonlinear::ParameterSystem) views [`FrequencyPath`] (λ = ω), [`LevelPath`]
 //!   (λ = excitation level at fixed ω) and [`PreloadPath`] (λ = the force's parameter, e.g. the
 //!   preload n0, at fixed ω);
-//! - [`newton`]: Newton with step damping, convergence on residual and increment;
 //! - [`response`]: harmonics, amplitude and peak of the output DOFs at a solution;
 //! - [`frf`]: a frequency response (continuation + recovery) and a case's continuation settings;
 //! - [`stability`]: Hill's method on the uncondensed model — Floquet exponents and a `stable`
@@ -20,11 +19,11 @@
 //!   static equilibrium (the balancing static load of the uncoupled approach, SAMA paper §6.1);
 //! - [`setup`]: the linear part of a matrix-defined case (dense K, M, C, excitation, rows).
 //!
-//! Path following is in [`crate::continuation`].
+//! The generic [`ParameterSystem`](crate::nonlinear::ParameterSystem) and Newton are in
+//! [`crate::nonlinear`], path following in [`crate::continuation`].
 
 pub mod frf;
 pub mod linear;
-pub mod newton;
 pub mod preload;
 pub mod response;
 pub mod setup;
@@ -32,8 +31,5 @@ pub mod stability;
 pub mod system;
 
 pub use linear::{Condensed, LinearModel, MatrixBlock, Uncondensed};
-pub use newton::{solve_fixed, NewtonFailure, NewtonOptions, NewtonSolution};
 pub use response::{OutputResponse, ResponseOptions};
-pub use system::{
-    FrequencyPath, HbmSystem, LevelPath, Linearization, ParameterSystem, PreloadPath,
-};
+pub use system::{FrequencyPath, HbmSystem, LevelPath, PreloadPath};

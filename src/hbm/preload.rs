@@ -43,7 +43,8 @@ impl<F: HarmonicForce> FromStaticEquilibrium<F> {
         let zero = vec![0.0; len];
         let mut state = inner.initial_state();
         let mut at_rest = vec![0.0; len];
-        inner.evaluate(layout, &zero, &mut state, &mut at_rest, None)?;
+        // At rest every velocity is zero, whatever ω.
+        inner.evaluate_at(layout, &zero, 0.0, &mut state, &mut at_rest, None, None)?;
         let mut rate = vec![0.0; len];
         let at_rest_rate = inner
             .parameter_derivative(layout, &zero, &inner.initial_state(), &mut rate)
@@ -82,6 +83,28 @@ impl<F: HarmonicForce> HarmonicForce for FromStaticEquilibrium<F> {
         jacobian: Option<MatMut<'_, f64>>,
     ) -> Result<()> {
         self.inner.evaluate(layout, q, state, force, jacobian)?;
+        for (f, r) in force.iter_mut().zip(&self.at_rest) {
+            *f -= r;
+        }
+        Ok(())
+    }
+
+    fn reads_velocity(&self) -> bool {
+        self.inner.reads_velocity()
+    }
+
+    fn evaluate_at(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        omega: f64,
+        state: &mut Self::State,
+        force: &mut [f64],
+        jacobian: Option<MatMut<'_, f64>>,
+        d_omega: Option<&mut [f64]>,
+    ) -> Result<()> {
+        self.inner
+            .evaluate_at(layout, q, omega, state, force, jacobian, d_omega)?;
         for (f, r) in force.iter_mut().zip(&self.at_rest) {
             *f -= r;
         }

@@ -3,62 +3,13 @@
 //! sign convention of [`HarmonicForce`]) and its derivative with respect to the continuation
 //! parameter (ω, the excitation level λ, or the force's own parameter such as the preload n0).
 
-use faer::{c64, Mat};
+use faer::c64;
 use rayon::prelude::*;
 
 use super::linear::{Condensed, LinearModel};
 use crate::error::{Error, Result};
 use crate::harmonics::{HarmonicForce, HarmonicLayout};
-
-/// The residual of a parameter-dependent system at one point, its Jacobian and its parameter
-/// derivative.
-#[derive(Clone, Debug)]
-pub struct Linearization {
-    /// r(x, λ), length `dim`.
-    pub residual: Vec<f64>,
-    /// ∂r/∂x, `dim` × `dim`.
-    pub jacobian: Mat<f64>,
-    /// ∂r/∂λ, length `dim`.
-    pub d_parameter: Vec<f64>,
-}
-
-impl Linearization {
-    /// Zeroed storage for a system of `dim` unknowns.
-    pub fn zeros(dim: usize) -> Linearization {
-        Linearization {
-            residual: vec![0.0; dim],
-            jacobian: Mat::zeros(dim, dim),
-            d_parameter: vec![0.0; dim],
-        }
-    }
-}
-
-/// A nonlinear system r(x, λ) = 0 in `dim` real unknowns x and one parameter λ, with memory
-/// (`State`) carried from one converged point to the next. This is what Newton
-/// ([`super::newton`]) and the continuation ([`crate::continuation`]) solve.
-pub trait ParameterSystem: Sync {
-    /// Memory of the nonlinear force (e.g. slider positions at the start of the period).
-    type State: Clone + Send + Sync + std::fmt::Debug;
-
-    /// Number of unknowns.
-    fn dim(&self) -> usize;
-
-    /// The force level the residual norm is compared with (N): Newton converges when
-    /// ‖r‖₂ ≤ tolerance · `residual_scale()`.
-    fn residual_scale(&self) -> f64;
-
-    /// The state before the first point.
-    fn initial_state(&self) -> Self::State;
-
-    /// Fills `out` at (x, λ) starting from the memory `state`; returns the end-of-period memory.
-    fn evaluate(
-        &self,
-        x: &[f64],
-        lambda: f64,
-        state: &Self::State,
-        out: &mut Linearization,
-    ) -> Result<Self::State>;
-}
+use crate::nonlinear::{Linearization, ParameterSystem};
 
 /// The harmonic balance of a linear model and a nonlinear force on its condensed DOFs.
 pub struct HbmSystem<'a, F: HarmonicForce> {
@@ -120,7 +71,8 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
     }
 
     /// Evaluates at (Q, ω) with excitation factor `level`: `out.residual` = r,
-    /// `out.jacobian` = ∂r/∂Q, `out.d_parameter` = ∂r/∂ω; and `level_derivative` (if given) =
+    /// `out.jacobian` = ∂r/∂Q, `out.d_parameter` = ∂r/∂ω (with ∂F_nl/∂ω of a force that reads
+    /// velocities, [`HarmonicForce::evaluate_at`]); and `level_derivative` (if given) =
     /// ∂r/∂level = −F̄_e. Returns the end-of-period force state.
     pub fn evaluate(
         &self,
@@ -136,12 +88,14 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         out.d_parameter.iter_mut().for_each(|v| *v = 0.0);
         out.jacobian.fill(0.0);
         let mut end_state = state.clone();
-        self.force.evaluate(
+        self.force.evaluate_at(
             &self.layout,
             q,
+            omega,
             &mut end_state,
             &mut out.residual,
             Some(out.jacobian.as_mut()),
+            Some(&mut out.d_parameter),
         )?;
         let mut level_derivative = level_derivative;
         if let Some(d) = level_derivative.as_deref_mut() {

@@ -14,7 +14,7 @@ use super::law::FrictionParams;
 use super::sector::sector_march;
 use super::signal::Harmonic;
 use super::system::{InitialCondition, MarchSystem};
-use crate::case::{Case, Damping, ExcitationLoad, MarchScheme, WeightedDofs};
+use crate::case::{Case, Damping, ElementKind, ExcitationLoad, MarchScheme, WeightedDofs};
 use crate::error::{Error, Result};
 use crate::hbm::setup::modal_damping;
 use crate::matrix_io::read_real_matrix;
@@ -175,6 +175,13 @@ fn matrix_system(case: &Case, sm: &StructuralModel) -> Result<(MarchSystem, Vec<
     let mut elements = Vec::new();
     for (i, e) in case.element.iter().enumerate() {
         let name = format!("element[{i}]");
+        if e.kind != ElementKind::Friction {
+            return Err(Error::input(format!(
+                "{file}: {name}: kind = \"{}\" is computed by the harmonic balance (`nlrom solve`); time marching takes `friction` elements only",
+                e.kind.name()
+            )));
+        }
+        let value = |v: Option<f64>| v.unwrap_or(0.0);
         elements.push(Element {
             tangential: direction(&e.tangential, &format!("{name}.tangential"))?,
             normal: e
@@ -182,7 +189,13 @@ fn matrix_system(case: &Case, sm: &StructuralModel) -> Result<(MarchSystem, Vec<
                 .as_ref()
                 .map(|w| direction(w, &format!("{name}.normal")))
                 .transpose()?,
-            params: FrictionParams::new(e.kt, e.kn, e.mu, e.n0, &format!("{file}: {name}"))?,
+            params: FrictionParams::new(
+                value(e.kt),
+                e.kn,
+                value(e.mu),
+                value(e.n0),
+                &format!("{file}: {name}"),
+            )?,
             name,
             applies_normal: true,
         });

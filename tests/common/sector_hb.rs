@@ -2,7 +2,8 @@
 
 use faer::c64;
 use nlrom::harmonics::HarmonicForce;
-use nlrom::hbm::{solve_fixed, FrequencyPath, HbmSystem, NewtonOptions};
+use nlrom::hbm::{FrequencyPath, HbmSystem};
+use nlrom::nonlinear::{solve_fixed, NewtonOptions};
 use nlrom::solve::SectorProblem;
 
 /// Harmonic 1 of the output DOFs (m) of the HB solution at ω (rad/s), by Newton from zero

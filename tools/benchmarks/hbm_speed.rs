@@ -22,7 +22,7 @@
 //! condensation of the linear part at ω; AFT = contact forces alone (inverse DFT, contact law
 //! march, DFT); contact Jacobian = forces with the analytic Jacobian minus forces alone;
 //! linear assembly = the whole residual + Jacobian evaluation minus the contact part; dense LU
-//! = faer's partial-pivoting LU and solve of the Jacobian (`hbm::newton::solve_dense`).
+//! = faer's partial-pivoting LU and solve of the Jacobian (`nonlinear::solve_dense`).
 
 use std::f64::consts::PI;
 use std::path::Path;
@@ -35,8 +35,8 @@ use nlrom::contact::pairs::{ContactPair, PairSet};
 use nlrom::continuation::trace;
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 use nlrom::hbm::frf::case_continuation;
-use nlrom::hbm::newton::solve_dense;
-use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel, Linearization, ParameterSystem};
+use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel};
+use nlrom::nonlinear::{solve_dense, Linearization, ParameterSystem};
 use nlrom::reduction::reduce;
 use nlrom::sama::build_interfaces;
 use nlrom::solve::SectorProblem;

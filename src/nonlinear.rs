@@ -1,16 +1,68 @@
-//! Newton–Raphson with the analytic Jacobian (SAMA paper eqs. 20–21), dense LU (faer, partial
-//! pivoting), backtracking step damping, and convergence on both the scaled residual and the
-//! increment.
+//! Nonlinear systems r(x, λ) = 0 and their Newton solution, independent of harmonic balance:
+//! [`ParameterSystem`] (the residual, its Jacobian ∂r/∂x and parameter derivative ∂r/∂λ at a point,
+//! with memory carried from one converged point to the next), Newton–Raphson with the analytic
+//! Jacobian (Battiato 2021, eqs. 20–21), dense LU (faer, partial pivoting), backtracking step
+//! damping, and convergence on both the scaled residual and the increment.
 //!
 //! [`newton_core`] iterates on any square system g(z) = 0 given g and ∂g/∂z; [`solve_fixed`]
-//! applies it to a [`ParameterSystem`] at a fixed parameter. The continuation corrector uses the
-//! same core on the bordered system.
+//! applies it to a [`ParameterSystem`] at a fixed parameter. The continuation corrector
+//! ([`crate::continuation`]) uses the same core on the bordered system; the harmonic balance
+//! ([`crate::hbm`]) implements [`ParameterSystem`].
 
 use faer::linalg::solvers::Solve;
 use faer::{Col, Mat};
 
-use super::system::{Linearization, ParameterSystem};
 use crate::error::Result;
+
+/// The residual of a parameter-dependent system at one point, its Jacobian and its parameter
+/// derivative.
+#[derive(Clone, Debug)]
+pub struct Linearization {
+    /// r(x, λ), length `dim`.
+    pub residual: Vec<f64>,
+    /// ∂r/∂x, `dim` × `dim`.
+    pub jacobian: Mat<f64>,
+    /// ∂r/∂λ, length `dim`.
+    pub d_parameter: Vec<f64>,
+}
+
+impl Linearization {
+    /// Zeroed storage for a system of `dim` unknowns.
+    pub fn zeros(dim: usize) -> Linearization {
+        Linearization {
+            residual: vec![0.0; dim],
+            jacobian: Mat::zeros(dim, dim),
+            d_parameter: vec![0.0; dim],
+        }
+    }
+}
+
+/// A nonlinear system r(x, λ) = 0 in `dim` real unknowns x and one parameter λ, with memory
+/// (`State`) carried from one converged point to the next. This is what Newton
+/// ([`solve_fixed`]) and the continuation ([`crate::continuation`]) solve.
+pub trait ParameterSystem: Sync {
+    /// Memory of the nonlinear force (e.g. slider positions at the start of the period).
+    type State: Clone + Send + Sync + std::fmt::Debug;
+
+    /// Number of unknowns.
+    fn dim(&self) -> usize;
+
+    /// The force level the residual norm is compared with (N): Newton converges when
+    /// ‖r‖₂ ≤ tolerance · `residual_scale()`.
+    fn residual_scale(&self) -> f64;
+
+    /// The state before the first point.
+    fn initial_state(&self) -> Self::State;
+
+    /// Fills `out` at (x, λ) starting from the memory `state`; returns the end-of-period memory.
+    fn evaluate(
+        &self,
+        x: &[f64],
+        lambda: f64,
+        state: &Self::State,
+        out: &mut Linearization,
+    ) -> Result<Self::State>;
+}
 
 /// Newton settings.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -29,10 +29,10 @@
 use faer::Mat;
 
 use crate::error::{Error, Result};
-use crate::hbm::newton::{
-    newton_core, norm, solve_dense, solve_fixed, Iterate, NewtonOptions, NewtonSolution,
+use crate::nonlinear::{
+    newton_core, norm, solve_dense, solve_fixed, Iterate, Linearization, NewtonOptions,
+    NewtonSolution, ParameterSystem,
 };
-use crate::hbm::system::{Linearization, ParameterSystem};
 
 /// Continuation settings (parameter values in the parameter's unit, e.g. rad/s).
 #[derive(Clone, Debug, PartialEq)]
