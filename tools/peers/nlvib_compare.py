@@ -244,7 +244,7 @@ def run_pyharm(p, workdir):
         end=p["end"], step=p["step"], dof=p["dof"])))
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     proc = subprocess.run([sys.executable, str(Path(__file__).with_name("pyharm_run.py")),
-                           str(spec), str(out)], capture_output=True, text=True)
+                           str(spec), str(out)], capture_output=True, text=True, cwd=workdir)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if not out.exists():
         return dict(error=(proc.stderr or proc.stdout)[-800:])
