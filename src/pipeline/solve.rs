@@ -327,15 +327,28 @@ fn sector_curve(
     Ok((curve, interfaces))
 }
 
-/// "contact 'NAME': σ = S, P of C contact nodes projected".
+/// "contact 'NAME': σ = S, P of C contact nodes projected", followed by "(E on the target's
+/// edge, outside by at most D m)" when nodes were paired on the target's border.
 pub fn projection_line(iface: &ContactInterface) -> String {
-    format!(
+    let mut line = format!(
         "contact '{}': σ = {}, {} of {} contact nodes projected",
         iface.name,
         iface.sigma,
         iface.pairs.len(),
         iface.contact_nodes
-    )
+    );
+    let offsets: Vec<f64> = iface
+        .edge_pairs()
+        .filter_map(|p| p.edge.map(|e| e.tangential_offset))
+        .collect();
+    if !offsets.is_empty() {
+        line += &format!(
+            " ({} on the target's edge, outside by at most {:.3e} m)",
+            offsets.len(),
+            offsets.iter().copied().fold(0.0, f64::max)
+        );
+    }
+    line
 }
 
 /// The warning for contact nodes that did not project onto the target, if any (`hint` says

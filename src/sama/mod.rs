@@ -14,10 +14,18 @@
 //! 2. **projects every contact node** onto it ([`project`]): the virtual node t_v, the target face
 //!    containing it with its n_T nodes (mid-side nodes included), the local frame (rows t1, t2, n;
 //!    n = the target face's outward normal, towards the contact body) and the signed gap. A node
-//!    whose nearest surface point is not an orthogonal projection inside a face (tangential offset
-//!    above the coincidence tolerance) or is farther than [`MAX_DISTANCE`] × the target's mean
-//!    edge is **unprojected**: listed in [`ContactInterface::unprojected`], never dropped silently;
-//! 3. **weights** (SAMA): w_j by inverse distance in the contact plane (eqs 28–29, [`weights`]);
+//!    whose nearest surface point is not an orthogonal projection (tangential offset above the
+//!    coincidence tolerance) lies outside the target's border — at a curved edge the chorded
+//!    target face cuts inside the arc that the other mesh's boundary nodes sit on, by up to the
+//!    chord's sagitta κh²/8. Such a node is **paired at that nearest border point** when its
+//!    tangential offset is at most the edge tolerance of the border there
+//!    ([`surface::edge_tolerance`]: a fraction of the edge length plus twice the sagitta of the
+//!    boundary's curvature; unbounded on an edge shared by two faces, where the node is above a
+//!    crease of the target), and its offset is reported ([`ContactPair::edge`]). A node farther
+//!    outside — no target under it — or farther than [`MAX_DISTANCE`] × the target's mean edge
+//!    is **unprojected**: listed in [`ContactInterface::unprojected`], never dropped silently;
+//! 3. **weights** (SAMA), for every paired node (on the border as inside a face): w_j by inverse
+//!    distance in the contact plane (eqs 28–29, [`weights`]);
 //!    zero weights of eq 29's coincident case are left out of the pair. With `coupling =
 //!    "interpolated"` the w_j are instead the target face's shape functions N_j at t_v (§4,
 //!    Fig. 8; a coincident node still gets weight 1 alone), which may be negative (corner nodes
@@ -25,7 +33,7 @@
 //! 4. **parameters** per pair c–t_j (eq 31): k_tj = w_j k_t, k_nj = w_j k_n, n0_j = w_j n0_c,
 //!    where k_t, k_n are per contact node (`docs/case-file.md`) and n0_c is the contact node's share of
 //!    the interface's total preload n0, in proportion to its tributary area on the contact faces
-//!    (HRZ lumping, [`weights::tributary_areas`]) among the *projected* contact nodes, so that
+//!    (HRZ lumping, [`weights::tributary_areas`]) among the *paired* contact nodes, so that
 //!    Σ_c n0_c = n0. Then eq 32 holds per contact node: Σ_j k_tj = k_t, Σ_j k_nj = k_n,
 //!    Σ_j n0_j = n0_c;
 //! 5. for `model = "node-to-node"`: pairs every contact node with the target node at the same
@@ -111,9 +119,23 @@ pub struct ContactPair {
     pub n0: Vec<f64>,
     /// The contact node's share n0_c of the interface preload (N).
     pub n0_node: f64,
+    /// Set when c projects outside the target surface, by less than the edge tolerance: t_v is
+    /// then the nearest point of the target's border, not an orthogonal projection.
+    pub edge: Option<EdgeOffset>,
     /// n0_c / n0: the node's fraction of the interface preload (its tributary area over the
     /// projected contact nodes' total area).
     pub preload_share: f64,
+}
+
+/// How far outside the target surface a contact node paired on the target's border lies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EdgeOffset {
+    /// Length (m) of the tangential part of x_c − t_v (the node's distance outside the border,
+    /// measured in the target's tangent plane at t_v).
+    pub tangential_offset: f64,
+    /// The edge tolerance (m) it was accepted under ([`TargetSurface::border_tolerance`] × the
+    /// edge factor); +∞ on an edge shared by two faces.
+    pub tolerance: f64,
 }
 
 /// A contact node that could not be projected onto the target surface.
@@ -163,6 +185,14 @@ pub struct ContactInterface {
     pub max_distance: f64,
 }
 
+impl ContactInterface {
+    /// The pairs whose contact node lies outside the target surface and was paired at the nearest
+    /// point of its border ([`ContactPair::edge`]).
+    pub fn edge_pairs(&self) -> impl Iterator<Item = &ContactPair> {
+        self.pairs.iter().filter(|p| p.edge.is_some())
+    }
+}
+
 /// The pairs of every `[[contact]]` of `case` on `mesh`. `cyclic`: the sector geometry for
 /// inter-sector contact (σ = ±1 candidates); `None` allows σ = 0 only.
 ///
@@ -189,11 +219,36 @@ struct ContactSide {
     areas: Vec<f64>,
 }
 
+/// [`build_interfaces`] with the edge tolerances scaled by `edge_factor` (1 in
+/// [`build_interfaces`]; 0 pairs only the nodes that project orthogonally inside a face).
+pub fn build_interfaces_with(
+    case: &Case,
+    mesh: &Mesh,
+    cyclic: Option<&CyclicGeometry>,
+    edge_factor: f64,
+) -> Result<Vec<ContactInterface>> {
+    case.contact
+        .iter()
+        .map(|c| build_interface_with(c, mesh, cyclic, edge_factor))
+        .collect()
+}
+
 /// The pairs of one `[[contact]]` (see the module documentation for the steps).
 pub fn build_interface(
     c: &Contact,
     mesh: &Mesh,
     cyclic: Option<&CyclicGeometry>,
+) -> Result<ContactInterface> {
+    build_interface_with(c, mesh, cyclic, 1.0)
+}
+
+/// [`build_interface`] with the edge tolerances ([`TargetSurface::border_tolerance`]) scaled by
+/// `edge_factor` ≥ 0.
+pub fn build_interface_with(
+    c: &Contact,
+    mesh: &Mesh,
+    cyclic: Option<&CyclicGeometry>,
+    edge_factor: f64,
 ) -> Result<ContactInterface> {
     let label = format!("[[contact]] '{}'", c.name);
     let side = contact_side(c, mesh, &label)?;
@@ -221,7 +276,12 @@ pub fn build_interface(
             .collect();
         let surface = TargetSurface::new(points, faces.clone(), &target_label(&label, c))?;
         let max_distance = MAX_DISTANCE * surface.mean_edge;
-        let projections = project_nodes(&surface, mesh, &side.nodes, max_distance, coincident);
+        let limits = Limits {
+            max_distance,
+            coincident,
+            edge_factor,
+        };
+        let projections = project_nodes(&surface, mesh, &side.nodes, &limits);
         trials.push(Trial {
             sigma,
             surface,
@@ -328,10 +388,23 @@ fn target_faces(c: &Contact, mesh: &Mesh, label: &str) -> Result<(Vec<u32>, Vec<
 enum NodeProjection {
     /// An orthogonal projection inside a face, within the distance limit.
     Inside(Projection),
+    /// The nearest point of the surface is on a face's border and the node is off it by more than
+    /// the coincidence tolerance but at most the edge tolerance (second field, m): paired there.
+    Edge(Projection, f64),
     /// The nearest surface point (within the search radius) is not inside a face, or too far.
     Outside(Projection),
     /// No surface point within the search radius.
     Far,
+}
+
+/// The acceptance limits of a projection.
+struct Limits {
+    /// Largest distance |x_c − t_v| (m).
+    max_distance: f64,
+    /// Tangential offset (m) up to which t_v counts as an orthogonal projection.
+    coincident: f64,
+    /// Scale of the edge tolerances (1 by default, 0 = no pairing on the border).
+    edge_factor: f64,
 }
 
 /// Projects the contact nodes (in parallel) and classifies the results.
@@ -339,21 +412,37 @@ fn project_nodes(
     surface: &TargetSurface,
     mesh: &Mesh,
     nodes: &[u32],
-    max_distance: f64,
-    coincident: f64,
+    limits: &Limits,
 ) -> Vec<NodeProjection> {
     let points: Vec<[f64; 3]> = nodes.iter().map(|&n| mesh.coords[n as usize]).collect();
     surface
-        .project_many(&points, max_distance)
+        .project_many(&points, limits.max_distance)
         .into_iter()
         .map(|p| match p {
             None => NodeProjection::Far,
-            Some(p) if p.tangential_offset <= coincident && p.distance <= max_distance => {
-                NodeProjection::Inside(p)
+            Some(p) if p.distance > limits.max_distance => NodeProjection::Outside(p),
+            Some(p) if p.tangential_offset <= limits.coincident => NodeProjection::Inside(p),
+            Some(p) if limits.edge_factor > 0.0 => {
+                let tol = limits.edge_factor * surface.border_tolerance(p.face, p.uv);
+                if p.tangential_offset <= tol {
+                    NodeProjection::Edge(p, tol)
+                } else {
+                    NodeProjection::Outside(p)
+                }
             }
             Some(p) => NodeProjection::Outside(p),
         })
         .collect()
+}
+
+impl NodeProjection {
+    /// The projection of a paired node (inside a face or on its border).
+    fn paired(&self) -> Option<&Projection> {
+        match self {
+            NodeProjection::Inside(p) | NodeProjection::Edge(p, _) => Some(p),
+            _ => None,
+        }
+    }
 }
 
 /// The projections of the contact nodes for one candidate σ.
@@ -370,10 +459,7 @@ impl Trial {
         let d: Vec<f64> = self
             .projections
             .iter()
-            .filter_map(|p| match p {
-                NodeProjection::Inside(p) => Some(p.distance),
-                _ => None,
-            })
+            .filter_map(|p| p.paired().map(|p| p.distance))
             .collect();
         let mean = if d.is_empty() {
             f64::INFINITY
@@ -405,7 +491,9 @@ fn choose_placement(trials: &[Trial], c: &Contact, mesh: &Mesh, label: &str) -> 
                 .projections
                 .iter()
                 .filter_map(|p| match p {
-                    NodeProjection::Outside(p) | NodeProjection::Inside(p) => Some(p.distance),
+                    NodeProjection::Outside(p)
+                    | NodeProjection::Inside(p)
+                    | NodeProjection::Edge(p, _) => Some(p.distance),
                     NodeProjection::Far => None,
                 })
                 .fold(f64::INFINITY, f64::min);
@@ -451,7 +539,7 @@ fn fill_pairs(
         .areas
         .iter()
         .zip(projections)
-        .filter(|(_, p)| matches!(p, NodeProjection::Inside(_)))
+        .filter(|(_, p)| p.paired().is_some())
         .map(|(a, _)| a)
         .sum();
     let matches = match c.model {
@@ -459,8 +547,15 @@ fn fill_pairs(
         ContactModel::Sama => None,
     };
     for (i, (&node, p)) in side.nodes.iter().zip(projections).enumerate() {
-        let p = match p {
-            NodeProjection::Inside(p) => p,
+        let (p, edge) = match p {
+            NodeProjection::Inside(p) => (p, None),
+            NodeProjection::Edge(p, tol) => (
+                p,
+                Some(EdgeOffset {
+                    tangential_offset: p.tangential_offset,
+                    tolerance: *tol,
+                }),
+            ),
             NodeProjection::Outside(p) => {
                 iface.unprojected.push(Unprojected {
                     node: mesh.node_tags[node as usize],
@@ -531,6 +626,7 @@ fn fill_pairs(
             area: side.areas[i],
             n0_node,
             preload_share,
+            edge,
         });
     }
     iface.sum_kt = iface.pairs.iter().flat_map(|p| &p.kt).sum();
@@ -580,7 +676,7 @@ fn coincident_targets(
     for (i, (&node, p)) in side.nodes.iter().zip(projections).enumerate() {
         let x = geo.mesh.coords[node as usize];
         match (p, find(x)) {
-            (NodeProjection::Inside(_), Some(l)) => matched[i] = l,
+            (NodeProjection::Inside(_) | NodeProjection::Edge(..), Some(l)) => matched[i] = l,
             _ => missing.push(node),
         }
     }

@@ -95,7 +95,79 @@ pub fn closest_on_face(kind: ElementType, xs: &[[f64; 3]], x: [f64; 3], uv0: [f6
             break;
         }
     }
-    uv
+    along_border(kind, xs, x, uv)
+}
+
+/// Reference coordinates of the corners of a triangle (unit triangle) or quad ([−1, 1]²), in
+/// Gmsh order.
+fn reference_corners(kind: ElementType) -> &'static [[f64; 2]] {
+    if is_triangle(kind) {
+        &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]
+    } else {
+        &[[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]
+    }
+}
+
+/// The minimiser of |x − x(u, v)| when the Gauss–Newton iterate `uv` stopped on the border of
+/// the reference element. The clamped step stops where the *unconstrained* step points out of
+/// the element, which is the constrained minimum only when ∂x/∂u ⊥ ∂x/∂v; so from there each
+/// edge the point lies on is searched by Gauss–Newton along the edge (parameter t ∈ [0, 1]),
+/// and the nearest of these points and `uv` is returned. An interior `uv`, or one where x − x(u, v)
+/// is already normal to the face (tangential part below 1e-9 of the face's size), is returned as is.
+fn along_border(kind: ElementType, xs: &[[f64; 3]], x: [f64; 3], uv: [f64; 2]) -> [f64; 2] {
+    const EPS: f64 = 1e-12;
+    let [p, xu, xv] = evaluate(kind, xs, uv);
+    let r = sub(x, p);
+    let n = cross(xu, xv);
+    let nn = dot(n, n);
+    if nn > 0.0 {
+        let tangential = norm(sub(r, scale(dot(r, n) / nn, n)));
+        if tangential <= 1e-9 * norm(xu).max(norm(xv)) {
+            return uv;
+        }
+    }
+    let corners = reference_corners(kind);
+    let dist2 = |uv: [f64; 2]| {
+        let d = sub(x, evaluate(kind, xs, uv)[0]);
+        dot(d, d)
+    };
+    let mut best = (dist2(uv), uv);
+    for k in 0..corners.len() {
+        let (a, b) = (corners[k], corners[(k + 1) % corners.len()]);
+        let e = [b[0] - a[0], b[1] - a[1]];
+        let len2 = e[0] * e[0] + e[1] * e[1];
+        let mut t = ((uv[0] - a[0]) * e[0] + (uv[1] - a[1]) * e[1]) / len2;
+        let off = [a[0] + t * e[0] - uv[0], a[1] + t * e[1] - uv[1]];
+        if off[0].abs() > EPS || off[1].abs() > EPS || !(-EPS..=1.0 + EPS).contains(&t) {
+            continue; // uv is not on this edge
+        }
+        for _ in 0..MAX_ITERATIONS {
+            let at = [a[0] + t * e[0], a[1] + t * e[1]];
+            let [p, xu, xv] = evaluate(kind, xs, at);
+            let xt = [0, 1, 2].map(|c| xu[c] * e[0] + xv[c] * e[1]);
+            let g = dot(xt, xt);
+            if g.is_nan() || g <= 0.0 {
+                break;
+            }
+            let next = (t + dot(sub(x, p), xt) / g).clamp(0.0, 1.0);
+            let step = (next - t).abs();
+            t = next;
+            if step < 1e-15 {
+                break;
+            }
+        }
+        // Exactly on the edge's line: the other coordinate from the corners, not from t·e.
+        let on = match (e[0] == 0.0, e[1] == 0.0) {
+            (true, _) => [a[0], a[1] + t * e[1]],
+            (_, true) => [a[0] + t * e[0], a[1]],
+            _ => [a[0] + t * e[0], b[1] + (1.0 - t) * (a[1] - b[1])],
+        };
+        let d = dist2(on);
+        if d < best.0 * (1.0 - 1e-12) {
+            best = (d, on);
+        }
+    }
+    best.1
 }
 
 /// The local frame (rows t1, t2, n) of a face at reference point `uv` (`docs/conventions.md` §3).

@@ -93,7 +93,10 @@ impl ContactData {
 /// One interface as the JSON object of `docs/user-guide.md` (`nlrom contact`), with extra keys: per
 /// pair the frame rows `t1`, `t2`, the `virtual_point`, signed `gap`, target `face` tag and its
 /// reference coordinates, tributary `area`, the pair parameters `kt`, `kn`, `n0` (eq 31) and the
-/// node's preload share `n0_node`; per interface the unprojected nodes' details and tolerances.
+/// node's preload share `n0_node` and, for a node paired on the target's border, its
+/// `tangential_offset` (null otherwise); per interface the unprojected nodes' details, the nodes
+/// paired on the border (`edge_projected`, with distance, offset and edge tolerance — null where
+/// unbounded) and the tolerances.
 pub fn interface_json(iface: &ContactInterface) -> Value {
     let pairs: Vec<Value> = iface
         .pairs
@@ -116,6 +119,7 @@ pub fn interface_json(iface: &ContactInterface) -> Value {
                 "kn": p.kn,
                 "n0": p.n0,
                 "n0_node": p.n0_node,
+                "tangential_offset": p.edge.map(|e| e.tangential_offset),
             })
         })
         .collect();
@@ -130,6 +134,18 @@ pub fn interface_json(iface: &ContactInterface) -> Value {
             })
         })
         .collect();
+    let edge: Vec<Value> = iface
+        .edge_pairs()
+        .map(|p| {
+            let e = p.edge.expect("edge pair");
+            json!({
+                "node": p.contact_node,
+                "distance": p.distance,
+                "tangential_offset": e.tangential_offset,
+                "tolerance": e.tolerance.is_finite().then_some(e.tolerance),
+            })
+        })
+        .collect();
     json!({
         "name": iface.name,
         "model": model_name(iface.model),
@@ -140,6 +156,8 @@ pub fn interface_json(iface: &ContactInterface) -> Value {
         "pairs": pairs,
         "unprojected": iface.unprojected.iter().map(|u| u.node).collect::<Vec<u64>>(),
         "unprojected_detail": details,
+        "edge_projected": iface.edge_pairs().map(|p| p.contact_node).collect::<Vec<u64>>(),
+        "edge_projected_detail": edge,
         "sum_kt": iface.sum_kt,
         "sum_kn": iface.sum_kn,
         "sum_n0": iface.sum_n0,
@@ -154,12 +172,16 @@ pub fn interfaces_text(interfaces: &[ContactInterface]) -> String {
     for iface in interfaces {
         let max_gap = iface.pairs.iter().map(|p| p.gap.abs()).fold(0.0, f64::max);
         s += &format!(
-            "contact '{}': model {}, σ = {}, {} contact nodes, {} projected, {} unprojected\n",
+            "contact '{}': model {}, σ = {}, {} contact nodes, {} projected{}, {} unprojected\n",
             iface.name,
             model_name(iface.model),
             iface.sigma,
             iface.contact_nodes,
             iface.pairs.len(),
+            match iface.edge_pairs().count() {
+                0 => String::new(),
+                n => format!(" ({n} on the target's edge)"),
+            },
             iface.unprojected.len()
         );
         s += &format!(
@@ -185,6 +207,19 @@ pub fn interfaces_text(interfaces: &[ContactInterface]) -> String {
                 p.area,
                 targets.join(", ")
             );
+        }
+        let edge: Vec<String> = iface
+            .edge_pairs()
+            .map(|p| {
+                let e = p.edge.expect("edge pair");
+                format!(
+                    "{} (outside by {:.3e} m, distance {:.3e} m)",
+                    p.contact_node, e.tangential_offset, p.distance
+                )
+            })
+            .collect();
+        if !edge.is_empty() {
+            s += &format!("  on the target's edge: {}\n", edge.join(", "));
         }
         if !iface.unprojected.is_empty() {
             let list: Vec<String> = iface

@@ -9,6 +9,8 @@
 //! ([`super::project`]). The sub-triangles use the face's own nodes as vertices, so the search
 //! mesh has exactly the surface's nodes.
 
+use std::collections::HashMap;
+
 use parry3d_f64::math::Vector as PVec;
 use parry3d_f64::shape::TriMesh;
 
@@ -45,6 +47,47 @@ pub struct TargetSurface {
     node_faces: Vec<u32>,
     /// Mean length (m) of the faces' corner-to-corner edges.
     pub mean_edge: f64,
+    /// Edge tolerance (m) of every face edge, `edge_start[f] + k` for edge k of face f:
+    /// [`edge_tolerance`] for an edge on the surface's boundary, +∞ for an edge shared by two faces.
+    edge_tol: Vec<f64>,
+    /// First entry of face f in `edge_tol`.
+    edge_start: Vec<usize>,
+    /// Per surface node: the largest edge tolerance of its boundary edges, +∞ for an interior node.
+    node_tol: Vec<f64>,
+}
+
+/// Edge tolerance as a fraction of the boundary edge's length: accepts the round-off of the
+/// node positions of two meshes of the same boundary (a straight boundary has no sagitta).
+pub const EDGE_SIZE_FRACTION: f64 = 1e-3;
+
+/// Multiple of the boundary's chord sagitta in the edge tolerance.
+pub const EDGE_SAGITTA_FACTOR: f64 = 2.0;
+
+/// Turning angle (rad) of the boundary polyline above which a boundary node is a corner of the
+/// outline (its angle says nothing about the curvature of the sides it joins).
+pub const CORNER_ANGLE: f64 = std::f64::consts::FRAC_PI_4;
+
+/// The edge tolerance (m) of a boundary edge of length `chord` (m, corner to corner) on a
+/// boundary of curvature `curvature` (1/m):
+/// `EDGE_SIZE_FRACTION · L + EDGE_SAGITTA_FACTOR · κ L² / 8`.
+///
+/// κ L²/8 is the sagitta of a chord of length L on an arc of curvature κ: the farthest that a
+/// point of the true boundary curve — a node of the other mesh of the same curved edge — lies
+/// outside the chorded (linear) target face. A quadratic face follows the arc far closer, so the
+/// bound holds for it too.
+pub fn edge_tolerance(chord: f64, curvature: f64) -> f64 {
+    EDGE_SIZE_FRACTION * chord + EDGE_SAGITTA_FACTOR * curvature * chord * chord / 8.0
+}
+
+/// Corner positions (in the face's node list) of edge k of a face, and its mid-side node if any.
+pub fn face_edge(kind: ElementType, k: usize) -> (usize, usize, Option<usize>) {
+    let corners = kind.num_corners();
+    let mid = match kind {
+        ElementType::Triangle6 => Some(3 + k),
+        ElementType::Quad8 | ElementType::Quad9 => Some(4 + k),
+        _ => None,
+    };
+    (k, (k + 1) % corners, mid)
 }
 
 /// Sub-triangles of a face for the search, as triples of positions in the face's node list.
@@ -207,6 +250,7 @@ impl TargetSurface {
         let trimesh = TriMesh::new(vertices, indices)
             .map_err(|e| Error::input(format!("{label}: cannot build its search mesh: {e}")))?;
         let (node_start, node_faces) = adjacency(points.len(), &faces);
+        let (edge_tol, edge_start, node_tol) = boundary_tolerances(&points, &faces);
         Ok(TargetSurface {
             points,
             faces,
@@ -215,6 +259,9 @@ impl TargetSurface {
             node_start,
             node_faces,
             mean_edge: edge_sum / edge_count as f64,
+            edge_tol,
+            edge_start,
+            node_tol,
         })
     }
 
@@ -255,6 +302,28 @@ impl TargetSurface {
             .collect()
     }
 
+    /// The edge tolerance (m) at the reference point `uv` of face `f` (a point of the face's
+    /// border, as the nearest point of a node outside the surface is): on a corner, the largest
+    /// [`edge_tolerance`] of the surface boundary edges at that node; on an edge, that edge's
+    /// tolerance. +∞ where the point is on an edge or node shared with other faces (a node above a
+    /// crease of the chorded surface has the target under it). Inside the face (not expected for
+    /// a point with a tangential offset): [`EDGE_SIZE_FRACTION`] × the mean edge.
+    pub fn border_tolerance(&self, f: usize, uv: [f64; 2]) -> f64 {
+        let face = &self.faces[f];
+        let on = border_edges(face.kind, uv);
+        match on.as_slice() {
+            [] => EDGE_SIZE_FRACTION * self.mean_edge,
+            [k] => self.edge_tol[self.edge_start[f] + k],
+            [a, b, ..] => {
+                // The corner shared by edges a and b: edge a's end is edge b's start or vice versa.
+                let (a0, a1, _) = face_edge(face.kind, *a);
+                let (b0, _, _) = face_edge(face.kind, *b);
+                let corner = if a1 == b0 { a1 } else { a0 };
+                self.node_tol[face.nodes[corner] as usize]
+            }
+        }
+    }
+
     /// Length (m) of the diagonal of the surface's bounding box.
     pub fn diagonal(&self) -> f64 {
         let [lo, hi] = crate::mesh::bbox_of(self.points.iter());
@@ -264,6 +333,121 @@ impl TargetSurface {
 
 fn sub_pts(xs: &[[f64; 3]], a: usize, b: usize) -> [f64; 3] {
     sub(xs[a], xs[b])
+}
+
+/// The edges (indices k of [`face_edge`]) of the reference element on which `uv` lies (within
+/// 1e-9), ascending.
+fn border_edges(kind: ElementType, uv: [f64; 2]) -> Vec<usize> {
+    const EPS: f64 = 1e-9;
+    let [u, v] = uv;
+    let on: Vec<bool> = if is_triangle(kind) {
+        vec![v.abs() <= EPS, (u + v - 1.0).abs() <= EPS, u.abs() <= EPS]
+    } else {
+        vec![
+            (v + 1.0).abs() <= EPS,
+            (u - 1.0).abs() <= EPS,
+            (v - 1.0).abs() <= EPS,
+            (u + 1.0).abs() <= EPS,
+        ]
+    };
+    on.iter()
+        .enumerate()
+        .filter(|(_, &b)| b)
+        .map(|(k, _)| k)
+        .collect()
+}
+
+/// Edge tolerances of a surface's faces (see [`TargetSurface::border_tolerance`]).
+///
+/// The boundary edges are the face edges (corner pairs) that belong to one face only. They form
+/// the boundary polyline through their corner and mid-side nodes; at a node joining two segments
+/// of lengths l1, l2 that turn by θ < [`CORNER_ANGLE`], the boundary curvature is
+/// κ = θ / ((l1 + l2)/2) (exact for a circle sampled by equal chords, to O(θ²)). An edge's κ is
+/// the largest at its nodes (0 when all are corners), and its tolerance [`edge_tolerance`].
+///
+/// Returns (tolerance per face edge, first edge of each face, tolerance per node).
+fn boundary_tolerances(
+    points: &[[f64; 3]],
+    faces: &[SurfaceFace],
+) -> (Vec<f64>, Vec<usize>, Vec<f64>) {
+    let key = |a: u32, b: u32| (a.min(b), a.max(b));
+    let mut count: HashMap<(u32, u32), u32> = HashMap::new();
+    for face in faces {
+        for k in 0..face.kind.num_corners() {
+            let (a, b, _) = face_edge(face.kind, k);
+            *count.entry(key(face.nodes[a], face.nodes[b])).or_default() += 1;
+        }
+    }
+    // Boundary segments at each node: the neighbouring node along the boundary polyline.
+    let mut along: HashMap<u32, Vec<u32>> = HashMap::new();
+    let mut link = |p: u32, q: u32| {
+        along.entry(p).or_default().push(q);
+        along.entry(q).or_default().push(p);
+    };
+    for face in faces {
+        for k in 0..face.kind.num_corners() {
+            let (a, b, mid) = face_edge(face.kind, k);
+            let (na, nb) = (face.nodes[a], face.nodes[b]);
+            if count[&key(na, nb)] != 1 {
+                continue;
+            }
+            match mid {
+                Some(m) => {
+                    link(na, face.nodes[m]);
+                    link(face.nodes[m], nb);
+                }
+                None => link(na, nb),
+            }
+        }
+    }
+    let curvature = |n: u32| -> f64 {
+        let Some(nb) = along.get(&n) else { return 0.0 };
+        let [p, q] = nb.as_slice() else { return 0.0 };
+        let x = points[n as usize];
+        let (d1, d2) = (sub(x, points[*p as usize]), sub(points[*q as usize], x));
+        let (l1, l2) = (norm(d1), norm(d2));
+        if l1 <= 0.0 || l2 <= 0.0 {
+            return 0.0;
+        }
+        let theta = (dot(d1, d2) / (l1 * l2)).clamp(-1.0, 1.0).acos();
+        if theta < CORNER_ANGLE {
+            theta / (0.5 * (l1 + l2))
+        } else {
+            0.0
+        }
+    };
+    let mut edge_tol = Vec::new();
+    let mut edge_start = Vec::with_capacity(faces.len());
+    let mut node_tol = vec![f64::INFINITY; points.len()];
+    let mut on_boundary = vec![false; points.len()];
+    for face in faces {
+        edge_start.push(edge_tol.len());
+        for k in 0..face.kind.num_corners() {
+            let (a, b, mid) = face_edge(face.kind, k);
+            let (na, nb) = (face.nodes[a], face.nodes[b]);
+            if count[&key(na, nb)] != 1 {
+                edge_tol.push(f64::INFINITY);
+                continue;
+            }
+            let kappa = [Some(na), mid.map(|m| face.nodes[m]), Some(nb)]
+                .into_iter()
+                .flatten()
+                .map(curvature)
+                .fold(0.0, f64::max);
+            let tol = edge_tolerance(norm(sub(points[nb as usize], points[na as usize])), kappa);
+            edge_tol.push(tol);
+            for n in [na, nb] {
+                let n = n as usize;
+                node_tol[n] = if on_boundary[n] {
+                    node_tol[n].max(tol)
+                } else {
+                    tol
+                };
+                on_boundary[n] = true;
+            }
+        }
+    }
+    (edge_tol, edge_start, node_tol)
 }
 
 /// Node → faces adjacency in CSR form.
