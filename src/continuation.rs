@@ -23,17 +23,17 @@
 //! - step: s ← s · clamp(n_target / n_iter, ½, 2) after a converged point; on a failed
 //!   corrector, or a tangent turning by more than 60°, the step is halved and the point retried
 //!   (never skipped);
-//! - below the minimum step, a corrector on a coordinate hyperplane ([`local_parametrization`]):
+//! - below the minimum step, a corrector on a coordinate hyperplane (`local_parametrization`):
 //!   the residual of a friction law sampled in time is piecewise smooth, and where the solution
 //!   curve crosses many facets (stick–slip transitions moving from sample to sample) the tangent
 //!   of the facet at the last point can point well away from the curve, so that Newton on the
 //!   hyperplane orthogonal to it cycles between two facets without a root in either. The
-//!   fallback predicts along the secant of the last two points and fixes one coordinate — the
-//!   parameter first (a natural-parameter step), then the unknown that changes most along the
-//!   secant — at 1, 4 and 16 minimum steps; the first converged point is taken and the step
-//!   restarts from the minimum. Only where that fails too does the path stop with a reported
-//!   failure and the points converged so far. A path that never reaches the minimum step is
-//!   traced exactly as without the fallback;
+//!   fallback predicts along the secant of the last two points and fixes the parameter there (a
+//!   natural-parameter step) at 1, 4 and 16 minimum steps; the first point converged forward
+//!   along the secant is taken and the step restarts from the minimum. Near a fold the secant
+//!   hardly moves the parameter and there is no such step. Only where that fails too does the
+//!   path stop with a reported failure and the points converged so far. A path that never
+//!   reaches the minimum step is traced exactly as without the fallback;
 //! - end: the first point beyond λ_end is replaced by the solution at exactly λ_end.
 
 use faer::Mat;
@@ -509,9 +509,10 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 ///
 /// The predictor follows the secant of the last two points (the local tangent of a piecewise
 /// smooth residual can point along a short facet rather than along the curve). The fixed
-/// coordinate is first the parameter (natural-parameter step), then the unknown with the largest
-/// secant component; steps of 1, 4 and 16 minimum steps are tried in turn. Returns the first
-/// point that converges, with its tangent oriented along the secant.
+/// coordinate is the parameter (a natural-parameter step), tried when the secant moves it (not at
+/// a fold); steps of 1, 4 and 16 minimum steps are tried in turn. Returns the first
+/// point that converges forward along the secant (within 60° of it and two steps of the last
+/// point, its tangent turned by less than 60°), with its tangent oriented along the secant.
 #[allow(clippy::type_complexity)]
 fn local_parametrization<S: ParameterSystem>(
     system: &S,
@@ -536,13 +537,10 @@ fn local_parametrization<S: ParameterSystem>(
         None => tangent.to_vec(),
     };
     let n = y0.len() - 1;
-    let largest = (0..n)
-        .max_by(|&a, &b| direction[a].abs().total_cmp(&direction[b].abs()))
-        .unwrap_or(0);
-    for coordinate in [n, largest] {
-        if direction[coordinate].abs() < 1e-3 {
-            continue;
-        }
+    // the parameter is fixed: a natural-parameter step, forward along the secant; near a fold
+    // (the secant hardly moves the parameter) there is no such step
+    let coordinate = n;
+    if direction[n].abs() >= 1e-3 {
         for factor in [1.0, 4.0, 16.0] {
             let h = factor * min_step;
             let predicted: Vec<f64> = y0.iter().zip(&direction).map(|(y, d)| y + h * d).collect();
@@ -561,8 +559,12 @@ fn local_parametrization<S: ParameterSystem>(
             };
             let mut y = sol.x.iter().map(|x| x / s.x).collect::<Vec<_>>();
             y.push(sol.parameter / s.lambda);
-            let moved = norm(&y.iter().zip(&y0).map(|(a, b)| a - b).collect::<Vec<_>>());
-            if moved <= 4.0 * h && moved > 0.0 {
+            let offset: Vec<f64> = y.iter().zip(&y0).map(|(a, b)| a - b).collect();
+            let moved = norm(&offset);
+            // forward along the secant, within two steps, and the curve not turning by more
+            // than 60° (a point beyond a fold, on another branch, fails one of these)
+            let forward = dot(&offset, &direction) >= 0.5 * moved;
+            if moved <= 2.0 * h && moved > 0.0 && forward && dot(&t, &direction) >= 0.5 {
                 return Some((sol, t));
             }
         }
