@@ -22,18 +22,8 @@
 //!   within one AFT sample), and a segment shorter than the initial step is not skipped;
 //! - step: s ← s · clamp(n_target / n_iter, ½, 2) after a converged point; on a failed
 //!   corrector, or a tangent turning by more than 60°, the step is halved and the point retried
-//!   (never skipped);
-//! - below the minimum step, a corrector on a coordinate hyperplane (`local_parametrization`):
-//!   the residual of a friction law sampled in time is piecewise smooth, and where the solution
-//!   curve crosses many facets (stick–slip transitions moving from sample to sample) the tangent
-//!   of the facet at the last point can point well away from the curve, so that Newton on the
-//!   hyperplane orthogonal to it cycles between two facets without a root in either. The
-//!   fallback predicts along the secant of the last two points and fixes the parameter there (a
-//!   natural-parameter step) at 1, 4 and 16 minimum steps; the first point converged forward
-//!   along the secant is taken and the step restarts from the minimum. Near a fold the secant
-//!   hardly moves the parameter and there is no such step. Only where that fails too does the
-//!   path stop with a reported failure and the points converged so far. A path that never
-//!   reaches the minimum step is traced exactly as without the fallback;
+//!   (never skipped) — below the minimum step the path stops with a reported failure and the
+//!   points converged so far, each with its accepted residual;
 //! - end: the first point beyond λ_end is replaced by the solution at exactly λ_end.
 
 use faer::Mat;
@@ -143,9 +133,6 @@ pub struct Path<S> {
     pub end: PathEnd,
     /// Steps that were rejected and retried with half the step.
     pub retries: usize,
-    /// Points reached by the local-parametrization corrector after the pseudo-arc-length
-    /// corrector failed at the minimum step.
-    pub fallbacks: usize,
 }
 
 /// Scaling of the unknowns and the parameter.
@@ -221,7 +208,6 @@ pub fn trace_from<S: ParameterSystem>(
         points: vec![],
         end: PathEnd::MaxPoints,
         retries: 0,
-        fallbacks: 0,
     };
     let mut current = point_from(start, 0.0, tangent[tangent.len() - 1]);
     on_point(&current);
@@ -255,20 +241,7 @@ pub fn trace_from<S: ParameterSystem>(
                 };
                 step *= 0.5;
                 path.retries += 1;
-                let fallback = if step < min_step {
-                    let previous =
-                        (path.points.len() >= 2).then(|| &path.points[path.points.len() - 2]);
-                    local_parametrization(
-                        system, &current, previous, &tangent, min_step, &scales, opts,
-                    )
-                } else {
-                    None
-                };
-                if let Some((sol, t)) = fallback {
-                    path.fallbacks += 1;
-                    step = min_step;
-                    (sol, t)
-                } else if step < min_step {
+                if step < min_step {
                     path.end = PathEnd::Failed(format!(
                         "continuation stopped after the point at parameter {:.9e}: {why} even with the minimum step {:.3e} (λ units); the {} points converged so far are kept",
                         current.parameter,
@@ -276,9 +249,8 @@ pub fn trace_from<S: ParameterSystem>(
                         path.points.len()
                     ));
                     return Ok(path);
-                } else {
-                    continue;
                 }
+                continue;
             }
         };
         let iterations = sol.iterations;
@@ -502,72 +474,4 @@ fn correct_on<S: ParameterSystem>(
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// Corrector on a coordinate hyperplane (Rheinboldt's local parametrization; Allgower & Georg
-/// 1990, §10.3), tried where the pseudo-arc-length corrector fails at the minimum step.
-///
-/// The predictor follows the secant of the last two points (the local tangent of a piecewise
-/// smooth residual can point along a short facet rather than along the curve). The fixed
-/// coordinate is the parameter (a natural-parameter step), tried when the secant moves it (not at
-/// a fold); steps of 1, 4 and 16 minimum steps are tried in turn. Returns the first
-/// point that converges forward along the secant (within 60° of it and two steps of the last
-/// point, its tangent turned by less than 60°), with its tangent oriented along the secant.
-#[allow(clippy::type_complexity)]
-fn local_parametrization<S: ParameterSystem>(
-    system: &S,
-    current: &PathPoint<S::State>,
-    previous: Option<&PathPoint<S::State>>,
-    tangent: &[f64],
-    min_step: f64,
-    s: &Scales,
-    opts: &ContinuationOptions,
-) -> Option<(NewtonSolution<S::State>, Vec<f64>)> {
-    let y0 = scaled(current, s);
-    let direction: Vec<f64> = match previous {
-        Some(p) => {
-            let d: Vec<f64> = y0.iter().zip(scaled(p, s)).map(|(a, b)| a - b).collect();
-            let len = norm(&d);
-            if len > 0.0 {
-                d.iter().map(|v| v / len).collect()
-            } else {
-                tangent.to_vec()
-            }
-        }
-        None => tangent.to_vec(),
-    };
-    let n = y0.len() - 1;
-    // the parameter is fixed: a natural-parameter step, forward along the secant; near a fold
-    // (the secant hardly moves the parameter) there is no such step
-    let coordinate = n;
-    if direction[n].abs() >= 1e-3 {
-        for factor in [1.0, 4.0, 16.0] {
-            let h = factor * min_step;
-            let predicted: Vec<f64> = y0.iter().zip(&direction).map(|(y, d)| y + h * d).collect();
-            let mut border = vec![0.0; n + 1];
-            border[coordinate] = 1.0;
-            let Ok((sol, Some(t))) = correct_on(
-                system,
-                &current.state,
-                &predicted,
-                &border,
-                &direction,
-                s,
-                opts,
-            ) else {
-                continue;
-            };
-            let mut y = sol.x.iter().map(|x| x / s.x).collect::<Vec<_>>();
-            y.push(sol.parameter / s.lambda);
-            let offset: Vec<f64> = y.iter().zip(&y0).map(|(a, b)| a - b).collect();
-            let moved = norm(&offset);
-            // forward along the secant, within two steps, and the curve not turning by more
-            // than 60° (a point beyond a fold, on another branch, fails one of these)
-            let forward = dot(&offset, &direction) >= 0.5 * moved;
-            if moved <= 2.0 * h && moved > 0.0 && forward && dot(&t, &direction) >= 0.5 {
-                return Some((sol, t));
-            }
-        }
-    }
-    None
 }
