@@ -26,8 +26,8 @@
 //! | solvers | [`hbm`] | harmonic balance: per-harmonic dynamic stiffness, condensation on the nonlinear DOFs, residual, stability |
 //! | solvers | [`march`] | time marching: Newmark, adaptive step, piecewise-linear Newmark, quasi-static (Gastaldi & Berruti 2018) |
 //! | problem | [`problem`] | a case as a solvable problem: ROM store, matrix case, reduced sector, damper, march of a case |
-//! | commands | [`commands`] | the commands `reduce`, `solve`, `run`, `batch`, `demo` and the `/march/` results: reporting, sweeps in parallel, summary (resonance, Q) |
-//! | commands | [`cli`] | the command line |
+//! | commands | [`commands`] | one module per command (`mesh info`, `modes`, `export`, `reduce`, `contact`, `solve`/`run`, `march`, `batch`, `demo`), one `Reporter` (`-q`, `-v`), `--json` reports |
+//! | commands | [`cli`] | the command line: clap definitions and the dispatch to [`commands`] |
 //!
 //! The user documentation (case file, results file, theory, validation) is in `docs/`.
 
