@@ -1,5 +1,6 @@
 //! The module layering of `src/` (the table in the crate documentation, `src/lib.rs`): a
-//! top-level module may use only the modules listed before it. Every `crate::<module>` path in
+//! top-level module may use only the modules listed before it, and only the builders
+//! ([`BUILDERS`]) may read a whole case (`case::Case`). Every `crate::<module>` path in
 //! compiled code (comments, string literals and `#[cfg(test)]` items removed) of every file under
 //! `src/` is checked against [`ORDER`], and the crate documentation must list the same order.
 
@@ -9,6 +10,7 @@ use std::path::{Path, PathBuf};
 /// The top-level modules, lowest first: each may use only those before it.
 const ORDER: &[&str] = &[
     "error",
+    "vec3",
     "mesh",
     "matrix_io",
     "harmonics",
@@ -27,12 +29,24 @@ const ORDER: &[&str] = &[
     "hbm",
     "march",
     "problem",
-    "pipeline",
+    "commands",
     "cli",
 ];
 
 /// The one allowed upward use: `error` wraps the mesh reader's `MshError`.
 const EXCEPTIONS: &[(&str, &str)] = &[("error", "mesh")];
+
+/// The builders: the only modules that may read a whole case (`case::Case`). The kernels take
+/// plain values or, at most, one table or value type of the schema.
+const BUILDERS: &[&str] = &[
+    "case",
+    "model",
+    "reduction",
+    "sama",
+    "problem",
+    "commands",
+    "cli",
+];
 
 /// `src` with comments, string and character literals blanked (replaced by spaces, so that
 /// positions and line numbers stay), and every `#[cfg(test)]` item removed.
@@ -228,8 +242,23 @@ fn check_file(relative: &Path, source: &str) -> Vec<String> {
             relative.display()
         )];
     };
+    let code = strip(source);
     let mut bad = Vec::new();
-    for (to, line) in crate_uses(&strip(source)) {
+    if !BUILDERS.contains(&from.as_str()) {
+        for (pos, _) in code.match_indices("Case") {
+            let before = code[..pos].chars().next_back();
+            let after = code[pos + 4..].chars().next();
+            let ident = |c: Option<char>| c.is_some_and(|c| c.is_alphanumeric() || c == '_');
+            if !ident(before) && !ident(after) {
+                let line = code[..pos].matches('\n').count() + 1;
+                bad.push(format!(
+                    "{}:{line}: `{from}` reads the whole case (`Case`); only builders may",
+                    relative.display()
+                ));
+            }
+        }
+    }
+    for (to, line) in crate_uses(&code) {
         if to == from || ["Result", "Error"].contains(&to.as_str()) {
             continue;
         }
@@ -309,13 +338,13 @@ fn the_crate_documentation_states_the_order() {
 #[test]
 fn the_checker_fails_on_a_back_edge() {
     // a time integrator that reaches into the command layer
-    let back = "use crate::error::Result;\nuse crate::pipeline::Reporter;\n";
+    let back = "use crate::error::Result;\nuse crate::commands::Reporter;\n";
     let bad = check_file(Path::new("march/sector.rs"), back);
     assert_eq!(bad.len(), 1, "{bad:?}");
-    assert!(bad[0].contains("march/sector.rs:2") && bad[0].contains("crate::pipeline"));
+    assert!(bad[0].contains("march/sector.rs:2") && bad[0].contains("crate::commands"));
     // inside a use group, and as an expression path
     let grouped =
-        "use crate::{case::Case, problem::{rom_store, sector}};\nfn f() { crate::cli::main(); }";
+        "use crate::{case::CaseKind, problem::{rom_store, sector}};\nfn f() { crate::cli::main(); }";
     let bad = check_file(Path::new("hbm/frf.rs"), grouped);
     assert_eq!(bad.len(), 2, "{bad:?}");
     assert!(bad[0].contains("crate::problem") && bad[1].contains("crate::cli"));
@@ -331,8 +360,8 @@ fn the_checker_ignores_comments_strings_and_test_code() {
     let src = r##"
 //! Built by [`crate::problem`] (a doc link, not a use).
 use crate::error::Result; // crate::cli in a comment
-/* crate::pipeline in a /* nested */ block comment */
-const S: &str = "crate::pipeline";
+/* crate::commands in a /* nested */ block comment */
+const S: &str = "crate::commands";
 const R: &str = r#"crate::cli "quoted""#;
 const C: char = '"';
 fn f<'a>(x: &'a str) -> &'a str { x }
@@ -340,7 +369,7 @@ fn f<'a>(x: &'a str) -> &'a str { x }
 use crate::problem::sector;
 #[cfg(test)]
 mod tests {
-    use crate::pipeline::Reporter;
+    use crate::commands::Reporter;
     fn g() { let _ = "}"; }
 }
 use crate::mesh::Mesh;
