@@ -8,9 +8,9 @@ use std::process::Command;
 
 use nlrom::case::{Case, MarchScheme};
 use nlrom::march::element::Direction;
-use nlrom::march::from_case::{case_march, CaseMarch};
 use nlrom::march::{march, MarchOutcome};
 use nlrom::output::{read_results, H5Reader, ResponseDof};
+use nlrom::problem::march_case::{case_march, CaseMarch};
 
 /// Runs `nlrom march CASE -o OUT --json EXTRA...`, asserts success and returns the JSON report.
 fn march_json(case: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {

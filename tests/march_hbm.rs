@@ -12,11 +12,11 @@ use nlrom::contact::grounded::DofElements;
 use nlrom::continuation::{ContinuationOptions, PathEnd};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::frf::frequency_response;
-use nlrom::hbm::setup::matrix_setup;
 use nlrom::hbm::{HbmSystem, ResponseOptions};
-use nlrom::march::from_case::case_march;
 use nlrom::march::march;
 use nlrom::model;
+use nlrom::problem::march_case::case_march;
+use nlrom::problem::matrix_case::matrix_setup;
 
 const HARMONICS: usize = 7;
 

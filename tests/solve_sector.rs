@@ -1,4 +1,4 @@
-//! The harmonic balance problem of a reduced sector (`nlrom::solve::SectorProblem`) on the N = 8
+//! The harmonic balance problem of a reduced sector (`nlrom::problem::sector::SectorProblem`) on the N = 8
 //! bundled sector (meshes/sector8.msh): linear limit against the full unreduced sector under the
 //! cyclic constraint, stuck limit against the ROM plus independently assembled contact springs,
 //! and the cyclic consistency of the pair rows, σ and phases under a rigid rotation.
@@ -18,10 +18,10 @@ use nlrom::hbm::{FrequencyPath, HbmSystem};
 use nlrom::mesh::Mesh;
 use nlrom::model::{self, StructuralModel};
 use nlrom::nonlinear::{solve_fixed, NewtonOptions};
+use nlrom::problem::sector::SectorProblem;
 use nlrom::reduction::{free_frontier_pairs, reduce};
 use nlrom::rom::Rom;
 use nlrom::sama::build_interfaces;
-use nlrom::solve::SectorProblem;
 
 const N: usize = 8;
 /// Rayleigh damping C = αM + βK (exactly projected by the reduction, so the full model has the
