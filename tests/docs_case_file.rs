@@ -60,6 +60,16 @@ fn depth(text: &str, open: char, close: char) -> i64 {
         .sum()
 }
 
+/// Appends `line` to the attribute text `buf` when it is (part of) an attribute; false otherwise.
+fn take_attribute(buf: &mut String, line: &str) -> bool {
+    let inside = line.starts_with("#[") || (!buf.is_empty() && depth(buf, '[', ']') > 0);
+    if inside {
+        buf.push_str(line);
+        buf.push(' ');
+    }
+    inside
+}
+
 /// The deserialised structs and enums of Rust source text, by name.
 fn parse_schema(source: &str) -> BTreeMap<String, Item> {
     let mut items = BTreeMap::new();
@@ -69,12 +79,7 @@ fn parse_schema(source: &str) -> BTreeMap<String, Item> {
     while i < lines.len() {
         let line = lines[i].trim();
         i += 1;
-        if line.starts_with("#[") || (!attrs.is_empty() && depth(&attrs, '[', ']') > 0) {
-            attrs.push_str(line);
-            attrs.push(' ');
-            continue;
-        }
-        if line.starts_with("//") || line.is_empty() {
+        if take_attribute(&mut attrs, line) || line.starts_with("//") || line.is_empty() {
             continue;
         }
         let decl = line
@@ -112,14 +117,7 @@ fn parse_schema(source: &str) -> BTreeMap<String, Item> {
                 if kind != "struct" {
                     continue;
                 }
-                if l.starts_with("#[")
-                    || (!field_attrs.is_empty() && depth(&field_attrs, '[', ']') > 0)
-                {
-                    field_attrs.push_str(l);
-                    field_attrs.push(' ');
-                    continue;
-                }
-                if l.starts_with("//") || l.is_empty() {
+                if take_attribute(&mut field_attrs, l) || l.starts_with("//") || l.is_empty() {
                     continue;
                 }
                 let f = l

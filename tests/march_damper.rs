@@ -366,7 +366,7 @@ steps_per_period = 100
     assert!(!dir.path().join("y.h5").exists());
 }
 
-/// A matrix-defined case (methods.md's Jenkins oscillator: m = k = 1, Rayleigh c = 0.1 M, k_t = 1,
+/// A matrix-defined case (the Jenkins oscillator of `docs/theory.md`: m = k = 1, Rayleigh c = 0.1 M, k_t = 1,
 /// F_s = 0.3, F = 0.5 at ω = 0.952957) through `nlrom march`: marched to steady state, its
 /// first-harmonic amplitude equals the H = 7 harmonic balance of `nlrom::hbm` (0.991341,
 /// tests/march_hbm.rs) within 1e-3.

@@ -4,7 +4,7 @@
 //!   (K + K_c − ω²M + iωC) Q = F of the marched matrices, for k = 0 and k = N/2, and without
 //!   `[cyclic]` or contact;
 //! - micro-slip: the steady first-harmonic amplitude equals the harmonic balance of
-//!   `nlrom::problem::sector::SectorProblem` (PairSet kinematics, AFT, H = 5) within 1 % (issue 9);
+//!   `nlrom::problem::sector::SectorProblem` (PairSet kinematics, AFT, H = 5) within 1 %;
 //!
 //! A travelling wave (k ≠ 0, N/2) is an input error naming `engine_order` (tests/march_damper.rs).
 
@@ -118,7 +118,7 @@ fn run(case: &Case) -> (CaseMarch, MarchOutcome) {
     (cm, out)
 }
 
-/// The first harmonics (complex, `conventions.md` §4) of the reported rows over the last period.
+/// The first harmonics (complex, `docs/conventions.md` §4) of the reported rows over the last period.
 fn march_h1(cm: &CaseMarch, out: &MarchOutcome) -> Vec<c64> {
     cm.response
         .iter()

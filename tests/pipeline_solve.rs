@@ -1,5 +1,5 @@
 //! `nlrom solve` on matrix-defined cases (`cases/chain3_jenkins.toml`: the 3-DOF chain with two
-//! Jenkins elements of issue 7's speed case): the written file against the library's
+//! Jenkins elements of the harmonic-balance speed case): the written file against the library's
 //! `frequency_response`, the stuck limit against a direct linear solve, sweeps in order, bad
 //! input (exit 2 naming the key) and a failing continuation (exit 1, converged points written).
 
