@@ -14,8 +14,8 @@ use std::time::Instant;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nlrom::case::{Case, MarchScheme};
-use nlrom::march::from_case::{case_march, CaseMarch};
 use nlrom::march::march;
+use nlrom::problem::march_case::{case_march, CaseMarch};
 
 /// Interleaved rounds of the timing table.
 const ROUNDS: usize = 40;

@@ -8,7 +8,8 @@
 //! balance has a closed form (docs/theory.md, "The friction contact element"): with
 //! cos β = 1 − 2F_s/(k_t A), a₁ = (k_t A/π)(β − ½ sin 2β) and |b₁| = (4F_s/π)(1 − F_s/(k_t A)),
 //! ((k + a₁/A − mω²)² + (cω + |b₁|/A)²) A² = F². The example prints the traced curve and, for each
-//! point, that relation's relative residual — the harmonic balance satisfies it to round-off.
+//! point, that relation's relative residual: zero to round-off while the element sticks, and
+//! below about 1e-5 in slip, the error of the 1024-sample time discretisation of the AFT.
 
 use faer::Mat;
 use nlrom::case::WeightedDofs;

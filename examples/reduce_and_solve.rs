@@ -11,9 +11,10 @@
 use std::path::PathBuf;
 
 use nlrom::case::Case;
-use nlrom::hbm::frf::{case_continuation, frequency_response};
+use nlrom::hbm::frf::frequency_response;
 use nlrom::hbm::ResponseOptions;
-use nlrom::solve::SectorProblem;
+use nlrom::problem::sector::SectorProblem;
+use nlrom::problem::settings::case_continuation;
 use nlrom::{model, reduction, sama, Error};
 
 fn main() -> nlrom::Result<()> {

@@ -89,6 +89,36 @@ pub struct Case {
     pub sweep_point: Option<SweepPoint>,
 }
 
+/// What a case describes; the one rule every command dispatches on ([`Case::kind`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CaseKind {
+    /// `[damper]`: the underplatform damper of Gastaldi & Berruti 2018, computed by time
+    /// marching only.
+    Damper,
+    /// A model on matrix rows: matrices without a mesh, or any model (also one assembled from a
+    /// mesh) with `[[element]]` friction elements on DOF combinations. Solved on the dense free
+    /// rows, without reduction.
+    Matrix,
+    /// A mesh model with `[reduction]` (optionally `[cyclic]`) and `[[contact]]` interfaces
+    /// between node groups: solved on the reduced sector.
+    Sector,
+}
+
+impl Case {
+    /// The kind of the case: `[damper]` → [`CaseKind::Damper`]; no mesh, or any `[[element]]`
+    /// → [`CaseKind::Matrix`] (elements act on matrix rows, which only the unreduced model has);
+    /// else [`CaseKind::Sector`].
+    pub fn kind(&self) -> CaseKind {
+        if self.damper.is_some() {
+            CaseKind::Damper
+        } else if self.model.mesh.is_none() || !self.element.is_empty() {
+            CaseKind::Matrix
+        } else {
+            CaseKind::Sector
+        }
+    }
+}
+
 /// One point of a parameter sweep.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SweepPoint {

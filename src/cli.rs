@@ -686,9 +686,9 @@ fn contact(case_path: &Path, as_json: bool) -> Result<()> {
 /// `nlrom march`: time marching of a `[damper]`, matrix-defined or sector ROM case; writes `/march/` and
 /// reports the counts (steps, iterations per step, state changes, wall time).
 fn march(a: &MarchArgs) -> Result<()> {
-    use crate::march::{
-        from_case::case_march, integrate::march as run_march, output::write_march_results,
-    };
+    use crate::march::march as run_march;
+    use crate::pipeline::march_output::write_march_results;
+    use crate::problem::march_case::case_march;
     let start = Instant::now();
     let case = Case::load(&a.case)?;
     let cm = case_march(&case, a.scheme.map(Scheme::to_case), &mut log_stderr)?;

@@ -1,28 +1,32 @@
 //! # nlrom — nonlinear reduced-order models of structures with friction contacts
 //!
-//! One pipeline in four stages; data flows one way through the modules:
+//! The modules are layered: each may use only the modules listed above it in this table (the one
+//! exception: [`error`] wraps the mesh reader's error type). `tests/layering.rs` checks every
+//! `crate::` path of the compiled code against this order.
 //!
-//! | stage | module | what it holds |
+//! | layer | module | what it holds |
 //! |---|---|---|
-//! | 1 import | [`mesh`] | Gmsh MSH 2.2/4.1 reader, physical groups, boundary faces |
-//! | 1 import | [`matrix_io`] | Matrix Market matrices and the DOF map (`dofs.csv`) |
-//! | 1 model | [`fe`] | 3-D elasticity: shape functions, quadrature, parallel assembly of K and M, clamping |
-//! | 1 model | [`model`] | the structural model of a case: assembled or imported K, M after clamping |
-//! | 1–2 modal | [`eigen`] | sparse shift-invert eigensolver K φ = λ M φ (lowest modes), reusable factorisation |
-//! | 2 cyclic | [`cyclic`] | cyclic-symmetry geometry: sector rotation R_α, frontier node pairing, harmonic indices k_n |
-//! | 2 reduction | [`reduction`] | Craig–Bampton (streamed static modes), cyclic transform per k, GSI, the ROM of a case |
-//! | 2 ROM | [`rom`] | the reduced-order model per harmonic index: matrices and reduced-DOF description |
-//! | 3 contact | [`contact`] | friction contact law, AFT evaluation, analytic Jacobians, contact pairs |
-//! | — | [`march`] | time marching: Newmark, adaptive step, piecewise-linear Newmark, quasi-static (Gastaldi & Berruti 2018) |
-//! | 3 contact | [`sama`] | contact pairs: target placement, projection, SAMA weights (eqs 28–32), node-to-node |
-//! | 3–4 | [`harmonics`] | real harmonic layout (conventions §4) and the `HarmonicForce` interface |
-//! | 5 output | [`output`] | HDF5 files: the ROM file and the results file (atomic writes, h5py-readable) |
-//! | 4 | [`hbm`] | harmonic balance: per-harmonic dynamic stiffness, condensation on the nonlinear DOFs, residual, Newton |
-//! | 4 | [`continuation`] | pseudo-arc-length continuation in ω (or the excitation level) through folds |
-//! | 4–5 | [`pipeline`] | the commands `reduce`, `solve`, `run`, `batch`, `demo`: ROM reuse, sweeps in parallel, results file, summary (resonance, Q) |
-//! | 4 | [`solve`] | the harmonic balance problem of a reduced sector: ROM per k_n, contact pairs, engine-order excitation |
-//! | — | [`case`] | the TOML case file (`docs/case-file.md`) |
-//! | — | [`cli`] | the command line |
+//! | foundation | [`error`] | the error type, exit codes |
+//! | foundation | [`mesh`] | Gmsh MSH 2.2/4.1 reader, physical groups, boundary faces |
+//! | foundation | [`matrix_io`] | Matrix Market matrices and the DOF map (`dofs.csv`) |
+//! | foundation | [`harmonics`] | real harmonic layout and the `HarmonicForce` interface |
+//! | schema | [`case`] | the TOML case file: tables, validation, group checks, sweeps, [`case::Case::kind`] |
+//! | model | [`cyclic`] | cyclic-symmetry geometry: sector rotation R_α, frontier node pairing, harmonic indices k_n |
+//! | model | [`rom`] | the reduced-order model per harmonic index: matrices and reduced-DOF description |
+//! | model | [`output`] | HDF5 files: the ROM file and the results file (atomic writes, h5py-readable) |
+//! | model | [`fe`] | 3-D elasticity: shape functions, quadrature, parallel assembly of K and M, clamping |
+//! | model | [`model`] | the structural model of a case: assembled or imported K, M after clamping |
+//! | model | [`eigen`] | sparse shift-invert eigensolver K φ = λ M φ (lowest modes), reusable factorisation |
+//! | model | [`reduction`] | Craig–Bampton (streamed static modes), cyclic transform per k, GSI, the ROM of a case |
+//! | contact | [`contact`] | friction contact law, AFT evaluation, analytic Jacobians, contact pairs |
+//! | contact | [`sama`] | contact interfaces: target placement, projection, SAMA weights (Battiato 2021, eqs 28–32), node-to-node |
+//! | solvers | [`nonlinear`] | r(x, λ) = 0: `ParameterSystem`, Newton |
+//! | solvers | [`continuation`] | pseudo-arc-length continuation in ω (or the excitation level) through folds |
+//! | solvers | [`hbm`] | harmonic balance: per-harmonic dynamic stiffness, condensation on the nonlinear DOFs, residual, stability |
+//! | solvers | [`march`] | time marching: Newmark, adaptive step, piecewise-linear Newmark, quasi-static (Gastaldi & Berruti 2018) |
+//! | problem | [`problem`] | a case as a solvable problem: ROM store, matrix case, reduced sector, damper, march of a case |
+//! | commands | [`pipeline`] | the commands `reduce`, `solve`, `run`, `batch`, `demo` and the `/march/` results: reporting, sweeps in parallel, summary (resonance, Q) |
+//! | commands | [`cli`] | the command line |
 //!
 //! The user documentation (case file, results file, theory, validation) is in `docs/`.
 
@@ -43,9 +47,9 @@ pub mod model;
 pub mod nonlinear;
 pub mod output;
 pub mod pipeline;
+pub mod problem;
 pub mod reduction;
 pub mod rom;
 pub mod sama;
-pub mod solve;
 
 pub use error::{Error, Result};

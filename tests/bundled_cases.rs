@@ -1,5 +1,5 @@
 //! Every case file bundled in `cases/`, `cases/paper/` and `cases/nlvib/` (the cases users start from, and the
-//! ones the README's commands run) parses and validates, and every group it names exists in its
+//! ones the documentation's commands run) parses and validates, and every group it names exists in its
 //! mesh.
 
 use std::path::{Path, PathBuf};

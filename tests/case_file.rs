@@ -1,4 +1,4 @@
-//! The TOML case file: the examples of interface.md parse, errors name the key and the line.
+//! The TOML case file: the examples of docs/case-file.md parse, errors name the key and the line.
 
 use std::path::{Path, PathBuf};
 
@@ -8,7 +8,7 @@ use nlrom::case::{
 use nlrom::mesh::{ElementBlock, ElementType, Mesh, MshFormat, MshVersion, PhysicalGroup};
 use nlrom::Error;
 
-/// The full example of interface.md, verbatim (with `[response]` added).
+/// The full example of the founding case-file contract, verbatim (with `[response]` added).
 const FULL: &str = r#"title = "shrouded sector, conforming shroud"
 
 [model]
@@ -70,7 +70,7 @@ scheme = "piecewise-linear"           # newmark | adaptive | piecewise-linear | 
 file = "results/shroud_conforming.h5"
 "#;
 
-/// The matrix-defined example of interface.md, completed with a frequency range.
+/// The matrix-defined example of the case-file contract, completed with a frequency range.
 const MATRIX: &str = r#"[model]
 stiffness = "K.mtx"
 mass = "M.mtx"

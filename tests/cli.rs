@@ -1,4 +1,4 @@
-//! The `nlrom` binary: `mesh info` output and exit statuses (`interface.md`).
+//! The `nlrom` binary: `mesh info` output and exit statuses (`docs/user-guide.md`).
 
 use std::path::Path;
 use std::process::Command;

@@ -1,5 +1,5 @@
 //! One contact element over a period (`nlrom::contact::{aft, element}`): AFT round trip, the
-//! Jenkins closed forms of `methods.md`, energy per cycle against the loop area, the separation
+//! Jenkins closed forms (`docs/theory.md`, "The friction contact element"), energy per cycle against the loop area, the separation
 //! fraction under harmonic normal motion, and the analytic Jacobian against central finite
 //! differences in every contact regime, for both variants and H ∈ {1, 3, 7}.
 
@@ -46,7 +46,7 @@ fn aft_round_trip_is_exact_for_band_limited_signals() {
     .is_err());
 }
 
-/// The Jenkins element (k_t, slip force F_s = μ n0) under u = A cos τ (`methods.md`).
+/// The Jenkins element (k_t, slip force F_s = μ n0) under u = A cos τ (`docs/theory.md`).
 #[test]
 fn jenkins_closed_forms() {
     let aft = Aft::new(HarmonicLayout::new(1, 4096).unwrap()).unwrap();

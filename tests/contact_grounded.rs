@@ -1,5 +1,5 @@
 //! Friction elements on DOF combinations (`nlrom::contact::grounded`, `[[element]]` of
-//! `interface.md`): the Jenkins closed forms through a case file, the two-DOF element against the
+//! `docs/case-file.md`): the Jenkins closed forms through a case file, the two-DOF element against the
 //! grounded one, the single-DOF oscillator's closed-form amplitude solved by Newton with the
 //! analytic Jacobian, the Jacobian and ∂F/∂n0 against central differences, input errors.
 
@@ -24,7 +24,7 @@ fn case_elements(elements: &str) -> Vec<FrictionElement> {
         .element
 }
 
-/// Jenkins element k_t = 1, F_s = μ n0 = 0.3 to the ground under q = A cos τ (`methods.md`).
+/// Jenkins element k_t = 1, F_s = μ n0 = 0.3 to the ground under q = A cos τ (`docs/theory.md`).
 #[test]
 fn jenkins_from_a_case_file() {
     let els = case_elements(
@@ -74,7 +74,7 @@ fn two_dof_element_equals_grounded_element_on_the_difference() {
     }
 }
 
-/// m q̈ + c q̇ + k q + f_J(q) = F cos ωt with one harmonic: the closed form of `methods.md` gives
+/// m q̈ + c q̇ + k q + f_J(q) = F cos ωt with one harmonic: the closed form (`docs/theory.md`) gives
 /// amplitude 1 at ω = 0.952957 and 1.249892 (k = m = 1, c = 0.1, k_t = 1, F_s = 0.3, F = 0.5),
 /// with Q = F / (k − mω² + a1/A + i(cω + |b1|/A)). The harmonic-balance residual with the element
 /// vanishes there, and Newton with the element's analytic Jacobian, started 10 % away, converges

@@ -1,4 +1,4 @@
-//! Continuation into contact separation (microslip paper, seed 002, §4.2: low preload + normal
+//! Continuation into contact separation (microslip paper, Cigeroglu, An & Menq 2007, §4.2: low preload + normal
 //! load variation → separation → softening): two oscillators, x tangential and y normal at one
 //! friction element (k_t = 1, k_n = 3, μ = 0.3, n0 = 0.2), x slipping, the y resonance bent by
 //! separation. The separation onset is a sharp fold; before the corrector's step check, Newton
@@ -8,8 +8,7 @@
 //!
 //! With the largest step 0.02 rad/s used here the corrector still fails just past the onset
 //! (ω ≈ 1.5633, reported); with steps ≤ 0.005 rad/s the same case passes the onset fold. The
-//! second test traces both turning points of a damped variant (issue 7 item "fold with
-//! separation").
+//! second test traces both turning points of a damped variant.
 
 mod hbm_support;
 
@@ -140,8 +139,8 @@ fn solve_at_amplitude<S: ParameterSystem>(
     )))
 }
 
-/// Both turning points of a softening-by-separation resonance (issue 7 acceptance "friction with
-/// separation produces a fold"; microslip paper, seed 002, §4.2 and Fig. 13: low preload, normal
+/// Both turning points of a softening-by-separation resonance (friction with separation produces a
+/// fold; microslip paper, Cigeroglu, An & Menq 2007, §4.2 and Fig. 13: low preload, normal
 /// load variation → separation → softening, two jumps with an unstable branch between them).
 ///
 /// Case: the two oscillators with damping c = 0.1 N·s/m, forces 0.05 N (tangential) and

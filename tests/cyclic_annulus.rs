@@ -1,4 +1,4 @@
-//! The definitive cyclic-symmetry test (methods.md, "Cyclic symmetry on the CB model"): the union
+//! The definitive cyclic-symmetry test (`docs/theory.md`, "Cyclic symmetry"): the union
 //! over k = 0..N−1 of the sector frequencies equals the frequencies of the full annulus — 8 rotated
 //! copies of meshes/sector8.msh merged at the frontiers, assembled by nlrom as an ordinary model,
 //! hub clamped — including multiplicities (k and N − k give the same frequencies: double modes).

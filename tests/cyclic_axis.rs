@@ -1,4 +1,4 @@
-//! Cyclic symmetry with nodes on the axis (issue 4 item 3): a sector of a solid disk without a
+//! Cyclic symmetry with nodes on the axis: a sector of a solid disk without a
 //! hole (meshes/disk8.msh, `tools/meshes/make_disk_mesh.py`: N = 8, radius 0.1 m, thickness 0.01 m,
 //! tetra10, rim clamped), whose z-axis edge belongs to both frontiers. Each axis node obeys
 //! `u = e^{iφ_k} R_α u` (`nlrom::cyclic::axis_basis`). Reference: the full disk — 8 rotated

@@ -1,4 +1,4 @@
-//! Cyclic-symmetry geometry (`conventions.md` §2): sector rotation, frontier pairing on the bundled
+//! Cyclic-symmetry geometry (`docs/conventions.md` §2): sector rotation, frontier pairing on the bundled
 //! sector models (N = 24 about z through the origin), harmonic indices.
 
 use std::path::PathBuf;

@@ -3,9 +3,9 @@
 //!
 //! - every key of the schema appears in it. The keys are derived from the source of the schema
 //!   (`src/case.rs` or `src/case/**/*.rs`): every struct that derives `Deserialize` is a table,
-//!   its fields are keys (`#[serde(rename = "…")]` honoured, `#[serde(skip)]` left out), a field
-//!   whose type is another such struct — or a type read through `#[serde(try_from = "Spec")]` —
-//!   is a nested table, walked from `Case` down. A key is documented when it is the first cell
+//!   its fields are keys (`#[serde(rename = "…")]` and every `alias` honoured, `#[serde(skip)]`
+//!   left out), a field whose type is another such struct — or a type read through
+//!   `#[serde(try_from = "Spec")]` — is a nested table, walked from `Case` down. A key is documented when it is the first cell
 //!   of a table row of the page, written as its full dotted path (`contact.misalignment.rotate.axis`);
 //! - every key used by a bundled case (`cases/**/*.toml`) is documented there, and every sweep
 //!   path they use matches a documented sweepable path.
@@ -39,11 +39,35 @@ fn attr_value(attrs: &str, name: &str) -> Option<String> {
     rest.find('"').map(|end| rest[..end].to_string())
 }
 
+/// Every value of `name = "…"` inside an attribute text (e.g. several `alias`es).
+fn attr_values(attrs: &str, name: &str) -> Vec<String> {
+    let pat = format!("{name} = \"");
+    let mut out = Vec::new();
+    let mut rest = attrs;
+    while let Some(at) = rest.find(&pat) {
+        rest = &rest[at + pat.len()..];
+        if let Some(end) = rest.find('"') {
+            out.push(rest[..end].to_string());
+        }
+    }
+    out
+}
+
 /// Net count of `open` minus `close` characters.
 fn depth(text: &str, open: char, close: char) -> i64 {
     text.chars()
         .map(|c| (c == open) as i64 - (c == close) as i64)
         .sum()
+}
+
+/// Appends `line` to the attribute text `buf` when it is (part of) an attribute; false otherwise.
+fn take_attribute(buf: &mut String, line: &str) -> bool {
+    let inside = line.starts_with("#[") || (!buf.is_empty() && depth(buf, '[', ']') > 0);
+    if inside {
+        buf.push_str(line);
+        buf.push(' ');
+    }
+    inside
 }
 
 /// The deserialised structs and enums of Rust source text, by name.
@@ -55,12 +79,7 @@ fn parse_schema(source: &str) -> BTreeMap<String, Item> {
     while i < lines.len() {
         let line = lines[i].trim();
         i += 1;
-        if line.starts_with("#[") || (!attrs.is_empty() && depth(&attrs, '[', ']') > 0) {
-            attrs.push_str(line);
-            attrs.push(' ');
-            continue;
-        }
-        if line.starts_with("//") || line.is_empty() {
+        if take_attribute(&mut attrs, line) || line.starts_with("//") || line.is_empty() {
             continue;
         }
         let decl = line
@@ -98,14 +117,7 @@ fn parse_schema(source: &str) -> BTreeMap<String, Item> {
                 if kind != "struct" {
                     continue;
                 }
-                if l.starts_with("#[")
-                    || (!field_attrs.is_empty() && depth(&field_attrs, '[', ']') > 0)
-                {
-                    field_attrs.push_str(l);
-                    field_attrs.push(' ');
-                    continue;
-                }
-                if l.starts_with("//") || l.is_empty() {
+                if take_attribute(&mut field_attrs, l) || l.starts_with("//") || l.is_empty() {
                     continue;
                 }
                 let f = l
@@ -129,7 +141,11 @@ fn parse_schema(source: &str) -> BTreeMap<String, Item> {
                     continue;
                 }
                 let key = attr_value(&fa, "rename").unwrap_or_else(|| ident.to_string());
-                fields.push((key, ty.trim_end_matches(',').to_string()));
+                let ty = ty.trim_end_matches(',').to_string();
+                for alias in attr_values(&fa, "alias") {
+                    fields.push((alias, ty.clone()));
+                }
+                fields.push((key, ty));
             }
         }
         if deserialized || try_from.is_some() {
@@ -421,6 +437,8 @@ pub struct Case {
 struct Model {
     #[serde(rename = "young-modulus")]
     young: f64,
+    #[serde(default, alias = "span")]
+    length: f64,
     range: Range,
 }
 
@@ -450,9 +468,11 @@ pub struct NotSchema {
         keys,
         [
             "model",
+            "model.length",
             "model.range",
             "model.range.start_hz",
             "model.range.start_rad_s",
+            "model.span",
             "model.young-modulus",
             "parts",
             "parts.name",

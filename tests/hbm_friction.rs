@@ -1,5 +1,5 @@
 //! Harmonic balance with friction (contact::element through a DOF-combination wrapper) against
-//! the closed forms of `methods.md`: the single-DOF Jenkins oscillator (H = 1) crossing amplitude
+//! the closed forms of `docs/theory.md`: the single-DOF Jenkins oscillator (H = 1) crossing amplitude
 //! 1 at ω = 0.952957 and 1.249892; Den Hartog's rigid-Coulomb amplitude ratios (H = 7, large k_t);
 //! the stuck limit (μ → ∞) equal to the linear FRF.
 
@@ -40,7 +40,7 @@ fn grounded_jenkins(kt: f64, slip_force: f64) -> DofElements {
     )
 }
 
-/// The closed-form HB-1 relation of methods.md, relative: ((k + a1/A − mω²)² + (cω + |b1|/A)²) A²
+/// The closed-form HB-1 relation (`docs/theory.md`), relative: ((k + a1/A − mω²)² + (cω + |b1|/A)²) A²
 /// / F² − 1 with k = m = 1, c = 0.1, k_t = 1, F_s = 0.3, F = 0.5.
 fn jenkins_relation(omega: f64, a: f64) -> f64 {
     let (kt, fs, c, f) = (1.0, 0.3, 0.1, 0.5);

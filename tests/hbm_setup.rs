@@ -9,10 +9,11 @@ use faer::{c64, Mat};
 use hbm_support::{complex_solve, dense};
 use nlrom::case::Case;
 use nlrom::harmonics::HarmonicLayout;
-use nlrom::hbm::frf::{case_continuation, frequency_response};
-use nlrom::hbm::setup::{matrix_setup, modal_damping};
+use nlrom::hbm::frf::frequency_response;
 use nlrom::hbm::{HbmSystem, ResponseOptions};
 use nlrom::model;
+use nlrom::problem::matrix_case::{matrix_setup, modal_damping};
+use nlrom::problem::settings::case_continuation;
 
 /// A 3-DOF chain ground–1–2–3 (springs 2, 1, 1; masses 1, 1, 2) in Matrix Market files.
 fn write_chain(dir: &Path) {

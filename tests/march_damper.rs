@@ -8,9 +8,9 @@ use std::process::Command;
 
 use nlrom::case::{Case, MarchScheme};
 use nlrom::march::element::Direction;
-use nlrom::march::from_case::{case_march, CaseMarch};
 use nlrom::march::{march, MarchOutcome};
 use nlrom::output::{read_results, H5Reader, ResponseDof};
+use nlrom::problem::march_case::{case_march, CaseMarch};
 
 /// Runs `nlrom march CASE -o OUT --json EXTRA...`, asserts success and returns the JSON report.
 fn march_json(case: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
@@ -366,7 +366,7 @@ steps_per_period = 100
     assert!(!dir.path().join("y.h5").exists());
 }
 
-/// A matrix-defined case (methods.md's Jenkins oscillator: m = k = 1, Rayleigh c = 0.1 M, k_t = 1,
+/// A matrix-defined case (the Jenkins oscillator of `docs/theory.md`: m = k = 1, Rayleigh c = 0.1 M, k_t = 1,
 /// F_s = 0.3, F = 0.5 at ω = 0.952957) through `nlrom march`: marched to steady state, its
 /// first-harmonic amplitude equals the H = 7 harmonic balance of `nlrom::hbm` (0.991341,
 /// tests/march_hbm.rs) within 1e-3.

@@ -2,7 +2,7 @@
 //! oscillators with an `[[element]]` friction element (`contact::grounded::DofElements` on the HB
 //! side, `march::element` on the marching side — the same `contact::law`), marched to steady state
 //! by piecewise-linear Newmark, whose first-harmonic amplitude must equal the HB's within 1 %
-//! (issue 9's acceptance; it closes issue 7's cross-check). The HB point is the end of a frequency
+//! (the cross-check of the two methods). The HB point is the end of a frequency
 //! continuation (`hbm::frf::frequency_response`) that stops exactly at the marched ω.
 
 use std::path::Path;
@@ -12,11 +12,11 @@ use nlrom::contact::grounded::DofElements;
 use nlrom::continuation::{ContinuationOptions, PathEnd};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::frf::frequency_response;
-use nlrom::hbm::setup::matrix_setup;
 use nlrom::hbm::{HbmSystem, ResponseOptions};
-use nlrom::march::from_case::case_march;
 use nlrom::march::march;
 use nlrom::model;
+use nlrom::problem::march_case::case_march;
+use nlrom::problem::matrix_case::matrix_setup;
 
 const HARMONICS: usize = 7;
 
@@ -105,7 +105,7 @@ fn compare(case: &Case, start: f64, omega: f64, what: &str) -> f64 {
     rel
 }
 
-/// methods.md's Jenkins oscillator (m = k = 1, c = 0.1, k_t = 1, F_s = μ n0 = 0.3, F = 0.5) at
+/// the Jenkins oscillator of `docs/theory.md` (m = k = 1, c = 0.1, k_t = 1, F_s = μ n0 = 0.3, F = 0.5) at
 /// ω = 0.952957, where the one-harmonic balance crosses amplitude 1.
 #[test]
 fn jenkins_sdof_matches_hbm() {

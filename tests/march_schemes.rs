@@ -185,7 +185,7 @@ fn piecewise_linear_equals_standard_newmark_at_the_same_step() {
 /// Quasi-static method on a massless system k q + f_t(q) = F cos ωt equals a direct static
 /// hysteresis computation (bisection of the monotone scalar equation at every instant, with the
 /// slider carried along), and its force harmonics under a prescribed u = A cos ωt equal the
-/// Jenkins closed form of methods.md (a1 = 0.2523158, |b1| = 0.2673803 for k_t = 1, F_s = 0.3, A = 1).
+/// Jenkins closed form of `docs/theory.md` (a1 = 0.2523158, |b1| = 0.2673803 for k_t = 1, F_s = 0.3, A = 1).
 #[test]
 fn quasi_static_equals_direct_static_hysteresis() {
     let (k, kt, fs, f, omega) = (0.5, 1.0, 0.3, 1.0, 3.0);

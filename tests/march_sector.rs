@@ -1,10 +1,10 @@
-//! Time marching of a reduced sector (`nlrom::march::sector`: the real ROM of meshes/sector8.msh
+//! Time marching of a reduced sector (`nlrom::problem::sector_march`: the real ROM of meshes/sector8.msh
 //! with node-to-node shroud contact) against the project's other methods on the same case:
 //! - stuck contact (μ = 1e6): the steady first harmonic equals the direct complex solve
 //!   (K + K_c − ω²M + iωC) Q = F of the marched matrices, for k = 0 and k = N/2, and without
 //!   `[cyclic]` or contact;
 //! - micro-slip: the steady first-harmonic amplitude equals the harmonic balance of
-//!   `nlrom::solve::SectorProblem` (PairSet kinematics, AFT, H = 5) within 1 % (issue 9);
+//!   `nlrom::problem::sector::SectorProblem` (PairSet kinematics, AFT, H = 5) within 1 %;
 //!
 //! A travelling wave (k ≠ 0, N/2) is an input error naming `engine_order` (tests/march_damper.rs).
 
@@ -13,12 +13,12 @@ mod common;
 use faer::linalg::solvers::Solve;
 use faer::{c64, Mat};
 use nlrom::case::{Case, MarchScheme};
-use nlrom::march::from_case::{case_march, CaseMarch};
 use nlrom::march::{march, MarchOutcome};
 use nlrom::model;
+use nlrom::problem::march_case::{case_march, CaseMarch};
+use nlrom::problem::sector::SectorProblem;
 use nlrom::reduction::reduce;
 use nlrom::sama::build_interfaces;
-use nlrom::solve::SectorProblem;
 
 use common::cli::root;
 use common::sector_hb::hb_outputs;
@@ -118,7 +118,7 @@ fn run(case: &Case) -> (CaseMarch, MarchOutcome) {
     (cm, out)
 }
 
-/// The first harmonics (complex, `conventions.md` §4) of the reported rows over the last period.
+/// The first harmonics (complex, `docs/conventions.md` §4) of the reported rows over the last period.
 fn march_h1(cm: &CaseMarch, out: &MarchOutcome) -> Vec<c64> {
     cm.response
         .iter()

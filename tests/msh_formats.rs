@@ -379,7 +379,7 @@ fn periodic_links_map_frontier_corners_by_rotation() {
     // Gmsh writes $Periodic for the frontier surfaces (and, in 4.1, their curves and points): the
     // row-major affine map is a rotation by ±α = 2π/24 about z that takes every master node of a
     // listed pair onto its slave node (to 1e-12 of the model size). Only corner nodes are listed
-    // (methods.md).
+    // (`docs/theory.md`).
     for (rel, links, sectors) in [
         ("meshes/sector_conforming.msh", 18, 24.0),
         ("meshes/formats/sector_conforming.v41-binary.msh", 18, 24.0),

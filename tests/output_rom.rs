@@ -1,5 +1,5 @@
 //! The ROM file (`nlrom::output::{write_rom, read_rom}`): bitwise round trip of every field,
-//! h5py reading the layout of README "ROM file", and errors that name the file and the dataset.
+//! h5py reading the layout of `docs/results-file.md`, "ROM file", and errors that name the file and the dataset.
 
 mod common;
 

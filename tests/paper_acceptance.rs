@@ -1,10 +1,10 @@
-//! Issue 8's acceptance on the bundled models, at the paper's nominal preload: the SAMA model of
+//! The SAMA acceptance on the bundled models, at the paper's nominal preload: the SAMA model of
 //! the non-conforming sector (`cases/paper/m1_nonconforming.toml`, target face 2× coarser,
 //! interpolated coupling) against the node-to-node benchmark on the conforming sector
 //! (`cases/paper/m1_conforming.toml`), mode M1, n0 = 113 N, each solved end to end by
 //! `nlrom solve` (mesh, assembly, CB + cyclic reduction, SAMA, HB with continuation).
 //! Goal: resonance frequency within 0.5 %, peak amplitude within 3 %. Every preload of both
-//! modes is checked by `python3 tools/validation/paper_comparison.py` (README, "The SAMA paper's experiment").
+//! modes is checked by `python3 tools/validation/paper_comparison.py` (`docs/validation.md`, "The SAMA paper's experiment").
 
 mod common;
 
@@ -60,11 +60,11 @@ fn sama_on_the_nonconforming_sector_matches_the_conforming_benchmark() {
         100.0 * df,
         100.0 * da
     );
-    // The benchmark itself: the full-window run of the README (785.502 Hz, 1.0064e-6 m); the
+    // The benchmark itself: the full-window run of `docs/validation.md` (785.502 Hz, 1.0064e-6 m); the
     // peak is sampled by the continuation, so the two agree to about a step.
     assert!((f_c / 785.502 - 1.0).abs() < 1e-3, "{f_c}");
     assert!((a_c / 1.0064e-6 - 1.0).abs() < 1e-2, "{a_c}");
-    // Issue 8's acceptance (measured +0.09 %, +0.25 % in the full-window run).
+    // The acceptance: 0.5 % / 3 % (measured +0.09 %, +0.25 % in the full-window run).
     assert!(df.abs() < 5e-3, "resonance: {:+.3} %", 100.0 * df);
     assert!(da.abs() < 3e-2, "amplitude: {:+.2} %", 100.0 * da);
     std::fs::remove_dir_all(&dir).ok();

@@ -1,4 +1,4 @@
-//! Issue 8 item 2: the per-element contact data of a sector FRF (`/contact/<name>/elements/<i>`)
+//! The per-element contact data of a sector FRF (`/contact/<name>/elements/<i>`)
 //! and the Python plots made from it. The bundled demo (N = 8 shrouded sector, node-to-node
 //! shroud, constant normal load, 1 N excitation: the shroud slips around resonance):
 //! - the per-element fractions average to the interface's `state_fractions` (1e-12) and each

@@ -1,5 +1,5 @@
 //! `nlrom solve` on matrix-defined cases (`cases/chain3_jenkins.toml`: the 3-DOF chain with two
-//! Jenkins elements of issue 7's speed case): the written file against the library's
+//! Jenkins elements of the harmonic-balance speed case): the written file against the library's
 //! `frequency_response`, the stuck limit against a direct linear solve, sweeps in order, bad
 //! input (exit 2 naming the key) and a failing continuation (exit 1, converged points written).
 
@@ -13,11 +13,12 @@ use faer::{c64, Mat};
 use nlrom::case::Case;
 use nlrom::contact::grounded::DofElements;
 use nlrom::harmonics::HarmonicLayout;
-use nlrom::hbm::frf::{case_continuation, frequency_response};
-use nlrom::hbm::setup::matrix_setup;
+use nlrom::hbm::frf::frequency_response;
 use nlrom::hbm::{HbmSystem, ResponseOptions};
 use nlrom::model;
 use nlrom::output::{read_results, ResponseDof, ResultsFile};
+use nlrom::problem::matrix_case::matrix_setup;
+use nlrom::problem::settings::case_continuation;
 
 /// `nlrom solve CASE -o OUT --json -q`: asserts exit status 0, returns the JSON report.
 fn solve_json(case: &Path, out: &Path) -> serde_json::Value {

@@ -1,6 +1,5 @@
-//! Issue 8: a results file written by `nlrom solve` read in Python with h5py only — the
-//! documented datasets exist with the documented shapes and units (README "Results file",
-//! interface.md "Results (HDF5)"), and the FRF peak computed in Python by `tools/post/plot_frf.py`
+//! A results file written by `nlrom solve` read in Python with h5py only — the
+//! documented datasets exist with the documented shapes and units (`docs/results-file.md`), and the FRF peak computed in Python by `tools/post/plot_frf.py`
 //! from the file equals the summary `nlrom solve --json` printed.
 
 mod common;

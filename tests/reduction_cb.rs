@@ -1,4 +1,4 @@
-//! Craig–Bampton against the full model (methods.md, "Craig–Bampton"): the bundled N = 24 sector,
+//! Craig–Bampton against the full model (`docs/theory.md`, "Craig–Bampton reduction"): the bundled N = 24 sector,
 //! hub clamped, no cyclic constraint, masters = both frontiers, shroud contact and target faces and
 //! the excitation node. Also: bad input (too many interface modes).
 
@@ -118,7 +118,7 @@ fn error_table(cb: &CraigBampton, f_full: &[f64], n_interior: usize) -> (Vec<f64
     (worst, worst_but_last)
 }
 
-// Acceptance of issue 4 (CB): the lowest 10 frequencies of the CB model against the full model.
+// The CB acceptance: the lowest 10 frequencies of the CB model against the full model.
 //
 // Finding (checked independently with scipy, tools/benchmarks/bench_reduce.py on the same K, M and master
 // rows, dense eigh of the reduced matrices): nlrom's static-mode blocks agree with scipy's
@@ -214,7 +214,7 @@ group = "excitation"
 force = [0.0, 0.0, 0.2]
 "#;
 
-// Issue 4's CB acceptance read literally: "on the bundled sector (clamped hub, no cyclic
+// The CB acceptance read literally: "on the bundled sector (clamped hub, no cyclic
 // constraint)". Without `[cyclic]` the frontiers are free faces, not masters: the case's master set
 // (`case_master_groups`, item 1 of the issue) is the shroud contact and target faces and the
 // excitation node, 393 DOF. Measured: with 30 interface modes modes 1–5 and 7–10 are within

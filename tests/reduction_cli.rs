@@ -1,5 +1,5 @@
 //! `nlrom modes --stage cb|cs|gsi [--harmonic K] --json` on the bundled N = 8 cyclic case
-//! (`cases/sector8_cs.toml`): interface.md JSON keys, consistency between the stages, and exit
+//! (`cases/sector8_cs.toml`): the JSON keys of `docs/user-guide.md`, consistency between the stages, and exit
 //! status 2 with a message for bad input.
 
 use std::process::Command;

@@ -1,5 +1,5 @@
 //! SAMA and node-to-node contact pairs on the bundled shrouded sector (N = 24): conforming and
-//! non-conforming shroud faces (issue 6 acceptance), and the `nlrom contact` command.
+//! non-conforming shroud faces, and the `nlrom contact` command.
 
 use std::path::Path;
 use std::process::Command;
@@ -560,7 +560,7 @@ fn rigid_rotation_residuals(
     (interp, pair)
 }
 
-/// The cause of the paper comparison's stiff SAMA results (README, issue 8): on the
+/// The cause of the paper comparison's stiff SAMA results (`docs/validation.md`): on the
 /// non-conforming shroud the array's pairs c–t_j join points up to a target element apart, so a
 /// rigid rotation (ω = 1e-4 rad about the axis, |u| ≈ 2.6e-5 m) stretches them by up to
 /// |ω| × |x_c − x_tj| (measured 2.60e-7 m: 1 % of the motion), and even the inverse-distance

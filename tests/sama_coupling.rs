@@ -15,10 +15,10 @@ use nlrom::cyclic::phase;
 use nlrom::harmonics::HarmonicForce;
 use nlrom::model;
 use nlrom::output::ContactData;
+use nlrom::problem::sector::SectorProblem;
 use nlrom::reduction::reduce;
 use nlrom::rom::{HarmonicRom, Rom};
 use nlrom::sama::{build_interfaces, ContactInterface};
-use nlrom::solve::SectorProblem;
 
 use common::sector_hb::hb_outputs;
 

@@ -1,4 +1,4 @@
-//! The harmonic balance problem of a reduced sector (`nlrom::solve::SectorProblem`) on the N = 8
+//! The harmonic balance problem of a reduced sector (`nlrom::problem::sector::SectorProblem`) on the N = 8
 //! bundled sector (meshes/sector8.msh): linear limit against the full unreduced sector under the
 //! cyclic constraint, stuck limit against the ROM plus independently assembled contact springs,
 //! and the cyclic consistency of the pair rows, σ and phases under a rigid rotation.
@@ -18,10 +18,10 @@ use nlrom::hbm::{FrequencyPath, HbmSystem};
 use nlrom::mesh::Mesh;
 use nlrom::model::{self, StructuralModel};
 use nlrom::nonlinear::{solve_fixed, NewtonOptions};
+use nlrom::problem::sector::SectorProblem;
 use nlrom::reduction::{free_frontier_pairs, reduce};
 use nlrom::rom::Rom;
 use nlrom::sama::build_interfaces;
-use nlrom::solve::SectorProblem;
 
 const N: usize = 8;
 /// Rayleigh damping C = αM + βK (exactly projected by the reduction, so the full model has the
@@ -139,7 +139,7 @@ fn hb_solve_with<F: HarmonicForce>(p: &SectorProblem, force: &F, omega: f64) -> 
 }
 
 /// The full (unreduced) sector's harmonic 1 at the output DOFs: T_kᴴ (K − ω²M + iωC) T_k q_k =
-/// T_kᴴ f with the library's sparse T_k (`nlrom::cyclic::CyclicTransform`, `conventions.md` §2:
+/// T_kᴴ f with the library's sparse T_k (`nlrom::cyclic::CyclicTransform`, `docs/conventions.md` §2:
 /// u_high = e^{iφ_k} R_α u_low) of the frontier pairs, solved by faer's sparse LU; u = T_k q_k.
 fn full_frf(s: &Setup, k: usize, omega: f64) -> Vec<c64> {
     let (geom, pairs) = free_frontier_pairs(&s.case, &s.model).unwrap();
@@ -203,7 +203,7 @@ fn rel_err(a: &[c64], b: &[c64]) -> f64 {
     (d / n).sqrt()
 }
 
-/// Linear limit (issue 7 acceptance): contact removed (kt = kn = n0 = 0) → the HB response at
+/// Linear limit: contact removed (kt = kn = n0 = 0) → the HB response at
 /// the excitation node equals the full sector's FRF under the cyclic constraint of k_1, within
 /// the Craig–Bampton error (30 fixed-interface modes): below 1e-3 between resonances.
 fn linear_limit(m: usize) {
@@ -298,7 +298,7 @@ fn geom_of(s: &Setup) -> CyclicGeometry {
 }
 
 /// Whether each pair is in contact at the static part Q⁽⁰⁾ of the HB solution x:
-/// n0_j + k_nj v₀ > 0 with v₀ = −n·(u_c − R_α^σ u_t) (k_0 = 0: no phase; `conventions.md` §3).
+/// n0_j + k_nj v₀ > 0 with v₀ = −n·(u_c − R_α^σ u_t) (k_0 = 0: no phase; `docs/conventions.md` §3).
 fn closed_pairs(p: &SectorProblem, x: &[f64], geom: &CyclicGeometry) -> Vec<bool> {
     let q0 = |r: usize| x[p.layout.static_index(r)];
     p.contact

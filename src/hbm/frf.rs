@@ -1,15 +1,13 @@
 //! A frequency response: the continuation of an [`HbmSystem`] in ω with the output DOFs'
-//! response recovered at every point, and the continuation settings of a case's
-//! `[continuation]` table.
+//! response recovered at every point.
 
 use super::response::{output_response, OutputResponse, ResponseOptions};
 use super::stability::is_stable;
 use super::system::{FrequencyPath, HbmSystem, LevelPath};
-use crate::case::Case;
 use crate::continuation::{trace, trace_from, ContinuationOptions, PathEnd, PathPoint};
 use crate::error::{Error, Result};
 use crate::harmonics::HarmonicForce;
-use crate::nonlinear::{solve_fixed, NewtonOptions, NewtonSolution, ParameterSystem};
+use crate::nonlinear::{solve_fixed, NewtonSolution, ParameterSystem};
 
 /// One point of a frequency response.
 #[derive(Clone, Debug)]
@@ -209,28 +207,4 @@ fn level_continuation<F: HarmonicForce>(
         end: Err(why),
         from: tried,
     }
-}
-
-/// The continuation settings of a case's `[continuation]` table (rad/s).
-pub fn case_continuation(case: &Case) -> Result<ContinuationOptions> {
-    let c = case.continuation.as_ref().ok_or_else(|| {
-        Error::input(format!(
-            "{}: key 'continuation': a forced response needs `[continuation] start_hz, end_hz, step_hz` (or the _rad_s keys)",
-            case.path.display()
-        ))
-    })?;
-    let (start, end, step) = c.omega_range();
-    let (min_step, max_step) = c.step_bounds_rad_s();
-    let mut opts = ContinuationOptions::new(start, end, step);
-    opts.min_step = min_step;
-    opts.max_step = max_step;
-    if let Some(n) = c.max_points {
-        opts.max_points = n;
-    }
-    opts.newton = NewtonOptions {
-        tolerance: c.tolerance.unwrap_or(opts.newton.tolerance),
-        max_iterations: c.max_iterations.unwrap_or(opts.newton.max_iterations),
-        ..opts.newton
-    };
-    Ok(opts)
 }

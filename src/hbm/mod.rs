@@ -8,16 +8,15 @@
 //! - [`linear`]: [`LinearModel`] — per harmonic n the dynamic stiffness D⁽ⁿ⁾(ω) of its harmonic
 //!   index, condensed per frequency (eqs. 15–18), with its ω-derivative;
 //! - [`system`]: [`HbmSystem`] — r(Q, ω) = D̄(ω) Q − F̄_e(ω) + F_nl(Q) (eq. 19) and ∂r/∂Q (eq. 21),
-//!   and the [`ParameterSystem`](crate::nonlinear::ParameterSystem) views [`FrequencyPath`] (λ = ω), [`LevelPath`]
-//!   (λ = excitation level at fixed ω) and [`PreloadPath`] (λ = the force's parameter, e.g. the
-//!   preload n0, at fixed ω);
+//!   and the [`ParameterSystem`](crate::nonlinear::ParameterSystem) views [`FrequencyPath`]
+//!   (λ = ω), [`LevelPath`] (λ = excitation level at fixed ω) and [`PreloadPath`] (λ = the
+//!   force's parameter, e.g. the preload n0, at fixed ω);
 //! - [`response`]: harmonics, amplitude and peak of the output DOFs at a solution;
-//! - [`frf`]: a frequency response (continuation + recovery) and a case's continuation settings;
+//! - [`frf`]: a frequency response (continuation + recovery);
 //! - [`stability`]: Hill's method on the uncondensed model — Floquet exponents and a `stable`
 //!   flag per solution point;
 //! - [`preload`]: [`preload::FromStaticEquilibrium`] — contact forces measured from the preloaded
-//!   static equilibrium (the balancing static load of the uncoupled approach, SAMA paper §6.1);
-//! - [`setup`]: the linear part of a matrix-defined case (dense K, M, C, excitation, rows).
+//!   static equilibrium (the balancing static load of the uncoupled approach, SAMA paper §6.1).
 //!
 //! The generic [`ParameterSystem`](crate::nonlinear::ParameterSystem) and Newton are in
 //! [`crate::nonlinear`], path following in [`crate::continuation`].
@@ -26,7 +25,6 @@ pub mod frf;
 pub mod linear;
 pub mod preload;
 pub mod response;
-pub mod setup;
 pub mod stability;
 pub mod system;
 

@@ -17,23 +17,18 @@
 //! | [`lowrank`] | a state's step matrix as a low-rank change of the all-stick one |
 //! | [`integrate`] | the time loop, adaptive step, records, counts |
 //! | [`periodic`] | steady-state detection and harmonics of the last period |
-//! | [`damper`] | the underplatform-damper demonstrator (§2, §6) |
-//! | [`sector`] | the real ROM of a sector (no cyclic symmetry, k = 0, k = N/2) with its `[[contact]]` pairs |
-//! | [`from_case`] | a case file (`[damper]`, a matrix model with `[[element]]`, a sector) as a march |
-//! | [`output`] | the `/march/` group of the results file |
 //! | [`dense`] | small dense linear algebra |
+//!
+//! The march of a case file (a `[damper]`, a model on matrix rows, a reduced sector) is built by
+//! [`crate::problem::march_case`].
 
-pub mod damper;
 pub mod dense;
 pub mod element;
-pub mod from_case;
 pub mod integrate;
 pub mod law;
 pub mod lowrank;
-pub mod output;
 pub mod periodic;
 pub mod schemes;
-pub mod sector;
 pub mod signal;
 pub mod system;
 

@@ -16,14 +16,12 @@ use rayon::prelude::*;
 use serde_json::{json, Value};
 
 use super::progress::Reporter;
-use super::solve::{
-    create_parent, default_rom_file, is_matrix_case, solve_to_file, CurveReport, RomPolicy,
-    SolveOptions,
-};
+use super::solve::{default_rom_file, solve_to_file, CurveReport, SolveOptions};
 use super::summary::CurveSummary;
 use super::summary_cells;
-use crate::case::Case;
+use crate::case::{Case, CaseKind};
 use crate::error::{Error, Result};
+use crate::problem::rom_store::{create_parent, RomPolicy};
 
 /// What `nlrom batch` runs.
 #[derive(Clone, Debug)]
@@ -133,7 +131,7 @@ fn run_job(job: &Job, opts: &BatchOptions, rep: &Reporter) -> JobResult {
     let mut written = None;
     let mut curves = Vec::new();
     let outcome = job_case(job, opts.template.as_deref()).and_then(|case| {
-        let policy = if is_matrix_case(&case) {
+        let policy = if case.kind() == CaseKind::Matrix {
             RomPolicy::ReadIfMatching
         } else {
             RomPolicy::Cache(default_rom_file(&case, &output))

@@ -10,10 +10,11 @@ use std::process::Command;
 use std::time::Instant;
 
 use super::progress::Reporter;
-use super::solve::{solve_to_file, RomPolicy, SolveOptions};
+use super::solve::{solve_to_file, SolveOptions};
 use super::{outcome_json, outcome_text};
 use crate::case::Case;
 use crate::error::{Error, Result};
+use crate::problem::rom_store::RomPolicy;
 
 /// The demo case, relative to the crate root.
 pub const DEMO_CASE: &str = "cases/demo.toml";

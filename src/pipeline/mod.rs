@@ -3,7 +3,7 @@
 //!
 //! * [`solve`]: one case end to end — the ROM (read when its key matches, else reduced), the
 //!   contact pairs, the harmonic balance problem and the frequency response of every sweep point
-//!   (in parallel), gathered into a results file; [`solve::RomPolicy`] says whether the ROM is
+//!   (in parallel), gathered into a results file; [`RomPolicy`] says whether the ROM is
 //!   cached in a file (`run`) or only read (`solve`).
 //! * [`summary`]: resonance frequency, peak amplitude and half-power Q-factor of a curve.
 //! * [`batch`]: many cases (or many meshes with one template case) in a rayon pool of `--jobs`
@@ -16,6 +16,7 @@
 
 pub mod batch;
 pub mod demo;
+pub mod march_output;
 pub mod progress;
 pub mod solve;
 pub mod summary;
@@ -25,17 +26,19 @@ use std::time::Instant;
 
 use serde_json::{json, Value};
 
+pub use crate::problem::rom_store::{RomOrigin, RomPolicy};
 pub use progress::Reporter;
 pub use solve::{
-    default_output, default_rom_file, is_matrix_case, solve_case, solve_to_file, CurveReport,
-    RomOrigin, RomPolicy, SolveOptions, SolveOutcome,
+    default_output, default_rom_file, solve_case, solve_to_file, CurveReport, SolveOptions,
+    SolveOutcome,
 };
 pub use summary::{summarize, CurveSummary};
 
-use crate::case::Case;
+use crate::case::{Case, CaseKind};
 use crate::error::{Error, Result};
 use crate::model;
 use crate::output::write_rom;
+use crate::problem::rom_store::{create_parent, file_info};
 use crate::reduction::reduce;
 
 /// `nlrom reduce CASE -o ROM.h5`: builds the model, reduces it for every harmonic index the case
@@ -57,8 +60,8 @@ pub fn reduce_command(
     }
     let model = model::build(&case, &mut |l| rep.detail(l))?;
     let rom = reduce(&case, &model, &mut |l| rep.detail(l))?;
-    solve::create_parent(output)?;
-    write_rom(output, &rom, &solve::file_info(&case))?;
+    create_parent(output)?;
+    write_rom(output, &rom, &file_info(&case))?;
     rep.info(&format!("wrote {} (key {})", output.display(), rom.key));
     let harmonics: Vec<Value> = rom
         .harmonics
@@ -119,7 +122,7 @@ pub fn solve_command(
     let start = Instant::now();
     let case = Case::load(case_path)?;
     let output = default_output(&case, output);
-    let policy = if cache_rom && !is_matrix_case(&case) {
+    let policy = if cache_rom && case.kind() != CaseKind::Matrix {
         RomPolicy::Cache(default_rom_file(&case, &output))
     } else {
         RomPolicy::ReadIfMatching

@@ -153,6 +153,18 @@ impl CurveBar {
     }
 }
 
+impl crate::problem::Log for Reporter {
+    fn info(&self, line: &str) {
+        Reporter::info(self, line);
+    }
+    fn warn(&self, line: &str) {
+        Reporter::warn(self, line);
+    }
+    fn detail(&self, line: &str) {
+        Reporter::detail(self, line);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::Reporter;

@@ -1,13 +1,14 @@
-//! Stage 4 of a case, end to end: the frequency response of every sweep point (SAMA paper, seed
-//! 004, §2–3: harmonic balance with condensation on the contact DOFs and arc-length continuation),
-//! traced in parallel (rayon) and gathered into a [`ResultsFile`] (`docs/results-file.md`).
+//! Stage 4 of a case, end to end: the frequency response of every sweep point (SAMA paper,
+//! Battiato 2021, §2–3: harmonic balance with condensation on the contact DOFs and arc-length
+//! continuation), traced in parallel (rayon) and gathered into a [`ResultsFile`]
+//! (`docs/results-file.md`).
 //!
 //! Two kinds of case:
-//! - *matrix cases* (no mesh, or `[[element]]` friction elements on DOF combinations): the dense
-//!   linear part of [`crate::hbm::setup::matrix_setup`] condensed on the rows the elements read,
-//!   and the elements of [`DofElements`] on those rows;
-//! - *sector cases* (a mesh with `[reduction]`): the ROM of every harmonic index (read from a ROM
-//!   file whose key matches [`rom_key`], else reduced — see [`RomPolicy`]), the contact pairs of
+//! - *matrix cases* ([`CaseKind::Matrix`]: no mesh, or `[[element]]` friction elements on DOF
+//!   combinations): the dense linear part of [`matrix_setup`] condensed on the rows the elements
+//!   read, and the elements of [`matrix_elements`] on those rows;
+//! - *sector cases* ([`CaseKind::Sector`]): the ROM of every harmonic index (read from a ROM
+//!   file whose key matches, else reduced — see [`RomPolicy`]), the contact pairs of
 //!   [`build_interfaces`] (SAMA or node-to-node) and [`SectorProblem`]; `/contact/<name>` gets the
 //!   pairs and, per point, the fractions of the period in stick, slip and separation.
 //!
@@ -24,38 +25,26 @@ use serde_json::{json, Value};
 
 use super::progress::Reporter;
 use super::summary::{summarize, CurveSummary};
-use crate::case::{Case, FrictionElement, WeightedDofs};
+use crate::case::{Case, CaseKind};
 use crate::contact::element::{ElementReport, HysteresisLoop};
-use crate::contact::grounded::DofElements;
 use crate::contact::pairs::PairState;
 use crate::continuation::PathEnd;
 use crate::error::{Error, Result};
 use crate::harmonics::{HarmonicForce, HarmonicLayout};
-use crate::hbm::frf::{case_continuation, frequency_response};
-use crate::hbm::setup::{matrix_setup, MatrixSetup};
+use crate::hbm::frf::frequency_response;
 use crate::hbm::{HbmSystem, ResponseOptions};
-use crate::mesh::msh::read_msh;
 use crate::mesh::Mesh;
 use crate::model::{self, StructuralModel};
 use crate::output::{
-    read_rom, write_results, write_rom, ContactCurveDetail, ContactData, FileInfo, FrfData,
-    FrfPoint, PointLoops, ResponseDof, ResultsFile,
+    write_results, ContactCurveDetail, ContactData, FileInfo, FrfData, FrfPoint, PointLoops,
+    ResponseDof, ResultsFile,
 };
-use crate::reduction::{reduce, rom_key};
+use crate::problem::matrix_case::{matrix_elements, matrix_setup};
+use crate::problem::rom_store::{create_parent, sector_rom, RomOrigin, RomPolicy};
+use crate::problem::sector::SectorProblem;
+use crate::problem::settings::case_continuation;
 use crate::rom::Rom;
 use crate::sama::{build_interfaces, ContactInterface};
-use crate::solve::SectorProblem;
-
-/// Where the ROM of a sector case comes from.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum RomPolicy {
-    /// `nlrom solve`: read the case's `[rom] file` when its stored key equals [`rom_key`] of the
-    /// case, else reduce in memory (nothing is written).
-    ReadIfMatching,
-    /// `nlrom run`, `batch`, `demo`: read this ROM file when its key matches, else reduce and
-    /// write it there.
-    Cache(PathBuf),
-}
 
 /// How `solve` runs a case.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -75,15 +64,6 @@ impl SolveOptions {
             stability: false,
         }
     }
-}
-
-/// How the ROM of a sector case was obtained.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum RomOrigin {
-    /// Read from this file (its key matched).
-    Reused(PathBuf),
-    /// Reduced now; written to the file if any.
-    Reduced(Option<PathBuf>),
 }
 
 /// The result of one curve (one sweep point).
@@ -187,19 +167,9 @@ pub fn solve_to_file(
     Ok(outcome)
 }
 
-/// Creates the parent directory of `path` if it is missing.
-pub fn create_parent(path: &Path) -> Result<()> {
-    match path.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => {
-            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))
-        }
-        _ => Ok(()),
-    }
-}
-
 /// Solves every sweep point of `case` (in parallel) and gathers the results.
 pub fn solve_case(case: &Case, opts: &SolveOptions, rep: &Reporter) -> Result<SolveOutcome> {
-    if case.damper.is_some() {
+    if case.kind() == CaseKind::Damper {
         return Err(Error::input(format!(
             "{}: a [damper] case is computed by time marching; run `nlrom march {} -o RESULT.h5`",
             case.path.display(),
@@ -208,7 +178,7 @@ pub fn solve_case(case: &Case, opts: &SolveOptions, rep: &Reporter) -> Result<So
     }
     case_continuation(case)?;
     let points = case.sweep_points()?;
-    let (curves, contacts, rom) = if is_matrix_case(case) {
+    let (curves, contacts, rom) = if case.kind() == CaseKind::Matrix {
         let (curves, contacts) = solve_matrix(case, &points, opts.stability, rep)?;
         (curves, contacts, None)
     } else {
@@ -230,11 +200,6 @@ pub fn solve_case(case: &Case, opts: &SolveOptions, rep: &Reporter) -> Result<So
         curves: reports,
         rom,
     })
-}
-
-/// A matrix case: no mesh, or friction elements on DOF combinations.
-pub fn is_matrix_case(case: &Case) -> bool {
-    case.model.mesh.is_none() || !case.element.is_empty()
 }
 
 /// One traced curve: its results group and its report.
@@ -290,149 +255,6 @@ fn matrix_curve(
         evaluate: &|_: &[f64], _: &_, _| Ok(Vec::new()),
     };
     trace_curve(case, &system, dofs, &probe, stability, rep)
-}
-
-/// The `[[element]]` friction elements of a matrix case on the condensed (nonlinear) rows of
-/// `setup`: every case row is mapped to its free row, then to its position among
-/// `setup.nonlinear_rows`.
-pub fn matrix_elements(
-    case: &Case,
-    model: &StructuralModel,
-    setup: &MatrixSetup,
-) -> Result<DofElements> {
-    let mut free_of = vec![None; model.n_dofs];
-    for (i, &row) in model.free.free_dofs.iter().enumerate() {
-        if let Some(slot) = free_of.get_mut(row) {
-            *slot = Some(i);
-        }
-    }
-    let position = |key: &str, d: usize| -> Result<usize> {
-        free_of
-            .get(d)
-            .copied()
-            .flatten()
-            .and_then(|r| setup.nonlinear_position(r))
-            .ok_or_else(|| {
-                Error::input(format!(
-                    "{}: key '{key}': row {d} is not a free row of the model",
-                    case.path.display()
-                ))
-            })
-    };
-    let remap = |key: String, w: &WeightedDofs| -> Result<WeightedDofs> {
-        Ok(WeightedDofs {
-            dofs: w
-                .dofs
-                .iter()
-                .map(|&d| position(&key, d))
-                .collect::<Result<_>>()?,
-            weights: w.weights.clone(),
-        })
-    };
-    let elements = case
-        .element
-        .iter()
-        .enumerate()
-        .map(|(i, e)| {
-            Ok(FrictionElement {
-                tangential: remap(format!("element[{i}].tangential.dofs"), &e.tangential)?,
-                normal: e
-                    .normal
-                    .as_ref()
-                    .map(|n| remap(format!("element[{i}].normal.dofs"), n))
-                    .transpose()?,
-                ..e.clone()
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
-    DofElements::from_case(&elements, setup.nonlinear_rows.len())
-}
-
-/// The ROM of a sector case per `policy`, the sector mesh, and where the ROM came from.
-pub(crate) fn sector_rom(
-    case: &Case,
-    policy: &RomPolicy,
-    rep: &Reporter,
-) -> Result<(Rom, Mesh, RomOrigin)> {
-    let key = rom_key(case)?;
-    let (file, cache) = match policy {
-        RomPolicy::ReadIfMatching => (case.rom.as_ref().map(|r| r.file.clone()), false),
-        RomPolicy::Cache(p) => (Some(p.clone()), true),
-    };
-    if let Some(path) = &file {
-        if path.exists() {
-            match read_rom(path) {
-                Ok(rom) if rom.key == key => {
-                    rep.info(&format!(
-                        "reusing the ROM in {} (key {key}: mesh, material, reduction and contact groups unchanged)",
-                        path.display()
-                    ));
-                    let mesh = read_mesh(case)?;
-                    return Ok((rom, mesh, RomOrigin::Reused(path.clone())));
-                }
-                Ok(rom) => rep.info(&format!(
-                    "the ROM in {} was built from other inputs (key {} ≠ {key}); reducing again",
-                    path.display(),
-                    rom.key
-                )),
-                Err(e) => rep.warn(&format!(
-                    "cannot use the ROM file {}: {e}; reducing again",
-                    path.display()
-                )),
-            }
-        } else if !cache {
-            rep.warn(&format!(
-                "[rom] file {} does not exist; reducing (write it with `nlrom reduce`)",
-                path.display()
-            ));
-        }
-    }
-    let t = Instant::now();
-    rep.info("reducing the model (Craig–Bampton, cyclic symmetry, interface reduction)");
-    let mut model = model::build(case, &mut |l| rep.detail(l))?;
-    let rom = reduce(case, &model, &mut |l| rep.detail(l))?;
-    rep.info(&format!(
-        "ROM of harmonic indices {:?} in {:.2} s",
-        rom.harmonics
-            .iter()
-            .map(|h| h.harmonic_index)
-            .collect::<Vec<_>>(),
-        t.elapsed().as_secs_f64()
-    ));
-    let written = if cache { file } else { None };
-    if let Some(path) = &written {
-        create_parent(path)?;
-        write_rom(path, &rom, &file_info(case))?;
-        rep.info(&format!("wrote the ROM to {} (key {key})", path.display()));
-    }
-    let mesh = model.mesh.take().ok_or_else(|| {
-        Error::input(format!(
-            "{}: a sector case needs `[model] mesh`",
-            case.path.display()
-        ))
-    })?;
-    Ok((rom, mesh, RomOrigin::Reduced(written)))
-}
-
-/// The title and text of a case for the files it writes.
-pub fn file_info(case: &Case) -> FileInfo {
-    FileInfo {
-        title: case.title.clone(),
-        case_text: case.source_text.clone(),
-    }
-}
-
-/// The case's mesh, with its groups checked against the case.
-fn read_mesh(case: &Case) -> Result<Mesh> {
-    let path = case.model.mesh.as_ref().ok_or_else(|| {
-        Error::input(format!(
-            "{}: a sector case needs `[model] mesh`",
-            case.path.display()
-        ))
-    })?;
-    let mesh = read_msh(path)?;
-    case.check_groups(&mesh)?;
-    Ok(mesh)
 }
 
 /// The curves of a sector case; `/contact/` holds the interfaces of sweep point 0 (the sweep

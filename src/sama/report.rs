@@ -1,8 +1,11 @@
-//! The `nlrom contact` report (`docs/user-guide.md`): JSON object and text table of the interfaces.
+//! The `nlrom contact` report (`docs/user-guide.md`): JSON object and text table of the
+//! interfaces, and an interface as the `/contact/<name>` group of the results file
+//! ([`ContactData`]).
 
 use serde_json::{json, Value};
 
-use crate::case::{ContactModel, SamaCoupling};
+use crate::case::{ContactElement, ContactModel, SamaCoupling};
+use crate::output::{ContactData, ContactPairData};
 
 use super::ContactInterface;
 
@@ -19,6 +22,71 @@ pub fn coupling_name(coupling: SamaCoupling) -> &'static str {
     match coupling {
         SamaCoupling::Array => "array",
         SamaCoupling::Interpolated => "interpolated",
+    }
+}
+
+/// The friction element's spelling in the case file and the results.
+pub fn element_name(element: ContactElement) -> &'static str {
+    match element {
+        ContactElement::OneD => "1d",
+        ContactElement::TwoD => "2d",
+    }
+}
+
+impl ContactData {
+    /// The friction elements of a SAMA / node-to-node interface, in the order of the harmonic
+    /// balance's elements: with the array coupling one per target node t_j of each contact node,
+    /// with the weights, frames and eq. 31 parameters `sama` computed; with the interpolated
+    /// coupling one per contact node (weight 1, the node's k_t, k_n and n0_c), whose
+    /// `target_node` is the target node of the largest shape-function share.
+    pub fn from_interface(interface: &ContactInterface) -> Self {
+        let interpolated = interface.coupling == SamaCoupling::Interpolated;
+        let mut pairs = Vec::new();
+        for pair in &interface.pairs {
+            let row =
+                |target_node: u64, weight: f64, kt: f64, kn: f64, preload: f64| ContactPairData {
+                    contact_node: pair.contact_node,
+                    target_node,
+                    weight,
+                    frame: pair.frame,
+                    kt,
+                    kn,
+                    preload,
+                    virtual_point: pair.virtual_point,
+                };
+            if interpolated && pair.targets.len() > 1 {
+                let dominant = (0..pair.targets.len())
+                    .max_by(|&a, &b| pair.weights[a].abs().total_cmp(&pair.weights[b].abs()))
+                    .unwrap_or(0);
+                pairs.push(row(
+                    pair.targets[dominant],
+                    1.0,
+                    pair.kt.iter().sum(),
+                    pair.kn.iter().sum(),
+                    pair.n0_node,
+                ));
+            } else {
+                for j in 0..pair.targets.len() {
+                    pairs.push(row(
+                        pair.targets[j],
+                        pair.weights[j],
+                        pair.kt[j],
+                        pair.kn[j],
+                        pair.n0[j],
+                    ));
+                }
+            }
+        }
+        ContactData {
+            name: interface.name.clone(),
+            model: model_name(interface.model).to_string(),
+            coupling: coupling_name(interface.coupling).to_string(),
+            element: element_name(interface.element).to_string(),
+            sigma: i64::from(interface.sigma),
+            mu: interface.mu,
+            pairs,
+            curves: Vec::new(),
+        }
     }
 }
 

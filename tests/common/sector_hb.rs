@@ -4,7 +4,7 @@ use faer::c64;
 use nlrom::harmonics::HarmonicForce;
 use nlrom::hbm::{FrequencyPath, HbmSystem};
 use nlrom::nonlinear::{solve_fixed, NewtonOptions};
-use nlrom::solve::SectorProblem;
+use nlrom::problem::sector::SectorProblem;
 
 /// Harmonic 1 of the output DOFs (m) of the HB solution at ω (rad/s), by Newton from zero
 /// (tolerance 1e-10), recovered from the condensed solution (SAMA paper eq 18).

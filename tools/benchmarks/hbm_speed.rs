@@ -34,12 +34,12 @@ use nlrom::contact::law::{ContactParams, Variant};
 use nlrom::contact::pairs::{ContactPair, PairSet};
 use nlrom::continuation::trace;
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
-use nlrom::hbm::frf::case_continuation;
 use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel};
 use nlrom::nonlinear::{solve_dense, Linearization, ParameterSystem};
+use nlrom::problem::sector::SectorProblem;
+use nlrom::problem::settings::case_continuation;
 use nlrom::reduction::reduce;
 use nlrom::sama::build_interfaces;
-use nlrom::solve::SectorProblem;
 use nlrom::{model, Result};
 
 const REPEAT: usize = 2;

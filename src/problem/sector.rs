@@ -1,5 +1,12 @@
-//! The harmonic balance problem of a reduced sector with friction contacts (SAMA paper, Battiato 2021,
-//! §2 eqs 10–12; cyclic relative displacement §5 eqs 33–34; `docs/conventions.md` §2–4).
+//! The harmonic balance problem of a reduced sector with friction contacts (SAMA paper,
+//! Battiato 2021, §2 eqs 10–12; cyclic relative displacement §5 eqs 33–34; `docs/conventions.md`
+//! §2–4).
+//!
+//! [`SectorProblem`] ties the ROM of every harmonic index k_n = n·m mod N
+//! ([`crate::rom::Rom`]), the contact pairs of every `[[contact]]` ([`crate::sama`]) and the
+//! engine-order excitation into the [`crate::hbm::LinearModel`] + [`PairSet`] that
+//! [`crate::hbm::HbmSystem`] and [`crate::continuation`] solve. The time march of the same sector
+//! ([`super::sector_march`]) shares its excitation, output-DOF and ROM-row helpers.
 //!
 //! Temporal harmonic n = 0..H of the response of the reference sector lives on the harmonic index
 //! k_n = n·m mod N (m the engine order); its linear part is the ROM of k_n,

@@ -21,10 +21,10 @@ use std::path::Path;
 
 use faer::c64;
 
-use super::from_case::CaseMarch;
-use super::integrate::MarchOutcome;
 use crate::error::Result;
+use crate::march::MarchOutcome;
 use crate::output::{write_results, Attr, Data, Dataset, FileInfo, Group, MarchData, ResultsFile};
+use crate::problem::march_case::CaseMarch;
 
 /// Writes the results file of a march (root attributes from `info`, `/march/`) atomically.
 pub fn write_march_results(

@@ -1,8 +1,8 @@
 //! The reduced model of a sector as a march: the real ROM of a mesh case (`[reduction]`, optional
-//! `[cyclic]`) with its `[[contact]]` interfaces as friction elements of [`super::element`].
+//! `[cyclic]`) with its `[[contact]]` interfaces as friction elements of [`crate::march::element`].
 //!
-//! The pipeline pieces are those of the harmonic balance ([`crate::solve::SectorProblem`]): the
-//! ROM of [`crate::pipeline::solve`] (read from `[rom] file` when its key matches, else reduced),
+//! The pieces are those of the harmonic balance ([`super::sector::SectorProblem`]): the ROM of
+//! [`super::rom_store`] (read from `[rom] file` when its key matches, else reduced),
 //! the contact pairs of [`crate::sama::build_interfaces`] on the ROM's physical master rows, the
 //! excitation and response groups. A time-domain model of the reference sector is real when its
 //! ROM is (`docs/conventions.md` §2):
@@ -25,20 +25,20 @@
 //! f̃_c(q) = f_c(q) − f_c(0), i.e. the constant −f_c(0) joins the external force, q = 0 is the
 //! static equilibrium and the march starts there at rest.
 
-use super::element::{Direction, Element};
-use super::schemes::{add_contact_force, evaluate_law};
-use super::signal::Harmonic;
-use super::system::{InitialCondition, MarchSystem};
+use super::rom_store::{sector_rom, RomPolicy};
+use super::sector::{excitation_vector, group_excitation, output_dofs, rows_of, tags_of, DofLabel};
+use super::Log;
 use crate::case::{Case, ContactElement};
 use crate::contact::pairs::ContactPair;
 use crate::error::{Error, Result};
+use crate::march::element::{Direction, Element};
+use crate::march::schemes::{add_contact_force, evaluate_law};
+use crate::march::signal::Harmonic;
+use crate::march::{InitialCondition, MarchSystem};
 use crate::mesh::Mesh;
 use crate::output::ResponseDof;
-use crate::pipeline::solve::{sector_rom, RomPolicy};
-use crate::pipeline::Reporter;
 use crate::rom::{HarmonicRom, ReducedDof, Rom};
 use crate::sama::{build_interfaces, ContactInterface};
-use crate::solve::sector::{excitation_vector, group_excitation, output_dofs, rows_of, tags_of};
 
 /// The marched sector model, its reported rows and their node labels.
 pub struct SectorMarch {
@@ -60,7 +60,7 @@ pub struct SectorMarch {
 pub fn sector_march(case: &Case, log: &mut dyn FnMut(&str)) -> Result<SectorMarch> {
     let k = harmonic_index(case)?;
     check_friction_elements(case)?;
-    let (rom, mesh, _) = sector_rom(case, &RomPolicy::ReadIfMatching, &Reporter::silent())?;
+    let (rom, mesh, _) = sector_rom(case, &RomPolicy::ReadIfMatching, &StageLog::new(log))?;
     let h = rom.harmonic(k).ok_or_else(|| {
         Error::input(format!(
             "{}: the ROM has no harmonic index k = {k}; rebuild it with `nlrom reduce`",
@@ -282,11 +282,7 @@ fn pair_elements(
 
 /// The excitation of engine order m on the ROM coordinates (f = Re(F e^{iωt}) with F = T_kᴴ f,
 /// [`excitation_vector`]) and the output DOFs.
-fn excitation(
-    case: &Case,
-    h: &HarmonicRom,
-    mesh: &Mesh,
-) -> Result<(Vec<Harmonic>, Vec<crate::solve::DofLabel>)> {
+fn excitation(case: &Case, h: &HarmonicRom, mesh: &Mesh) -> Result<(Vec<Harmonic>, Vec<DofLabel>)> {
     let (_, group, force) = group_excitation(case)?;
     let nodes = tags_of(mesh, &group)?;
     let f = excitation_vector(h, &nodes, force, &group)?;
@@ -321,4 +317,28 @@ fn subtract_force_at_rest(sys: &mut MarchSystem) {
     for (h, f) in sys.force.iter_mut().zip(&f0) {
         h.mean -= f;
     }
+}
+
+/// The `log` callback of [`sector_march`] as a [`Log`]: what was read, reused or written and the
+/// warnings are passed on (warnings prefixed `warning: `); the stages' details are dropped.
+struct StageLog<'a>(std::cell::RefCell<&'a mut dyn FnMut(&str)>);
+
+impl<'a> StageLog<'a> {
+    fn new(log: &'a mut dyn FnMut(&str)) -> Self {
+        StageLog(std::cell::RefCell::new(log))
+    }
+
+    fn line(&self, line: &str) {
+        (self.0.borrow_mut())(line);
+    }
+}
+
+impl Log for StageLog<'_> {
+    fn info(&self, line: &str) {
+        self.line(line);
+    }
+    fn warn(&self, line: &str) {
+        self.line(&format!("warning: {line}"));
+    }
+    fn detail(&self, _: &str) {}
 }

@@ -1,18 +1,27 @@
-//! The linear part of a matrix-defined case (`docs/case-file.md`: `[model] stiffness/mass/damping`,
-//! `[excitation] dofs/force`, `[response] dofs`, `[[element]]` on DOF combinations): dense K, M,
-//! C over the free rows, the excitation on harmonic 1, the nonlinear rows (every row an element
-//! reads) and the output rows.
+//! A model on matrix rows ([`crate::case::CaseKind::Matrix`]; `docs/case-file.md`: `[model]
+//! stiffness/mass/damping`, `[excitation] dofs/force`, `[response] dofs`, `[[element]]` on DOF
+//! combinations): dense K, M, C over the free rows, the excitation on harmonic 1, the nonlinear
+//! rows (every row an element reads) and the output rows.
 //!
 //! Damping: `matrix` (read, same size as K), `rayleigh = [α, β]` (C = αM + βK) or `modal = ζ`
 //! (C = M Φ diag(2ζω_j) Φᵀ M over all modes of the dense problem, Φ mass-normalised).
+//!
+//! One map from case rows to free rows ([`free_row`]) and one damping builder
+//! ([`damping_matrix`]) serve both solvers: the harmonic balance ([`matrix_setup`],
+//! [`matrix_elements`]) and the time march ([`matrix_march`]).
 
 use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
 use faer::{Mat, MatRef, Par, Side};
 
-use super::linear::LinearModel;
-use crate::case::{Case, Damping, ExcitationLoad};
+use crate::case::{Case, Damping, ElementKind, ExcitationLoad, FrictionElement, WeightedDofs};
+use crate::contact::grounded::DofElements;
 use crate::eigen::self_adjoint_eigen_qr;
 use crate::error::{Error, Result};
+use crate::hbm::LinearModel;
+use crate::march::element::{Direction, Element};
+use crate::march::law::FrictionParams;
+use crate::march::signal::Harmonic;
+use crate::march::{InitialCondition, MarchSystem};
 use crate::matrix_io::read_real_matrix;
 use crate::model::StructuralModel;
 
@@ -52,7 +61,7 @@ pub fn matrix_setup(case: &Case, model: &StructuralModel) -> Result<MatrixSetup>
     let free_of = free_row_map(model);
     let k = model.free.k.to_dense();
     let m = model.free.m.to_dense();
-    let c = damping_matrix(case, model, &free_of, k.as_ref(), m.as_ref())?;
+    let c = damping_matrix(case, model, k.as_ref(), m.as_ref())?;
     let force = excitation(case, model, &free_of)?;
     let mut nonlinear_rows = Vec::new();
     for (i, e) in case.element.iter().enumerate() {
@@ -91,7 +100,7 @@ pub fn matrix_setup(case: &Case, model: &StructuralModel) -> Result<MatrixSetup>
 }
 
 /// Matrix row (before clamping) → free row, `None` for a clamped row.
-fn free_row_map(model: &StructuralModel) -> Vec<Option<usize>> {
+pub fn free_row_map(model: &StructuralModel) -> Vec<Option<usize>> {
     let mut map = vec![None; model.n_dofs];
     for (i, &row) in model.free.free_dofs.iter().enumerate() {
         if row < map.len() {
@@ -101,8 +110,9 @@ fn free_row_map(model: &StructuralModel) -> Vec<Option<usize>> {
     map
 }
 
-/// The free row of case row `d` named at `key`, or an input error.
-fn free_row(case: &Case, free_of: &[Option<usize>], key: &str, d: usize) -> Result<usize> {
+/// The free row of case row `d` named at `key` (`free_of` from [`free_row_map`]), or an input
+/// error naming the key, the row and why (clamped, or out of range).
+pub fn free_row(case: &Case, free_of: &[Option<usize>], key: &str, d: usize) -> Result<usize> {
     match free_of.get(d) {
         Some(Some(r)) => Ok(*r),
         Some(None) => Err(Error::input(format!(
@@ -157,11 +167,12 @@ fn excitation(case: &Case, model: &StructuralModel, free_of: &[Option<usize>]) -
     Ok(f)
 }
 
-/// The dense damping matrix over the free rows, `None` when undamped.
-fn damping_matrix(
+/// The dense damping matrix C over the free rows of `model` (K and M dense over the same rows),
+/// `None` when undamped: Rayleigh αM + βK, an external matrix restricted to the free rows, or
+/// modal damping ζ on every mode of (K, M) ([`modal_damping`]).
+pub fn damping_matrix(
     case: &Case,
     model: &StructuralModel,
-    free_of: &[Option<usize>],
     k: MatRef<'_, f64>,
     m: MatRef<'_, f64>,
 ) -> Result<Option<Mat<f64>>> {
@@ -184,9 +195,7 @@ fn damping_matrix(
                 )));
             }
             let full = c.to_dense();
-            let rows: Vec<usize> = (0..model.n_dofs)
-                .filter(|&r| free_of[r].is_some())
-                .collect();
+            let rows = &model.free.free_dofs;
             Ok(Some(Mat::from_fn(n, n, |i, j| full[(rows[i], rows[j])])))
         }
         Some(Damping::Modal(zeta)) => modal_damping(k, m, *zeta).map(Some).map_err(|e| {
@@ -220,4 +229,159 @@ pub fn modal_damping(k: MatRef<'_, f64>, m: MatRef<'_, f64>, zeta: f64) -> Resul
         lu[(i, r)] * 2.0 * zeta * lambda[r].max(0.0).sqrt()
     });
     Ok(&scaled * lu.transpose())
+}
+
+/// The `[[element]]` friction elements of a matrix case on the condensed (nonlinear) rows of
+/// `setup`: every case row is mapped to its free row, then to its position among
+/// `setup.nonlinear_rows`.
+pub fn matrix_elements(
+    case: &Case,
+    model: &StructuralModel,
+    setup: &MatrixSetup,
+) -> Result<DofElements> {
+    let free_of = free_row_map(model);
+    let position = |key: &str, d: usize| -> Result<usize> {
+        let r = free_row(case, &free_of, key, d)?;
+        setup.nonlinear_position(r).ok_or_else(|| {
+            Error::input(format!(
+                "{}: key '{key}': row {d} is not a nonlinear row of the model",
+                case.path.display()
+            ))
+        })
+    };
+    let remap = |key: String, w: &WeightedDofs| -> Result<WeightedDofs> {
+        Ok(WeightedDofs {
+            dofs: w
+                .dofs
+                .iter()
+                .map(|&d| position(&key, d))
+                .collect::<Result<_>>()?,
+            weights: w.weights.clone(),
+        })
+    };
+    let elements = case
+        .element
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            Ok(FrictionElement {
+                tangential: remap(format!("element[{i}].tangential.dofs"), &e.tangential)?,
+                normal: e
+                    .normal
+                    .as_ref()
+                    .map(|n| remap(format!("element[{i}].normal.dofs"), n))
+                    .transpose()?,
+                ..e.clone()
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    DofElements::from_case(&elements, setup.nonlinear_rows.len())
+}
+
+/// The march system of a matrix-defined case: dense K, M, C over the free rows (row-major), the
+/// excitation f = force·cos ωt on its rows (none without `[excitation]`), the `[[element]]`
+/// friction elements; starts at rest. Returns the system and the reported free rows:
+/// `[response] dofs`, else the excitation rows, else the first three rows.
+pub fn matrix_march(case: &Case, sm: &StructuralModel) -> Result<(MarchSystem, Vec<usize>)> {
+    let file = case.path.display().to_string();
+    let n = sm.free.n_free();
+    let free_of = free_row_map(sm);
+    let row = |r: usize, key: &str| free_row(case, &free_of, key, r);
+    let k = sm.free.k.to_dense();
+    let m = sm.free.m.to_dense();
+    let c = damping_matrix(case, sm, k.as_ref(), m.as_ref())?;
+    let row_major =
+        |a: &Mat<f64>| -> Vec<f64> { (0..n * n).map(|ij| a[(ij / n, ij % n)]).collect() };
+    let mut force = vec![Harmonic::default(); n];
+    let mut response = Vec::new();
+    if let Some(e) = &case.excitation {
+        match &e.load {
+            ExcitationLoad::Dofs { dofs, force: f } => {
+                for (&d, &fv) in dofs.iter().zip(f) {
+                    let i = row(d, "excitation.dofs")?;
+                    force[i].cos += fv * e.force_scale;
+                    response.push(i);
+                }
+            }
+            ExcitationLoad::Group { .. } => {
+                return Err(Error::input(format!(
+                    "{file}: excitation.group needs a mesh; a matrix model gives `dofs` and `force`"
+                )))
+            }
+        }
+    }
+    if let Some(r) = &case.response {
+        if !r.dofs.is_empty() {
+            response = r
+                .dofs
+                .iter()
+                .map(|&d| row(d, "response.dofs"))
+                .collect::<Result<_>>()?;
+        }
+    }
+    let direction = |w: &WeightedDofs, key: &str| -> Result<Direction> {
+        Ok(Direction {
+            weights: w
+                .dofs
+                .iter()
+                .zip(&w.weights)
+                .map(|(&d, &x)| Ok((row(d, key)?, x)))
+                .collect::<Result<_>>()?,
+            prescribed: Harmonic::default(),
+        })
+    };
+    let mut elements = Vec::new();
+    for (i, e) in case.element.iter().enumerate() {
+        let name = format!("element[{i}]");
+        if e.kind != ElementKind::Friction {
+            return Err(Error::input(format!(
+                "{file}: {name}: kind = \"{}\" is computed by the harmonic balance (`nlrom solve`); time marching takes `friction` elements only",
+                e.kind.name()
+            )));
+        }
+        let value = |v: Option<f64>| v.unwrap_or(0.0);
+        elements.push(Element {
+            tangential: direction(&e.tangential, &format!("{name}.tangential"))?,
+            normal: e
+                .normal
+                .as_ref()
+                .map(|w| direction(w, &format!("{name}.normal")))
+                .transpose()?,
+            params: FrictionParams::new(
+                value(e.kt),
+                e.kn,
+                value(e.mu),
+                value(e.n0),
+                &format!("{file}: {name}"),
+            )?,
+            name,
+            applies_normal: true,
+        });
+    }
+    if response.is_empty() {
+        response = (0..n.min(3)).collect();
+    }
+    let mut sys = MarchSystem {
+        n,
+        mass: row_major(&m),
+        damping: match &c {
+            Some(c) => row_major(c),
+            None => vec![0.0; n * n],
+        },
+        stiffness: row_major(&k),
+        force,
+        damping_force: Vec::new(),
+        elements,
+        dof_names: sm
+            .free
+            .free_dofs
+            .iter()
+            .map(|d| format!("row {d}"))
+            .collect(),
+        initial: InitialCondition::Rest,
+        displacement_scale: 1.0,
+    };
+    sys.displacement_scale = sys.default_displacement_scale();
+    sys.validate(&file)?;
+    Ok((sys, response))
 }

@@ -9,14 +9,14 @@
 //! q_iP(t). Local relative displacements platform − damper (eq. 3): u_t = **t**·(q_iP − q_iD),
 //! normal approach v = **n**·(q_iP − q_iD) (v > 0: interference, Table 1). The contact force on the
 //! damper, Γ_iDᵀ f_i*, is the element's generalized force −g_t f_t − g_n f_n of
-//! [`super::element`].
+//! [`crate::march::element`].
 
-use super::element::{Direction, Element};
-use super::law::FrictionParams;
-use super::signal::Harmonic;
-use super::system::{InitialCondition, MarchSystem};
 use crate::case::Damper;
 use crate::error::{Error, Result};
+use crate::march::element::{Direction, Element};
+use crate::march::law::FrictionParams;
+use crate::march::signal::Harmonic;
+use crate::march::{InitialCondition, MarchSystem};
 
 /// The damper of a `[damper]` table as a march system (3 DOF: u (m), w (m), φ (rad)), starting
 /// from static equilibrium under the centrifugal load; `omega` (rad/s) is the excitation frequency

@@ -1,0 +1,46 @@
+//! A case as a solvable problem: the one layer that reads the case schema ([`crate::case`]) and
+//! joins the stages below it (model, reduction, contact interfaces, harmonic balance, time
+//! marching) into the systems the solvers take. The commands ([`crate::pipeline`]) call it.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`rom_store`] | the ROM of a sector case: read from a ROM file whose key matches, else reduced (and cached) |
+//! | [`matrix_case`] | a model on matrix rows: free rows, dense K, M, C, excitation, output rows, `[[element]]` elements |
+//! | [`sector`] | the harmonic balance problem of a reduced sector with its contact interfaces |
+//! | [`sector_march`] | the real ROM of a sector (no cyclic symmetry, k = 0, k = N/2) as a time-marching model |
+//! | [`damper`] | the underplatform damper of a `[damper]` table as a time-marching model |
+//! | [`march_case`] | any case as a time-marching model, by [`crate::case::Case::kind`] |
+//! | [`settings`] | the solver settings of a case's `[continuation]` table |
+//!
+//! Every command dispatches on [`crate::case::Case::kind`]: a `[damper]`, a model on matrix rows
+//! (no mesh, or `[[element]]`), or a reduced sector.
+
+pub mod damper;
+pub mod march_case;
+pub mod matrix_case;
+pub mod rom_store;
+pub mod sector;
+pub mod sector_march;
+pub mod settings;
+
+/// Where a problem builder's messages go: lines about what was read, reused or written
+/// (`info`), problems the user must see (`warn`) and the stages' own logs (`detail`). The
+/// commands' `Reporter` implements it with `--quiet` and `-v`.
+pub trait Log {
+    /// What was read, reused or written.
+    fn info(&self, line: &str);
+    /// A warning.
+    fn warn(&self, line: &str);
+    /// A stage's detailed log line.
+    fn detail(&self, line: &str);
+}
+
+/// A [`Log`] that drops every line.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Silent;
+
+impl Log for Silent {
+    fn info(&self, _: &str) {}
+    fn warn(&self, _: &str) {}
+    fn detail(&self, _: &str) {}
+}
