@@ -54,7 +54,7 @@ fn lattice(n: usize) -> Lattice {
 
 /// `{:e}` for some values, `{}` for others, as different writers do.
 fn num(k: usize, v: f64) -> String {
-    if k % 3 == 0 {
+    if k.is_multiple_of(3) {
         format!("{v:.16e}")
     } else {
         format!("{v}")
