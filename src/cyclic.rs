@@ -26,6 +26,7 @@ use faer::{c64, Mat, MatRef};
 use crate::case::Cyclic;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
+use crate::vec3::{dot, mat_vec, norm, rotate_about, sub};
 
 /// Relative tolerance of the frontier matching: two positions coincide when they are closer than
 /// `MATCH_TOLERANCE × mesh.size()` (the bounding-box diagonal, m). The same tolerance decides
@@ -803,27 +804,6 @@ fn intersect_sorted(a: &[u32], b: &[u32]) -> Vec<u32> {
         }
     }
     out
-}
-
-fn rotate_about(r: &[[f64; 3]; 3], origin: [f64; 3], p: [f64; 3]) -> [f64; 3] {
-    let v = mat_vec(r, sub(p, origin));
-    [v[0] + origin[0], v[1] + origin[1], v[2] + origin[2]]
-}
-
-fn mat_vec(r: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
-    [dot(r[0], v), dot(r[1], v), dot(r[2], v)]
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
 }
 
 #[cfg(test)]

@@ -29,9 +29,6 @@ pub enum Error {
     /// The computation failed (no convergence, singular system, ...).
     #[error("{0}")]
     Compute(String),
-    /// A command whose stage is not implemented yet.
-    #[error("{0}: not implemented yet (see the status table in README.md)")]
-    NotImplemented(String),
 }
 
 impl Error {
@@ -39,7 +36,7 @@ impl Error {
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Io { .. } | Error::Msh(_) | Error::Input(_) => 2,
-            Error::Compute(_) | Error::NotImplemented(_) => 1,
+            Error::Compute(_) => 1,
         }
     }
 

@@ -7,6 +7,7 @@
 //! | layer | module | what it holds |
 //! |---|---|---|
 //! | foundation | [`error`] | the error type, exit codes |
+//! | foundation | [`vec3`] | 3-vector and 3×3-matrix helpers on plain arrays |
 //! | foundation | [`mesh`] | Gmsh MSH 2.2/4.1 reader, physical groups, boundary faces |
 //! | foundation | [`matrix_io`] | Matrix Market matrices and the DOF map (`dofs.csv`) |
 //! | foundation | [`harmonics`] | real harmonic layout and the `HarmonicForce` interface |
@@ -25,13 +26,14 @@
 //! | solvers | [`hbm`] | harmonic balance: per-harmonic dynamic stiffness, condensation on the nonlinear DOFs, residual, stability |
 //! | solvers | [`march`] | time marching: Newmark, adaptive step, piecewise-linear Newmark, quasi-static (Gastaldi & Berruti 2018) |
 //! | problem | [`problem`] | a case as a solvable problem: ROM store, matrix case, reduced sector, damper, march of a case |
-//! | commands | [`pipeline`] | the commands `reduce`, `solve`, `run`, `batch`, `demo` and the `/march/` results: reporting, sweeps in parallel, summary (resonance, Q) |
-//! | commands | [`cli`] | the command line |
+//! | commands | [`commands`] | one module per command (`mesh info`, `modes`, `export`, `reduce`, `contact`, `solve`/`run`, `march`, `batch`, `demo`), one `Reporter` (`-q`, `-v`), `--json` reports |
+//! | commands | [`cli`] | the command line: clap definitions and the dispatch to [`commands`] |
 //!
 //! The user documentation (case file, results file, theory, validation) is in `docs/`.
 
 pub mod case;
 pub mod cli;
+pub mod commands;
 pub mod contact;
 pub mod continuation;
 pub mod cyclic;
@@ -46,10 +48,10 @@ pub mod mesh;
 pub mod model;
 pub mod nonlinear;
 pub mod output;
-pub mod pipeline;
 pub mod problem;
 pub mod reduction;
 pub mod rom;
 pub mod sama;
+pub mod vec3;
 
 pub use error::{Error, Result};

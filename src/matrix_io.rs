@@ -48,11 +48,6 @@ impl SparseMatrix {
             SparseMatrix::Complex(m) => m.ncols(),
         }
     }
-
-    /// Whether the file had the `complex` field.
-    pub fn is_complex(&self) -> bool {
-        matches!(self, SparseMatrix::Complex(_))
-    }
 }
 
 /// Reads a Matrix Market file (coordinate or array; real, integer or complex; any symmetry).

@@ -5,11 +5,12 @@
 //! independence, input errors.
 
 use faer::Mat;
-use nlrom::contact::kinematics::{mat_mul, relative_local, relative_transpose, Mat3, Phases};
+use nlrom::contact::kinematics::{relative_local, relative_transpose, Phases};
 use nlrom::contact::law::{ContactParams, Variant};
-use nlrom::contact::pairs::{ContactPair, PairSet, SectorCoupling};
+use nlrom::contact::pairs::{PairElement, PairSet, SectorCoupling};
 use nlrom::cyclic::{harmonic_indices, CyclicGeometry};
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
+use nlrom::vec3::{mat_mul, Mat3};
 
 mod contact_common;
 use contact_common::{check_derivative, check_jacobian, forces, Rng};
@@ -161,7 +162,7 @@ fn pair_set(variant: Variant, rot: &Mat3, axis: [f64; 3], h: usize) -> PairSet {
     let f1 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     let rotate_frame = |f: Mat3| [0, 1, 2].map(|i| mat_vec(rot, f[i]));
     let pairs = vec![
-        ContactPair {
+        PairElement {
             contact: [0, 1, 2],
             target: Some([3, 4, 5]),
             frame: rotate_frame(f0),
@@ -169,7 +170,7 @@ fn pair_set(variant: Variant, rot: &Mat3, axis: [f64; 3], h: usize) -> PairSet {
             params: params(1.0),
             preload_rate: 0.7,
         },
-        ContactPair {
+        PairElement {
             contact: [6, 7, 8],
             target: Some([9, 10, 11]),
             frame: rotate_frame(f1),
@@ -177,7 +178,7 @@ fn pair_set(variant: Variant, rot: &Mat3, axis: [f64; 3], h: usize) -> PairSet {
             params: params(0.5),
             preload_rate: 0.3,
         },
-        ContactPair {
+        PairElement {
             contact: [12, 13, 14],
             target: None,
             frame: rotate_frame(f1),
@@ -299,7 +300,7 @@ fn frame_invariance_and_rigid_motion() {
         }
     }
     // Common translation of both nodes of a same-sector pair.
-    let pair = ContactPair {
+    let pair = PairElement {
         contact: [0, 1, 2],
         target: Some([3, 4, 5]),
         frame: [[0.0, 0.0, 1.0], [0.6, -0.8, 0.0], [0.8, 0.6, 0.0]],
@@ -359,7 +360,7 @@ fn result_does_not_depend_on_the_thread_count() {
 
 #[test]
 fn bad_pairs_and_inputs_are_reported() {
-    let good = ContactPair {
+    let good = PairElement {
         contact: [0, 1, 2],
         target: Some([3, 4, 5]),
         frame: IDENTITY,
@@ -367,12 +368,12 @@ fn bad_pairs_and_inputs_are_reported() {
         params: params(1.0),
         preload_rate: 1.0,
     };
-    let err = |p: ContactPair| {
+    let err = |p: PairElement| {
         PairSet::new(6, Variant::OneD, vec![good.clone(), p], None)
             .unwrap_err()
             .to_string()
     };
-    let msg = err(ContactPair {
+    let msg = err(PairElement {
         target: Some([3, 4, 6]),
         ..good.clone()
     });
@@ -380,17 +381,17 @@ fn bad_pairs_and_inputs_are_reported() {
         msg.contains("contact pair 1") && msg.contains("row 6"),
         "{msg}"
     );
-    let msg = err(ContactPair {
+    let msg = err(PairElement {
         frame: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]],
         ..good.clone()
     });
     assert!(msg.contains("right-handed"), "{msg}");
-    let msg = err(ContactPair {
+    let msg = err(PairElement {
         sigma: 1,
         ..good.clone()
     });
     assert!(msg.contains("σ = 1"), "{msg}");
-    let msg = err(ContactPair {
+    let msg = err(PairElement {
         params: ContactParams {
             mu: -0.1,
             ..good.params

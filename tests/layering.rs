@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 /// The top-level modules, lowest first: each may use only those before it.
 const ORDER: &[&str] = &[
     "error",
+    "vec3",
     "mesh",
     "matrix_io",
     "harmonics",
@@ -27,7 +28,7 @@ const ORDER: &[&str] = &[
     "hbm",
     "march",
     "problem",
-    "pipeline",
+    "commands",
     "cli",
 ];
 
@@ -309,10 +310,10 @@ fn the_crate_documentation_states_the_order() {
 #[test]
 fn the_checker_fails_on_a_back_edge() {
     // a time integrator that reaches into the command layer
-    let back = "use crate::error::Result;\nuse crate::pipeline::Reporter;\n";
+    let back = "use crate::error::Result;\nuse crate::commands::Reporter;\n";
     let bad = check_file(Path::new("march/sector.rs"), back);
     assert_eq!(bad.len(), 1, "{bad:?}");
-    assert!(bad[0].contains("march/sector.rs:2") && bad[0].contains("crate::pipeline"));
+    assert!(bad[0].contains("march/sector.rs:2") && bad[0].contains("crate::commands"));
     // inside a use group, and as an expression path
     let grouped =
         "use crate::{case::Case, problem::{rom_store, sector}};\nfn f() { crate::cli::main(); }";
@@ -331,8 +332,8 @@ fn the_checker_ignores_comments_strings_and_test_code() {
     let src = r##"
 //! Built by [`crate::problem`] (a doc link, not a use).
 use crate::error::Result; // crate::cli in a comment
-/* crate::pipeline in a /* nested */ block comment */
-const S: &str = "crate::pipeline";
+/* crate::commands in a /* nested */ block comment */
+const S: &str = "crate::commands";
 const R: &str = r#"crate::cli "quoted""#;
 const C: char = '"';
 fn f<'a>(x: &'a str) -> &'a str { x }
@@ -340,7 +341,7 @@ fn f<'a>(x: &'a str) -> &'a str { x }
 use crate::problem::sector;
 #[cfg(test)]
 mod tests {
-    use crate::pipeline::Reporter;
+    use crate::commands::Reporter;
     fn g() { let _ = "}"; }
 }
 use crate::mesh::Mesh;

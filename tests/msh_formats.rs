@@ -152,7 +152,7 @@ fn counts_agree_with_meshio() {
     assert!(files.contains_key("meshes/disk8.msh"));
     for (rel, want) in files {
         let m = load(rel);
-        let got = nlrom::cli::mesh_summary(&m);
+        let got = nlrom::commands::mesh_info::mesh_summary(&m);
         assert_eq!(got["nodes"], want["nodes"], "{rel}: nodes");
         assert_eq!(got["elements"], want["elements"], "{rel}: element counts");
         let groups = want["groups"].as_object().expect("groups");

@@ -3,7 +3,7 @@
 //! ¾ k3 a³ and ¼ k3 a³; polynomial spring; quadratic damper 8/(3π) c ω² a²; the clipped cosine of
 //! the unilateral spring; tanh friction in its viscous and Coulomb limits), Jacobians and ∂F/∂ω
 //! against central differences on two-DOF combinations, case-file errors, and a frequency
-//! response through `nlrom::pipeline` of an oscillator with a cubic spring and a quadratic damper
+//! response through `nlrom::commands` of an oscillator with a cubic spring and a quadratic damper
 //! (both folds traced) against its one-harmonic amplitude relation.
 
 use std::f64::consts::PI;
@@ -11,9 +11,9 @@ use std::path::{Path, PathBuf};
 
 use faer::Mat;
 use nlrom::case::{Case, FrictionElement};
+use nlrom::commands::{solve_case, Reporter, RomPolicy, SolveOptions};
 use nlrom::contact::grounded::DofElements;
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
-use nlrom::pipeline::{solve_case, Reporter, RomPolicy, SolveOptions};
 
 mod contact_common;
 use contact_common::Rng;
@@ -369,7 +369,7 @@ fn root() -> PathBuf {
 }
 
 /// m q̈ + k q + k3 q³ + c q̇|q̇| = F cos ωt (m = k = 1, k3 = 0.5, c = 0.05, F = 0.1) through
-/// `nlrom::pipeline::solve_case` with H = 1: every point satisfies the one-harmonic relation
+/// `nlrom::commands::solve_case` with H = 1: every point satisfies the one-harmonic relation
 /// ((k − mω² + ¾ k3 A²) A)² + (8/(3π) c ω² A²)² = F² to 1e-7 of F², the path turns back in ω
 /// twice (both folds traced) and reaches its end.
 #[test]

@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use faer::c64;
 use nlrom::output::{
     read_results, write_results, ContactCurveDetail, ContactData, ContactPairData, FileInfo,
-    FrfData, FrfPoint, MarchData, PointLoops, ResponseDof, ResultsFile,
+    FrfData, FrfRecord, MarchData, PointLoops, ResponseDof, ResultsFile,
 };
 use nlrom::output::{Attr, Data, Dataset, Group};
 use serde_json::{json, Value};
@@ -30,7 +30,7 @@ fn frf(n0: f64, points: usize, harmonics: usize, contacts: usize) -> FrfData {
     let points = (0..points)
         .map(|p| {
             let w = 5000.0 + 7.3 * p as f64 - if p > 3 { 20.0 } else { 0.0 }; // a fold
-            FrfPoint {
+            FrfRecord {
                 omega: w,
                 harmonics: (0..r * h1)
                     .map(|j| {

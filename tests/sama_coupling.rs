@@ -111,7 +111,7 @@ fn rel_err(a: &[c64], b: &[c64]) -> f64 {
 
 /// Stuck limit of the interpolated coupling: the HB harmonic 1 at 760 Hz (below the stuck
 /// resonance, 787 Hz) equals the ROM + the independently assembled interpolated springs to 1e-8
-/// (the virtual-node rows, the DofMap's forces Bᵀ F_y and Jacobian Bᵀ J_y B, the preload
+/// (the virtual-node rows, the LinearMap's forces Bᵀ F_y and Jacobian Bᵀ J_y B, the preload
 /// balance), and differs from the array coupling's response (stiffer, 911 Hz) by far more.
 #[test]
 fn interpolated_stuck_limit_equals_rom_with_interpolated_springs() {
@@ -154,16 +154,16 @@ fn interpolated_stuck_limit_equals_rom_with_interpolated_springs() {
     assert!(other > 0.1, "{other:.3e}");
 }
 
-/// The DofMap's forward map, transpose and Jacobian against the dense B built from the same
+/// The LinearMap's forward map, transpose and Jacobian against the dense B built from the same
 /// combinations (identity on the outer DOFs, then the extra rows), H = 2.
 #[test]
 fn dof_map_matches_the_dense_matrix() {
     use nlrom::contact::aft::global_index;
-    use nlrom::contact::mapped::DofMap;
+    use nlrom::contact::mapped::LinearMap;
     use nlrom::harmonics::HarmonicLayout;
     let layout = HarmonicLayout::new(2, 16).unwrap();
     let extra = vec![vec![(0, 0.25), (2, -0.5)], vec![(1, 2.0)]];
-    let map = DofMap::identity_and(3, extra.clone()).unwrap();
+    let map = LinearMap::identity_and(3, extra.clone()).unwrap();
     let (no, ni, m) = (3, 5, layout.coefficients());
     assert_eq!((map.outer(), map.inner()), (no, ni));
     let rows: Vec<Vec<(usize, f64)>> = (0..no).map(|s| vec![(s, 1.0)]).chain(extra).collect();
@@ -199,6 +199,6 @@ fn dof_map_matches_the_dense_matrix() {
             assert!((jx[(i, j)] - jd[(i, j)]).abs() < 1e-12);
         }
     }
-    assert!(DofMap::identity_and(2, vec![vec![(2, 1.0)]]).is_err());
-    assert!(DofMap::identity_and(2, vec![vec![(0, f64::NAN)]]).is_err());
+    assert!(LinearMap::identity_and(2, vec![vec![(2, 1.0)]]).is_err());
+    assert!(LinearMap::identity_and(2, vec![vec![(0, f64::NAN)]]).is_err());
 }

@@ -3,7 +3,7 @@
 
 use nlrom::contact::element::LocalElement;
 use nlrom::contact::law::{ContactParams, Variant};
-use nlrom::contact::pairs::{ContactPair, PairSet, SectorCoupling};
+use nlrom::contact::pairs::{PairElement, PairSet, SectorCoupling};
 use nlrom::cyclic::{harmonic_indices, CyclicGeometry};
 use nlrom::harmonics::HarmonicLayout;
 
@@ -39,8 +39,8 @@ pub fn pair_set(pairs: usize) -> (PairSet, HarmonicLayout, Vec<f64>) {
     let geo = CyclicGeometry::new(24, [0.0; 3], [0.0, 0.0, 1.0]).unwrap();
     let h = 3;
     let layout = HarmonicLayout::with_default_samples(h);
-    let list: Vec<ContactPair> = (0..pairs)
-        .map(|i| ContactPair {
+    let list: Vec<PairElement> = (0..pairs)
+        .map(|i| PairElement {
             contact: [0, 1, 2].map(|c| 3 * (i % 32) + c),
             target: Some([0, 1, 2].map(|c| 3 * (32 + (7 * i) % 32) + c)),
             frame: [[0.0, 0.0, 1.0], [0.6, -0.8, 0.0], [0.8, 0.6, 0.0]],

@@ -4,9 +4,9 @@
 //!
 //! A signal's coefficients are stored contiguously in *signal order*
 //! `[Q⁽⁰⁾, Re Q⁽¹⁾, Im Q⁽¹⁾, …, Re Q⁽ᴴ⁾, Im Q⁽ᴴ⁾]` (length m = 2H + 1) for
-//! q(τ) = Q⁽⁰⁾ + Σ_{n≥1} (Re Q⁽ⁿ⁾ cos nτ − Im Q⁽ⁿ⁾ sin nτ); [`gather`] and [`scatter_add`] convert
-//! between one DOF's signal order and the harmonic-major vector of many DOFs. Samples are taken at
-//! τ_j = 2πj/N_t, j = 0..N_t−1. The forward transform is scaled so that a band-limited signal
+//! q(τ) = Q⁽⁰⁾ + Σ_{n≥1} (Re Q⁽ⁿ⁾ cos nτ − Im Q⁽ⁿ⁾ sin nτ); [`gather`] and [`global_index`]
+//! map between one DOF's signal order and the harmonic-major vector of many DOFs. Samples are
+//! taken at τ_j = 2πj/N_t, j = 0..N_t−1. The forward transform is scaled so that a band-limited signal
 //! (harmonics ≤ H < N_t/2) round-trips exactly.
 
 use std::sync::Arc;
@@ -25,9 +25,8 @@ pub struct Aft {
     /// Row j (length m): the value at τ_j of the basis function of each coefficient,
     /// [1, cos τ_j, −sin τ_j, cos 2τ_j, …]; q(τ_j) = Σ_l synthesis[j][l] Q_l.
     synthesis: Vec<f64>,
-    /// Row k (length N_t): Q_k = Σ_j analysis[k][j] q(τ_j) for a band-limited q.
-    analysis: Vec<f64>,
-    /// The analysis table transposed: row j (length m) holds ∂Q_k/∂q(τ_j) for k = 0..2H.
+    /// The analysis table (Q_k = Σ_j A[k][j] q(τ_j) for a band-limited q) transposed: row j
+    /// (length m) holds ∂Q_k/∂q(τ_j) for k = 0..2H.
     analysis_columns: Vec<f64>,
     /// cos(2πq/N_t), sin(2πq/N_t) for q = 0..N_t−1.
     unit_circle: (Vec<f64>, Vec<f64>),
@@ -114,7 +113,6 @@ impl Aft {
             forward,
             inverse,
             synthesis,
-            analysis,
             analysis_columns,
             unit_circle,
             step_factors,
@@ -183,12 +181,6 @@ impl Aft {
     pub fn synthesis_row(&self, j: usize) -> &[f64] {
         let m = self.layout.coefficients();
         &self.synthesis[j * m..(j + 1) * m]
-    }
-
-    /// Row k of the analysis table: ∂Q_k/∂q(τ_j) for j = 0..N_t−1 (length N_t).
-    pub fn analysis_row(&self, k: usize) -> &[f64] {
-        let n = self.layout.time_samples;
-        &self.analysis[k * n..(k + 1) * n]
     }
 
     /// Column j of the analysis table: ∂Q_k/∂q(τ_j) for k = 0..2H (length 2H+1, contiguous).
@@ -266,11 +258,6 @@ impl Aft {
     pub fn unit_circle(&self) -> (&[f64], &[f64]) {
         (&self.unit_circle.0, &self.unit_circle.1)
     }
-
-    /// The whole analysis table, row-major m × N_t.
-    pub fn analysis_table(&self) -> &[f64] {
-        &self.analysis
-    }
 }
 
 /// Copies the coefficients of `dof` from the harmonic-major vector `q` of `n_dof` DOFs into
@@ -290,22 +277,6 @@ pub fn global_index(layout: &HarmonicLayout, l: usize, dof: usize, n_dof: usize)
         layout.static_index(dof)
     } else {
         layout.cos_index(l.div_ceil(2), dof, n_dof) + (1 - l % 2)
-    }
-}
-
-/// Adds `coefficients` (signal order) of `dof` into the harmonic-major vector `f`.
-pub fn scatter_add(
-    layout: &HarmonicLayout,
-    coefficients: &[f64],
-    dof: usize,
-    n_dof: usize,
-    f: &mut [f64],
-) {
-    f[layout.static_index(dof)] += coefficients[0];
-    for n in 1..=layout.harmonics {
-        let i = layout.cos_index(n, dof, n_dof);
-        f[i] += coefficients[2 * n - 1];
-        f[i + 1] += coefficients[2 * n];
     }
 }
 

@@ -16,9 +16,7 @@
 //! cyclic transformation (Hermitian transpose).
 
 use crate::error::{Error, Result};
-
-/// A 3×3 matrix, row-major.
-pub type Mat3 = [[f64; 3]; 3];
+use crate::vec3::Mat3;
 
 /// cos θ_n, sin θ_n of the inter-sector phase for n = 0..=H.
 #[derive(Clone, Debug, PartialEq)]
@@ -59,17 +57,6 @@ impl Phases {
     pub fn harmonics(&self) -> usize {
         self.cos.len() - 1
     }
-}
-
-/// Product a·b of 3×3 matrices.
-pub fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
-    let mut c = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            c[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
-        }
-    }
-    c
 }
 
 /// Local relative harmonics `out` = F (Q_c − e^{iθ} R^σ Q_t) (3·m, component-major) from the

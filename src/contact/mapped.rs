@@ -15,17 +15,17 @@ use crate::harmonics::HarmonicLayout;
 
 /// y = B x with B sparse: row i of B is `rows[i]`, a list of (outer DOF, coefficient).
 #[derive(Clone, Debug, PartialEq)]
-pub struct DofMap {
+pub struct LinearMap {
     outer: usize,
     rows: Vec<Vec<(usize, f64)>>,
 }
 
-impl DofMap {
+impl LinearMap {
     /// The map whose first `outer` inner DOFs are the outer DOFs themselves (identity) and whose
     /// further inner DOFs are the combinations `extra` (each a list of (outer DOF, coefficient)).
     ///
     /// Errors ([`Error::Input`]): an outer DOF index ≥ `outer` or a non-finite coefficient.
-    pub fn identity_and(outer: usize, extra: Vec<Vec<(usize, f64)>>) -> Result<DofMap> {
+    pub fn identity_and(outer: usize, extra: Vec<Vec<(usize, f64)>>) -> Result<LinearMap> {
         for (i, row) in extra.iter().enumerate() {
             if let Some(&(s, c)) = row.iter().find(|(s, c)| *s >= outer || !c.is_finite()) {
                 return Err(Error::input(format!(
@@ -34,7 +34,7 @@ impl DofMap {
             }
         }
         let rows = (0..outer).map(|s| vec![(s, 1.0)]).chain(extra).collect();
-        Ok(DofMap { outer, rows })
+        Ok(LinearMap { outer, rows })
     }
 
     /// Number of outer DOFs (x).

@@ -16,7 +16,7 @@
 //!   coordinate's value and rate (cubic, polynomial, unilateral with gap, quadratic damper, tanh
 //!   friction), used by [`grounded::DofElements`] next to the friction elements.
 //! * `assembly`: the parallel evaluate-and-sum loop shared by the two.
-//! * [`mapped`]: [`mapped::DofMap`], elements reading linear combinations of the solved DOFs
+//! * [`mapped`]: [`mapped::LinearMap`], elements reading linear combinations of the solved DOFs
 //!   (SAMA's interpolated virtual target nodes).
 
 pub mod aft;

@@ -2,7 +2,7 @@
 //! [`HarmonicForce`] (SAMA paper, Battiato 2021: node-to-node elements §3 eqs 13–14, 25–27;
 //! weighted pairs eqs 31–32; cyclic-symmetry relative displacement eq. 33).
 //!
-//! Each [`ContactPair`] joins a contact node c (3 rows of the DOF vector, x y z) to a target node
+//! Each [`PairElement`] joins a contact node c (3 rows of the DOF vector, x y z) to a target node
 //! t (3 rows) or to the ground, with a local frame (t1, t2, n) in the global axes, the
 //! inter-sector rotation σ ∈ {−1, 0, 1} and its own contact parameters (SAMA's weighted k_t, k_n,
 //! n0). The local relative motion is (u1, u2, v) = (t1·r, t2·r, −n·r) with
@@ -23,16 +23,17 @@ use crate::contact::element::{
     evaluate as evaluate_element, ElementReport, HysteresisLoop, LocalElement, Workspace,
 };
 use crate::contact::kinematics::{
-    check_frame, mat_mul, node_jacobian, relative_local, relative_transpose, Mat3, Phases,
+    check_frame, node_jacobian, relative_local, relative_transpose, Phases,
 };
 use crate::contact::law::{ContactParams, Variant};
-use crate::contact::mapped::DofMap;
+use crate::contact::mapped::LinearMap;
 use crate::error::{Error, Result};
 use crate::harmonics::{HarmonicForce, HarmonicLayout};
+use crate::vec3::{mat_mul, transpose, Mat3};
 
 /// One contact pair.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ContactPair {
+pub struct PairElement {
     /// Rows (0-based, in the DOF vector of the set) of the contact node's x, y, z displacement.
     pub contact: [usize; 3],
     /// Rows of the target node's x, y, z displacement; `None`: the target is the ground.
@@ -77,11 +78,11 @@ struct Prepared {
 pub struct PairSet {
     n_dofs: usize,
     variant: Variant,
-    pairs: Vec<ContactPair>,
+    pairs: Vec<PairElement>,
     prepared: Vec<Prepared>,
     coupling: Option<SectorCoupling>,
     /// Rows of the pairs are inner DOFs y = B x of this map (x: the DOFs the force acts on).
-    map: Option<DofMap>,
+    map: Option<LinearMap>,
     aft: AftCache,
     slots: SlotStorage,
 }
@@ -122,7 +123,7 @@ impl PairSet {
     pub fn new(
         n_dofs: usize,
         variant: Variant,
-        pairs: Vec<ContactPair>,
+        pairs: Vec<PairElement>,
         coupling: Option<SectorCoupling>,
     ) -> Result<Self> {
         let mut prepared = Vec::with_capacity(pairs.len());
@@ -172,10 +173,10 @@ impl PairSet {
         })
     }
 
-    /// The same pairs reading inner DOFs y = B x ([`DofMap`]): the rows given to [`PairSet::new`]
+    /// The same pairs reading inner DOFs y = B x ([`LinearMap`]): the rows given to [`PairSet::new`]
     /// (its `n_dofs`) are rows of y, and the set acts on x (`map.outer()` DOFs) with forces Bᵀ F_y
     /// and Jacobian Bᵀ J_y B. Error ([`Error::Input`]) when the map's inner size is not `n_dofs`.
-    pub fn with_map(mut self, map: DofMap) -> Result<Self> {
+    pub fn with_map(mut self, map: LinearMap) -> Result<Self> {
         if map.inner() != self.n_dofs {
             return Err(Error::input(format!(
                 "contact pairs: the DOF map gives {} inner DOFs, the pairs use {}",
@@ -188,7 +189,7 @@ impl PairSet {
     }
 
     /// The pairs.
-    pub fn pairs(&self) -> &[ContactPair] {
+    pub fn pairs(&self) -> &[PairElement] {
         &self.pairs
     }
 
@@ -484,21 +485,11 @@ fn buffers(aft: &Aft, m: usize) -> Buffers {
     }
 }
 
-fn transpose(a: &Mat3) -> Mat3 {
-    let mut t = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            t[i][j] = a[j][i];
-        }
-    }
-    t
-}
-
 impl HarmonicForce for PairSet {
     type State = PairState;
 
     fn n_dofs(&self) -> usize {
-        self.map.as_ref().map_or(self.n_dofs, DofMap::outer)
+        self.map.as_ref().map_or(self.n_dofs, LinearMap::outer)
     }
 
     /// Sliders at rest at the origin of the relative motion.

@@ -3,17 +3,10 @@
 use crate::error::{Error, Result};
 use crate::mesh::{ElementBlock, Mesh};
 
-/// An isotropic linear elastic material (Hooke's law σ = λ tr(ε) I + 2μ ε).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Material {
-    /// Young's modulus E (Pa), > 0.
-    pub young: f64,
-    /// Poisson's ratio ν (dimensionless), −1 < ν < 0.5.
-    pub poisson: f64,
-    /// Density ρ (kg/m³), > 0.
-    pub density: f64,
-}
+pub use crate::case::Material;
 
+/// Hooke's law σ = λ tr(ε) I + 2μ ε of an isotropic linear elastic [`Material`] (the case
+/// schema's `material` table).
 impl Material {
     /// Checks E > 0, −1 < ν < 0.5 and ρ > 0 (all finite). `what` names the material in the message
     /// (e.g. `material of volume group 'blade'`).
@@ -65,16 +58,6 @@ impl Material {
     }
 }
 
-impl From<crate::case::Material> for Material {
-    fn from(m: crate::case::Material) -> Self {
-        Material {
-            young: m.young,
-            poisson: m.poisson,
-            density: m.density,
-        }
-    }
-}
-
 /// The materials of a model: per volume (dimension-3) physical group, and a default for the volume
 /// elements of no listed group.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -97,11 +80,11 @@ impl Materials {
     /// The materials of a case file's `[model]` (`material` and `materials`).
     pub fn from_case(model: &crate::case::Model) -> Self {
         Materials {
-            default: model.material.map(Material::from),
+            default: model.material,
             by_group: model
                 .materials
                 .iter()
-                .map(|g| (g.group.clone(), g.material().into()))
+                .map(|g| (g.group.clone(), g.material()))
                 .collect(),
         }
     }

@@ -41,11 +41,6 @@ impl Harmonic {
     pub fn bound(&self) -> f64 {
         self.mean.abs() + self.cos.hypot(self.sin)
     }
-
-    /// Whether the signal is identically zero.
-    pub fn is_zero(&self) -> bool {
-        self.mean == 0.0 && self.cos == 0.0 && self.sin == 0.0
-    }
 }
 
 #[cfg(test)]

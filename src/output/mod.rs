@@ -23,7 +23,7 @@ use std::time::{SystemTime, UNIX_EPOCH};
 pub use h5::{Attr, Column, Data, Dataset, Group, H5File, H5Reader, Records};
 pub use results::{
     read_results, write_results, ContactCurveDetail, ContactData, ContactPairData, FrfData,
-    FrfPoint, MarchData, PointLoops, ResponseDof, ResultsFile,
+    FrfRecord, MarchData, PointLoops, ResponseDof, ResultsFile,
 };
 pub use rom_file::{read_rom, write_rom};
 

@@ -69,7 +69,7 @@ pub enum ResponseDof {
 
 /// One point of a frequency response curve.
 #[derive(Clone, Debug, PartialEq)]
-pub struct FrfPoint {
+pub struct FrfRecord {
     /// Excitation frequency ω (rad/s).
     pub omega: f64,
     /// Harmonics Q⁽ⁿ⁾ (m), n = 0..=H, response-major: `harmonics[r * (H + 1) + n]`.
@@ -98,7 +98,7 @@ pub struct FrfData {
     /// The response DOFs, R of them.
     pub response_dofs: Vec<ResponseDof>,
     /// The points, in path order (ω may go back and forth at a fold).
-    pub points: Vec<FrfPoint>,
+    pub points: Vec<FrfRecord>,
 }
 
 /// One node-to-node friction element (c, t_j) of a contact interface.
@@ -851,7 +851,7 @@ fn read_frf(reader: &H5Reader, i: usize, contact_names: &[String]) -> Result<Frf
         fractions.push(reader.f64s(&format!("/contact/{name}/state_fractions/{i}"), &[p, 3])?);
     }
     let points = (0..p)
-        .map(|q| FrfPoint {
+        .map(|q| FrfRecord {
             omega: omega[q],
             harmonics: values[q * r * h1..(q + 1) * r * h1].to_vec(),
             peak: peak[q * r..(q + 1) * r].to_vec(),

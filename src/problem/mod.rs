@@ -1,6 +1,6 @@
 //! A case as a solvable problem: the one layer that reads the case schema ([`crate::case`]) and
 //! joins the stages below it (model, reduction, contact interfaces, harmonic balance, time
-//! marching) into the systems the solvers take. The commands ([`crate::pipeline`]) call it.
+//! marching) into the systems the solvers take. The commands ([`crate::commands`]) call it.
 //!
 //! | module | what |
 //! |---|---|

@@ -24,7 +24,7 @@ use faer::c64;
 
 use crate::case::{Case, ContactElement, Excitation, ExcitationLoad};
 use crate::contact::law::Variant;
-use crate::contact::mapped::DofMap;
+use crate::contact::mapped::LinearMap;
 use crate::contact::pairs::{PairSet, SectorCoupling};
 use crate::cyclic::harmonic_indices;
 use crate::error::{Error, Result};
@@ -200,7 +200,7 @@ fn node_row_map(dofs: &[DofLabel]) -> BTreeMap<u64, [usize; 3]> {
 
 /// The [`PairSet`] of all interfaces on the contact DOF vector, with the cyclic coupling
 /// (R_α, k_n) when the ROM is cyclic; interpolated SAMA couplings read virtual nodes
-/// (Σ_j N_j u_tj) through a [`DofMap`] appended after the physical rows.
+/// (Σ_j N_j u_tj) through a [`LinearMap`] appended after the physical rows.
 fn pair_set(
     rom: &Rom,
     interfaces: &[ContactInterface],
@@ -224,7 +224,7 @@ fn pair_set(
     }
     let inner = n_dofs + virtuals.rows.len();
     PairSet::new(inner, variant, pairs, coupling)?
-        .with_map(DofMap::identity_and(n_dofs, virtuals.rows)?)
+        .with_map(LinearMap::identity_and(n_dofs, virtuals.rows)?)
 }
 
 /// The one friction element variant of all interfaces (the PairSet has one).

@@ -29,7 +29,7 @@ use super::rom_store::{sector_rom, RomPolicy};
 use super::sector::{excitation_vector, group_excitation, output_dofs, rows_of, tags_of, DofLabel};
 use super::Log;
 use crate::case::{Case, ContactElement};
-use crate::contact::pairs::ContactPair;
+use crate::contact::pairs::PairElement;
 use crate::error::{Error, Result};
 use crate::march::element::{Direction, Element};
 use crate::march::schemes::{add_contact_force, evaluate_law};
@@ -242,7 +242,7 @@ fn contact_elements(
 /// P = [t1; t2; −n], R^σ the target's rotation and c the neighbour phase.
 /// `label` names the pair in messages and results.
 fn pair_elements(
-    pair: &ContactPair,
+    pair: &PairElement,
     rotation: &[[f64; 3]; 3],
     c: f64,
     label: &str,

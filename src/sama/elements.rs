@@ -1,12 +1,12 @@
 //! The pairs of an interface as node-to-node friction elements of the harmonic balance
-//! ([`crate::contact::pairs::ContactPair`]): with the array coupling one element per c–t_j with
+//! ([`crate::contact::pairs::PairElement`]): with the array coupling one element per c–t_j with
 //! the weighted parameters of eq 31 (SAMA paper, Fig. 7a: the parallel array of node-to-node
 //! elements); with the interpolated coupling one element per contact node on a virtual node
 //! (Fig. 8), whose rows are combinations Σ_j N_j u_tj of the target nodes' rows.
 
 use crate::case::SamaCoupling;
 use crate::contact::law::ContactParams;
-use crate::contact::pairs::ContactPair as Element;
+use crate::contact::pairs::PairElement;
 use crate::error::{Error, Result};
 
 use super::{ContactInterface, ContactPair};
@@ -51,7 +51,7 @@ impl ContactInterface {
     /// invalid parameters.
     /// With `coupling = "interpolated"` a contact node with several targets needs a virtual node:
     /// use [`ContactInterface::elements_with`]; here that is an error.
-    pub fn elements(&self, rows: impl Fn(u64) -> Option<[usize; 3]>) -> Result<Vec<Element>> {
+    pub fn elements(&self, rows: impl Fn(u64) -> Option<[usize; 3]>) -> Result<Vec<PairElement>> {
         let mut virtuals = VirtualNodes::new(usize::MAX);
         let elements = self.elements_with(rows, &mut virtuals)?;
         if !virtuals.rows.is_empty() {
@@ -83,7 +83,7 @@ impl ContactInterface {
         &self,
         rows: impl Fn(u64) -> Option<[usize; 3]>,
         virtuals: &mut VirtualNodes,
-    ) -> Result<Vec<Element>> {
+    ) -> Result<Vec<PairElement>> {
         let node_rows = |tag: u64, role: &str| {
             rows(tag).ok_or_else(|| {
                 Error::input(format!(
@@ -107,7 +107,7 @@ impl ContactInterface {
                     self.name, p.contact_node
                 );
                 let (kt, kn) = (p.kt.iter().sum(), p.kn.iter().sum());
-                out.push(Element {
+                out.push(PairElement {
                     contact,
                     target: Some(virtuals.add(&targets)),
                     frame: p.frame,
@@ -119,7 +119,7 @@ impl ContactInterface {
             }
             for (j, &t) in p.targets.iter().enumerate() {
                 let context = format!("contact '{}', pair {}–{}", self.name, p.contact_node, t);
-                out.push(Element {
+                out.push(PairElement {
                     contact,
                     target: Some(node_rows(t, "target")?),
                     frame: p.frame,

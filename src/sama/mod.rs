@@ -40,14 +40,13 @@
 //!    position after placement (weight 1); a contact node without one is an error that lists them.
 //!
 //! With `coupling = "array"` (default) the harmonic balance turns each pair c–t_j into a
-//! node-to-node friction element acting on the
-//! relative displacement r = u_c − e^{iσφ_k} R_α^σ u_tj ([`ContactInterface::relative_displacement`];
-//! eq 33 of the paper), whose force goes back to the target node by the adjoint map
-//! ([`ContactInterface::pair_forces`]). [`ContactInterface::elements`] hands the pairs to
+//! node-to-node friction element acting on the relative displacement
+//! r = u_c − e^{iσφ_k} R_α^σ u_tj (eq 33 of the paper; [`crate::contact::kinematics`]), whose force
+//! goes back to the target node by the adjoint map. [`ContactInterface::elements`] hands the pairs to
 //! [`crate::contact::pairs::PairSet`] as such elements (weighted parameters and preload rates).
 //! With `coupling = "interpolated"` each contact node becomes one element (k_t, k_n, n0_c) on
 //! r = u_c − e^{iσφ_k} R_α^σ Σ_j N_j u_tj: the element reads a *virtual node* whose rows the
-//! [`crate::contact::mapped::DofMap`] fills with Σ_j N_j u_tj ([`ContactInterface::elements_with`]).
+//! [`crate::contact::mapped::LinearMap`] fills with Σ_j N_j u_tj ([`ContactInterface::elements_with`]).
 //!
 //! Why the choice matters (measured on the bundled shroud, `tools/validation/stuck_frequencies.rs`): the
 //! array's pairs c–t_j join points up to one target element apart, so a rigid rotation θ of both
@@ -58,7 +57,6 @@
 
 pub mod elements;
 pub mod geom;
-pub mod operator;
 pub mod project;
 pub mod report;
 pub mod surface;
@@ -72,7 +70,8 @@ use crate::error::{Error, Result};
 use crate::mesh::faces::group_faces;
 use crate::mesh::Mesh;
 
-use geom::{norm, sub, RigidMap};
+use crate::vec3::{norm, sub};
+use geom::RigidMap;
 use project::Projection;
 use surface::{degeneracy, SurfaceFace, TargetSurface};
 

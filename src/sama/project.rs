@@ -14,8 +14,8 @@ use rayon::prelude::*;
 use crate::mesh::faces::surface_shape;
 use crate::mesh::ElementType;
 
-use super::geom::{cross, dot, norm, scale, sub, unit};
 use super::surface::{is_triangle, reference_node, subdivision, TargetSurface};
+use crate::vec3::{cross, dot, norm, scale, sub, unit};
 
 /// The projection of a point onto the target surface.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -18,7 +18,7 @@ use crate::error::{Error, Result};
 use crate::mesh::faces::{area_vector, surface_quadrature};
 use crate::mesh::ElementType;
 
-use super::geom::{cross, dot, norm, sub};
+use crate::vec3::{cross, dot, norm, sub};
 
 /// One face of a surface: its type, its nodes (indices into the surface's `points`, in Gmsh order
 /// and outward orientation) and the tag of the mesh element it comes from (for messages and output).

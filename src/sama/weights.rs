@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use crate::mesh::faces::{area_vector, surface_quadrature, surface_shape};
 use crate::mesh::ElementType;
 
-use super::geom::{dot, norm, sub};
+use crate::vec3::{dot, norm, sub};
 
 /// Inverse-distance weights of the target nodes of one contact node (SAMA paper eqs 28–29).
 ///

@@ -31,7 +31,7 @@ use std::time::Instant;
 use faer::Mat;
 use nlrom::case::Case;
 use nlrom::contact::law::{ContactParams, Variant};
-use nlrom::contact::pairs::{ContactPair, PairSet};
+use nlrom::contact::pairs::{PairElement, PairSet};
 use nlrom::continuation::trace;
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel};
@@ -230,7 +230,7 @@ fn synthetic(contact_dofs: usize, h: usize, samples: usize) -> Result<()> {
         n,
         Variant::OneD,
         (0..pairs)
-            .map(|p| ContactPair {
+            .map(|p| PairElement {
                 contact: [6 * p, 6 * p + 1, 6 * p + 2],
                 target: Some([6 * p + 3, 6 * p + 4, 6 * p + 5]),
                 frame: identity,

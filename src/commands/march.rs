@@ -1,4 +1,5 @@
-//! The `/march/` group of the results file (`docs/results-file.md`): a march as the
+//! `nlrom march`: time marching of a `[damper]`, matrix-defined or sector ROM case, and the
+//! `/march/` group of the results file it writes (`docs/results-file.md`): a march as the
 //! [`MarchData`] of [`crate::output::results`], whose [`write_results`] owns the file. The layout's
 //! datasets (`time`, `response` [T, R], `response_dofs`, `contact_force` [T, E, 2] and
 //! `contact_state` [T, E] per element, `element_names`, `first_harmonic_last_period` \[R\],
@@ -18,13 +19,70 @@
 //! `rejected_steps`, `total_iterations`, `factorisations`.
 
 use std::path::Path;
+use std::time::Instant;
 
 use faer::c64;
 
+use serde_json::json;
+
+use super::Reporter;
+use crate::case::{Case, MarchScheme};
 use crate::error::Result;
-use crate::march::MarchOutcome;
+use crate::march::{march, MarchOutcome};
 use crate::output::{write_results, Attr, Data, Dataset, FileInfo, Group, MarchData, ResultsFile};
-use crate::problem::march_case::CaseMarch;
+use crate::problem::march_case::{case_march, CaseMarch};
+use crate::problem::rom_store::file_info;
+
+/// `nlrom march`: time marching of a `[damper]`, matrix-defined or sector ROM case; writes `/march/` and
+/// reports the counts (steps, iterations per step, state changes, wall time).
+pub fn march_command(
+    case_path: &Path,
+    output: &Path,
+    scheme: Option<MarchScheme>,
+    rep: &Reporter,
+    as_json: bool,
+) -> Result<()> {
+    let start = Instant::now();
+    let case = Case::load(case_path)?;
+    let cm = case_march(&case, scheme, &mut |l| rep.info(l))?;
+    let out = march(&cm.system, &cm.settings)?;
+    write_march_results(output, &file_info(&case), &cm, &out)?;
+    let last = out.periods.last();
+    let report = json!({
+        "scheme": out.scheme.as_str(),
+        "steps": out.steps,
+        "rejected_steps": out.rejected_steps,
+        "total_iterations": out.total_iterations,
+        "iteration_histogram": out.iteration_histogram(),
+        "single_iteration_fraction": out.single_iteration_fraction(),
+        "state_changes_last_period": last.map(|p| p.state_changes),
+        "periodicity_error_last_period": last.and_then(|p| p.periodicity_error),
+        "steady_period": out.steady_period,
+        "time_step_range_s": [out.step_range.0, out.step_range.1],
+        "first_harmonic_last_period": cm.response.iter().map(|&d| out.first_harmonic_amplitude()[d]).collect::<Vec<_>>(),
+        "response_dofs": cm.response.iter().map(|&d| cm.system.dof_names[d].clone()).collect::<Vec<_>>(),
+        "march_wall_seconds": out.wall_seconds,
+        "output": output.display().to_string(),
+        "wall_seconds": start.elapsed().as_secs_f64(),
+    });
+    if as_json {
+        println!("{report}");
+    } else {
+        println!(
+            "{} march of {}: {} steps ({} iterations, {:.1} % single-iteration steps), {} state changes in the last period, steady {}, {:.3} s; wrote {}",
+            out.scheme,
+            case_path.display(),
+            out.steps,
+            out.total_iterations,
+            100.0 * out.single_iteration_fraction(),
+            last.map_or(0, |p| p.state_changes),
+            out.steady_period.map_or("not reached".to_string(), |p| format!("after {p} periods")),
+            out.wall_seconds,
+            output.display()
+        );
+    }
+    Ok(())
+}
 
 /// Writes the results file of a march (root attributes from `info`, `/march/`) atomically.
 pub fn write_march_results(

@@ -1,23 +1,34 @@
-//! The user-facing pipeline commands (`docs/user-guide.md`): `nlrom reduce`,
-//! `solve`, `run`, `batch` and `demo` joined from the library's stages.
+//! The commands of the command line (`docs/user-guide.md`), one module each, all reporting
+//! through one [`Reporter`] (`--quiet`, `-v`) and printing one JSON object with `--json`:
 //!
-//! * [`solve`]: one case end to end — the ROM (read when its key matches, else reduced), the
-//!   contact pairs, the harmonic balance problem and the frequency response of every sweep point
-//!   (in parallel), gathered into a results file; [`RomPolicy`] says whether the ROM is
-//!   cached in a file (`run`) or only read (`solve`).
+//! * [`mesh_info`]: `nlrom mesh info`, a mesh's summary;
+//! * [`modes`]: `nlrom modes`, natural frequencies at a stage of the reduction;
+//! * [`export`]: `nlrom export`, K, M and the DOF map as files;
+//! * [`reduce`]: `nlrom reduce`, the ROM file of a mesh case;
+//! * [`contact`]: `nlrom contact`, the contact pairs of a case;
+//! * [`march`]: `nlrom march`, time marching and the `/march/` results;
+//! * [`solve`]: `nlrom solve` and `run`, one case end to end — the ROM (read when its key
+//!   matches, else reduced), the contact pairs, the harmonic balance problem and the frequency
+//!   response of every sweep point (in parallel), gathered into a results file; [`RomPolicy`]
+//!   says whether the ROM is cached in a file (`run`) or only read (`solve`).
 //! * [`summary`]: resonance frequency, peak amplitude and half-power Q-factor of a curve.
-//! * [`batch`]: many cases (or many meshes with one template case) in a rayon pool of `--jobs`
-//!   threads, one results file each and a summary table (`summary.csv`).
-//! * [`demo`]: the bundled demo case end to end, then the plots.
+//! * [`batch`]: `nlrom batch`, many cases (or many meshes with one template case) in a rayon
+//!   pool of `--jobs` threads, one results file each and a summary table (`summary.csv`).
+//! * [`demo`]: `nlrom demo`, the bundled demo case end to end, then the plots.
 //! * [`progress`]: log lines (`--quiet`, `-v`) and indicatif progress bars on stderr.
 //!
 //! Exit status (`crate::error::Error::exit_code`): 0 success, 1 a failed computation (a
 //! continuation that did not converge: its converged points are written first), 2 bad input.
 
 pub mod batch;
+pub mod contact;
 pub mod demo;
-pub mod march_output;
+pub mod export;
+pub mod march;
+pub mod mesh_info;
+pub mod modes;
 pub mod progress;
+pub mod reduce;
 pub mod solve;
 pub mod summary;
 
@@ -27,7 +38,14 @@ use std::time::Instant;
 use serde_json::{json, Value};
 
 pub use crate::problem::rom_store::{RomOrigin, RomPolicy};
+pub use contact::contact_command;
+pub use demo::demo_command;
+pub use export::export_command;
+pub use march::march_command;
+pub use mesh_info::mesh_info_command;
+pub use modes::modes_command;
 pub use progress::Reporter;
+pub use reduce::reduce_command;
 pub use solve::{
     default_output, default_rom_file, solve_case, solve_to_file, CurveReport, SolveOptions,
     SolveOutcome,
@@ -36,75 +54,6 @@ pub use summary::{summarize, CurveSummary};
 
 use crate::case::{Case, CaseKind};
 use crate::error::{Error, Result};
-use crate::model;
-use crate::output::write_rom;
-use crate::problem::rom_store::{create_parent, file_info};
-use crate::reduction::reduce;
-
-/// `nlrom reduce CASE -o ROM.h5`: builds the model, reduces it for every harmonic index the case
-/// needs and writes the ROM file (atomically); prints the harmonic indices, their number of
-/// coordinates and lowest frequencies.
-pub fn reduce_command(
-    case_path: &Path,
-    output: &Path,
-    rep: &Reporter,
-    as_json: bool,
-) -> Result<()> {
-    let start = Instant::now();
-    let case = Case::load(case_path)?;
-    if case.model.mesh.is_none() {
-        return Err(Error::input(format!(
-            "{}: `nlrom reduce` needs a mesh case (`[model] mesh` with `[reduction]`); a matrix case is solved directly by `nlrom solve`",
-            case_path.display()
-        )));
-    }
-    let model = model::build(&case, &mut |l| rep.detail(l))?;
-    let rom = reduce(&case, &model, &mut |l| rep.detail(l))?;
-    create_parent(output)?;
-    write_rom(output, &rom, &file_info(&case))?;
-    rep.info(&format!("wrote {} (key {})", output.display(), rom.key));
-    let harmonics: Vec<Value> = rom
-        .harmonics
-        .iter()
-        .map(|h| {
-            json!({
-                "harmonic_index": h.harmonic_index,
-                "coordinates": h.len(),
-                "frequencies_hz": h.frequencies_hz,
-            })
-        })
-        .collect();
-    if as_json {
-        let report = json!({
-            "output": output.display().to_string(),
-            "key": rom.key,
-            "full_dofs": rom.full_dofs,
-            "interface_modes": rom.interface_modes,
-            "harmonics": harmonics,
-            "wall_seconds": start.elapsed().as_secs_f64(),
-        });
-        println!("{report}");
-        return Ok(());
-    }
-    println!(
-        "ROM of {} ({} free DOF, {} interface modes) written to {}",
-        case_path.display(),
-        rom.full_dofs,
-        rom.interface_modes,
-        output.display()
-    );
-    println!("{:>6} {:>12}  lowest frequencies (Hz)", "k", "coordinates");
-    for h in &rom.harmonics {
-        let f: Vec<String> = h
-            .frequencies_hz
-            .iter()
-            .take(5)
-            .map(|f| format!("{f:.3}"))
-            .collect();
-        println!("{:>6} {:>12}  {}", h.harmonic_index, h.len(), f.join(", "));
-    }
-    Ok(())
-}
 
 /// `nlrom solve` (`cache_rom = false`) and `nlrom run` (`cache_rom = true`, the ROM is kept in
 /// [`default_rom_file`] and reused while its key matches): solves the case (with the `stable`

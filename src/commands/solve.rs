@@ -36,7 +36,7 @@ use crate::hbm::{HbmSystem, ResponseOptions};
 use crate::mesh::Mesh;
 use crate::model::{self, StructuralModel};
 use crate::output::{
-    write_results, ContactCurveDetail, ContactData, FileInfo, FrfData, FrfPoint, PointLoops,
+    write_results, ContactCurveDetail, ContactData, FileInfo, FrfData, FrfRecord, PointLoops,
     ResponseDof, ResultsFile,
 };
 use crate::problem::matrix_case::{matrix_elements, matrix_setup};
@@ -486,7 +486,7 @@ fn trace_curve<F: HarmonicForce>(
                 ));
             }
             for p in &traced.points {
-                frf.points.push(FrfPoint {
+                frf.points.push(FrfRecord {
                     omega: p.omega,
                     harmonics: p.response.harmonics.concat(),
                     peak: p.response.peak.clone(),
