@@ -1,5 +1,6 @@
 //! The module layering of `src/` (the table in the crate documentation, `src/lib.rs`): a
-//! top-level module may use only the modules listed before it. Every `crate::<module>` path in
+//! top-level module may use only the modules listed before it, and only the builders
+//! ([`BUILDERS`]) may read a whole case (`case::Case`). Every `crate::<module>` path in
 //! compiled code (comments, string literals and `#[cfg(test)]` items removed) of every file under
 //! `src/` is checked against [`ORDER`], and the crate documentation must list the same order.
 
@@ -34,6 +35,18 @@ const ORDER: &[&str] = &[
 
 /// The one allowed upward use: `error` wraps the mesh reader's `MshError`.
 const EXCEPTIONS: &[(&str, &str)] = &[("error", "mesh")];
+
+/// The builders: the only modules that may read a whole case (`case::Case`). The kernels take
+/// plain values or, at most, one table or value type of the schema.
+const BUILDERS: &[&str] = &[
+    "case",
+    "model",
+    "reduction",
+    "sama",
+    "problem",
+    "commands",
+    "cli",
+];
 
 /// `src` with comments, string and character literals blanked (replaced by spaces, so that
 /// positions and line numbers stay), and every `#[cfg(test)]` item removed.
@@ -229,8 +242,23 @@ fn check_file(relative: &Path, source: &str) -> Vec<String> {
             relative.display()
         )];
     };
+    let code = strip(source);
     let mut bad = Vec::new();
-    for (to, line) in crate_uses(&strip(source)) {
+    if !BUILDERS.contains(&from.as_str()) {
+        for (pos, _) in code.match_indices("Case") {
+            let before = code[..pos].chars().next_back();
+            let after = code[pos + 4..].chars().next();
+            let ident = |c: Option<char>| c.is_some_and(|c| c.is_alphanumeric() || c == '_');
+            if !ident(before) && !ident(after) {
+                let line = code[..pos].matches('\n').count() + 1;
+                bad.push(format!(
+                    "{}:{line}: `{from}` reads the whole case (`Case`); only builders may",
+                    relative.display()
+                ));
+            }
+        }
+    }
+    for (to, line) in crate_uses(&code) {
         if to == from || ["Result", "Error"].contains(&to.as_str()) {
             continue;
         }
@@ -316,7 +344,7 @@ fn the_checker_fails_on_a_back_edge() {
     assert!(bad[0].contains("march/sector.rs:2") && bad[0].contains("crate::commands"));
     // inside a use group, and as an expression path
     let grouped =
-        "use crate::{case::Case, problem::{rom_store, sector}};\nfn f() { crate::cli::main(); }";
+        "use crate::{case::CaseKind, problem::{rom_store, sector}};\nfn f() { crate::cli::main(); }";
     let bad = check_file(Path::new("hbm/frf.rs"), grouped);
     assert_eq!(bad.len(), 2, "{bad:?}");
     assert!(bad[0].contains("crate::problem") && bad[1].contains("crate::cli"));
