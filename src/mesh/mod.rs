@@ -6,6 +6,7 @@
 //! (see [`element`]). Physical groups are resolved to element blocks, and from them to node sets,
 //! by name.
 
+mod ascii;
 pub mod element;
 pub mod faces;
 pub mod msh;

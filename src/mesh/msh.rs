@@ -25,6 +25,7 @@ use nom::error::{ErrorKind, ParseError};
 use nom::{IResult, Parser};
 use rayon::prelude::*;
 
+use super::ascii;
 use super::{ElementBlock, ElementType, Mesh, MshFormat, MshVersion, PeriodicLink, PhysicalGroup};
 use crate::error::Error;
 
@@ -666,6 +667,9 @@ impl State {
                 i = r;
             }
             None => {
+                if let Some(r) = self.nodes_v22_parallel(i, n) {
+                    return Ok((r, ()));
+                }
                 for _ in 0..n {
                     let at = skip_ws(i);
                     let (r, tag) = uint(i)?;
@@ -764,7 +768,70 @@ impl State {
         Ok((i, ()))
     }
 
+    /// The ASCII node records `tag x y z` of MSH 2.2, one per line, read in parallel
+    /// ([`ascii`]); `None` (nothing read) for small blocks or when any line is not such a record:
+    /// the caller then reads them sequentially.
+    fn nodes_v22_parallel<'a>(&mut self, i: &'a [u8], n: usize) -> Option<&'a [u8]> {
+        if n < ascii::CHUNK_LINES {
+            return None;
+        }
+        let mut records = vec![(0u64, [0.0; 3]); n];
+        let rest = ascii::read_records(skip_ws(i), n, 1, &mut records, |line, slot| {
+            let (r, tag) = ascii::uint(line)?;
+            let (r, x) = ascii::float(r)?;
+            let (r, y) = ascii::float(r)?;
+            let (r, z) = ascii::float(r)?;
+            slot[0] = (tag, [x, y, z]);
+            (tag != 0).then_some(r)
+        })?;
+        self.node_tags.extend(records.iter().map(|r| r.0));
+        self.coords.extend(records.iter().map(|r| r.1));
+        Some(rest)
+    }
+
+    /// A 4.1 ASCII node block (n tag lines, then n coordinate lines) read in parallel, as
+    /// [`State::nodes_v22_parallel`]; on `None` nothing is kept.
+    fn node_block_ascii_parallel<'a>(
+        &mut self,
+        i: &'a [u8],
+        n: usize,
+        extra: usize,
+    ) -> Option<&'a [u8]> {
+        if n < ascii::CHUNK_LINES {
+            return None;
+        }
+        let first = self.node_tags.len();
+        self.node_tags.resize(first + n, 0);
+        self.coords.resize(first + n, [0.0; 3]);
+        let read =
+            ascii::read_records(skip_ws(i), n, 1, &mut self.node_tags[first..], |line, t| {
+                let (r, tag) = ascii::uint(line)?;
+                t[0] = tag;
+                (tag != 0).then_some(r)
+            })
+            .and_then(|i| {
+                ascii::read_records(i, n, 1, &mut self.coords[first..], |line, p| {
+                    let (r, x) = ascii::float(line)?;
+                    let (r, y) = ascii::float(r)?;
+                    let (mut r, z) = ascii::float(r)?;
+                    for _ in 0..extra {
+                        r = ascii::float(r)?.0;
+                    }
+                    p[0] = [x, y, z];
+                    Some(r)
+                })
+            });
+        if read.is_none() {
+            self.node_tags.truncate(first);
+            self.coords.truncate(first);
+        }
+        read
+    }
+
     fn node_block_ascii<'a>(&mut self, mut i: &'a [u8], n: usize, extra: usize) -> PResult<'a, ()> {
+        if let Some(r) = self.node_block_ascii_parallel(i, n, extra) {
+            return Ok((r, ()));
+        }
         let first = self.node_tags.len();
         for _ in 0..n {
             let at = skip_ws(i);
@@ -921,6 +988,43 @@ impl State {
         Ok((i, ()))
     }
 
+    /// A 4.1 ASCII element block (`tag node...` per line) read in parallel, as
+    /// [`State::nodes_v22_parallel`]; on `None` the block is left empty.
+    fn element_block_ascii_parallel<'a>(
+        lookup: &NodeLookup,
+        i: &'a [u8],
+        n: usize,
+        block: &mut ElementBlock,
+    ) -> Option<&'a [u8]> {
+        if n < ascii::CHUNK_LINES {
+            return None;
+        }
+        let nn = block.kind.num_nodes();
+        block.tags.resize(n, 0);
+        block.connectivity.resize(n * nn, 0);
+        let read = ascii::read_records2(
+            skip_ws(i),
+            n,
+            (&mut block.tags, 1),
+            (&mut block.connectivity, nn),
+            |line, tag, conn| {
+                let (mut r, t) = ascii::uint(line)?;
+                tag[0] = t;
+                for c in conn.iter_mut() {
+                    let (r2, node) = ascii::uint(r)?;
+                    *c = lookup.get(node)?;
+                    r = r2;
+                }
+                Some(r)
+            },
+        );
+        if read.is_none() {
+            block.tags.clear();
+            block.connectivity.clear();
+        }
+        read
+    }
+
     fn element_block_ascii<'a>(
         &self,
         mut i: &'a [u8],
@@ -932,6 +1036,9 @@ impl State {
             .lookup
             .as_ref()
             .expect("nodes are read before elements");
+        if let Some(r) = Self::element_block_ascii_parallel(lookup, i, n, block) {
+            return Ok((r, ()));
+        }
         for _ in 0..n {
             let (r, tag) = uint(i)?;
             block.tags.push(tag);
@@ -958,7 +1065,89 @@ impl State {
         }
     }
 
+    /// The ASCII element records of MSH 2.2 (`tag type ntags tag... node...` per line) read in
+    /// parallel, as [`State::nodes_v22_parallel`]: each chunk of lines gives its runs of
+    /// consecutive elements of one (type, entity, physical), appended in order to the blocks as
+    /// the sequential reader does ([`State::block_v22`]). On `None` nothing is kept.
+    fn elements_v22_ascii_parallel<'a>(&mut self, i: &'a [u8], n: usize) -> Option<&'a [u8]> {
+        struct Run {
+            kind: ElementType,
+            entity: i32,
+            physical: i32,
+            tags: Vec<u64>,
+            connectivity: Vec<u32>,
+        }
+        if n < ascii::CHUNK_LINES {
+            return None;
+        }
+        let lookup = self.lookup.as_ref()?;
+        let start = skip_ws(i);
+        let (chunks, end) = ascii::line_chunks(start, n, ascii::lines_per_chunk(n))?;
+        let runs: Vec<Vec<Run>> = chunks
+            .par_iter()
+            .map(|&(first, lines)| {
+                let mut runs: Vec<Run> = Vec::new();
+                let mut r = &start[first..];
+                for _ in 0..lines {
+                    let (r1, tag) = ascii::uint(r)?;
+                    let (r1, ty) = ascii::uint(r1)?;
+                    let kind = element_type(r1, ty as i64).ok()?.1;
+                    let (mut r1, ntags) = ascii::uint(r1)?;
+                    if ntags > 64 {
+                        return None;
+                    }
+                    let mut tags = [0i32; 2];
+                    for k in 0..ntags as usize {
+                        let (r2, t) = ascii::int32(r1)?;
+                        if let Some(slot) = tags.get_mut(k) {
+                            *slot = t;
+                        }
+                        r1 = r2;
+                    }
+                    let [physical, entity] = tags;
+                    let same = runs.last().is_some_and(|l: &Run| {
+                        l.kind == kind && l.entity == entity && l.physical == physical
+                    });
+                    if !same {
+                        // Most chunks hold one run: room for all their lines.
+                        let room = if runs.is_empty() { lines } else { 0 };
+                        runs.push(Run {
+                            kind,
+                            entity,
+                            physical,
+                            tags: Vec::with_capacity(room),
+                            connectivity: Vec::with_capacity(room * kind.num_nodes()),
+                        });
+                    }
+                    let run = runs.last_mut().expect("pushed");
+                    run.tags.push(tag);
+                    for _ in 0..kind.num_nodes() {
+                        let (r2, node) = ascii::uint(r1)?;
+                        run.connectivity.push(lookup.get(node)?);
+                        r1 = r2;
+                    }
+                    r = ascii::line_end(r1)?;
+                }
+                Some(runs)
+            })
+            .collect::<Option<_>>()?;
+        for run in runs.into_iter().flatten() {
+            let b = self.block_v22(run.kind, run.entity, run.physical);
+            let b = &mut self.blocks[b];
+            if b.tags.is_empty() {
+                (b.tags, b.connectivity) = (run.tags, run.connectivity);
+            } else {
+                b.tags.extend_from_slice(&run.tags);
+                b.connectivity.extend_from_slice(&run.connectivity);
+            }
+        }
+        Some(&start[end..])
+    }
+
     fn elements_v22_ascii<'a>(&mut self, mut i: &'a [u8], n: usize) -> PResult<'a, ()> {
+        if let Some(r) = self.elements_v22_ascii_parallel(i, n) {
+            return Ok((r, ()));
+        }
         for _ in 0..n {
             let (r, tag) = uint(i)?;
             let type_at = skip_ws(r);
@@ -1361,6 +1550,51 @@ mod tests {
     use super::*;
 
     const TINY_41: &str = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n2 1 \"face\"\n3 2 \"solid body\"\n$EndPhysicalNames\n$Entities\n0 0 1 1\n5 0 0 0 1 1 0 1 1 0\n7 0 0 0 1 1 1 1 2 1 5\n$EndEntities\n$Nodes\n2 4 10 40\n2 5 0 3\n10\n20\n30\n0 0 0\n1 0 0\n0 1 0\n3 7 0 1\n40\n0 0 1\n$EndNodes\n$Elements\n2 2 1 9\n2 5 2 1\n1 10 20 30\n3 7 4 1\n9 10 20 30 40\n$EndElements\n";
+
+    /// The parallel line readers take large blocks of one record per line (the integration test
+    /// `msh_parallel` checks that they give what the sequential reader gives).
+    #[test]
+    fn large_ascii_blocks_take_the_parallel_readers() {
+        let n = 3 * ascii::CHUNK_LINES + 5;
+        let mut nodes = String::from("\n");
+        for k in 1..=n {
+            nodes += &format!("{k} {}.5 -{k}e-3 0\n", k % 97);
+        }
+        let mut state = State::default();
+        let rest = state.nodes_v22_parallel(nodes.as_bytes(), n).unwrap();
+        assert!(rest.is_empty());
+        assert_eq!(state.node_tags, (1..=n as u64).collect::<Vec<_>>());
+        assert_eq!(state.coords[9], [10.5, -10e-3, 0.0]);
+        state.index_nodes(b"").unwrap();
+        let lookup = state.lookup.as_ref().unwrap();
+        let mut elements = String::from("\n");
+        for e in 1..=n {
+            elements += &format!("{e} {} {} {}\n", e, e % n + 1, (e + 1) % n + 1);
+        }
+        let mut block = ElementBlock {
+            kind: ElementType::Triangle3,
+            entity: 1,
+            physicals: Vec::new(),
+            tags: Vec::new(),
+            connectivity: Vec::new(),
+        };
+        let rest = State::element_block_ascii_parallel(lookup, elements.as_bytes(), n, &mut block)
+            .unwrap();
+        assert!(rest.is_empty());
+        assert_eq!(block.tags.len(), n);
+        assert_eq!(&block.connectivity[..6], &[0, 1, 2, 1, 2, 3]);
+        // A record over two lines, or an unknown node: refused (the sequential reader decides).
+        let broken = elements.replacen("7 7 ", "7\n7 ", 1);
+        assert!(
+            State::element_block_ascii_parallel(lookup, broken.as_bytes(), n, &mut block).is_none()
+        );
+        assert!(block.tags.is_empty() && block.connectivity.is_empty());
+        let unknown = elements.replacen("\n9 9 ", &format!("\n9 {} ", n + 1), 1);
+        assert!(
+            State::element_block_ascii_parallel(lookup, unknown.as_bytes(), n, &mut block)
+                .is_none()
+        );
+    }
 
     #[test]
     fn tiny_41_ascii() {

@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
-"""Generate a large second-order tetrahedral mesh for parser benchmarks (output is NOT committed).
+"""Generate a large tetrahedral mesh for parser benchmarks (output is NOT committed).
 
-    python3 tools/meshes/make_large_mesh.py OUT_PREFIX [--tets 1600000]
+    python3 tools/meshes/make_large_mesh.py OUT_PREFIX [--tets 1600000] [--order 2]
 
 Writes OUT_PREFIX.v41-ascii.msh, OUT_PREFIX.v41-binary.msh, OUT_PREFIX.v22-ascii.msh and
-OUT_PREFIX.v22-binary.msh: a box [0, 1] x [0, 0.5] x [0, 0.25] meshed with 10-node tetrahedra,
-at least --tets of them, physical groups "volume" (3), "bottom" (2, z = 0) and "top" (2, z = 0.25).
+OUT_PREFIX.v22-binary.msh: a box [0, 1] x [0, 0.5] x [0, 0.25] meshed with 10-node tetrahedra
+(--order 2, default) or 4-node ones (--order 1), at least --tets of them, physical groups
+"volume" (3), "bottom" (2, z = 0) and "top" (2, z = 0.25).
 A good place is the git-ignored tools/large/ folder, e.g. `tools/large/box`.
 
 The uniform mesh size is calibrated: a coarse first-order mesh (about --tets / 8 tetrahedra)
@@ -49,6 +50,7 @@ def main(argv=None) -> int:
     ap.add_argument("out_prefix", type=Path, help="output path prefix, e.g. tools/large/box")
     ap.add_argument("--tets", type=int, default=1_600_000, help="minimum number of tetrahedra")
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--order", type=int, choices=(1, 2), default=2, help="element order")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
 
@@ -103,9 +105,10 @@ def main(argv=None) -> int:
     else:
         print("could not reach the requested number of tetrahedra", file=sys.stderr)
         return 1
-    gmsh.model.mesh.setOrder(2)
-    n = sum(len(gmsh.model.mesh.getElementsByType(et)[0]) for et in gmsh.model.mesh.getElementTypes(3))
-    log(f"second order: {n} 10-node tetrahedra", t0)
+    if args.order == 2:
+        gmsh.model.mesh.setOrder(2)
+        n = sum(len(gmsh.model.mesh.getElementsByType(et)[0]) for et in gmsh.model.mesh.getElementTypes(3))
+        log(f"second order: {n} 10-node tetrahedra", t0)
 
     n_nodes = len(gmsh.model.mesh.getNodes()[0])
     n_tri = sum(len(gmsh.model.mesh.getElements(2, s)[1][0]) for s in (bottom, top))
@@ -119,8 +122,8 @@ def main(argv=None) -> int:
         gmsh.write(str(path))
         log(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB)", t0)
     gmsh.finalize()
-    print(f"tetra10 elements: {n}")
-    print(f"triangle6 elements (bottom + top): {n_tri}")
+    print(f"tetra{4 if args.order == 1 else 10} elements: {n}")
+    print(f"triangle{3 if args.order == 1 else 6} elements (bottom + top): {n_tri}")
     print(f"nodes: {n_nodes}")
     log("done", t0)
     return 0

@@ -3,7 +3,8 @@
 matrix cases of cases/nlvib/: each peer's model is written from the nlrom case file (matrices,
 Rayleigh damping, force, [[element]] list, H, N_t, frequency range), each tool traces the
 frequency response, and the script reports per curve and tool: whole curve traced, points,
-CPU time per continuation point, peak amplitude |Q1| of the reported DOF and its frequency, and
+CPU time per continuation point, peak amplitude A1 = |Q1| (first harmonic) of the reported DOF
+and its frequency, and
 the ratios to nlrom.
 
 NLvib is not part of nlrom: give the path of a checkout (the folder holding SRC/) with --nlvib
@@ -18,8 +19,9 @@ Without case arguments: cases/nlvib/chain07_jenkins.toml, chain07.toml, sdof_jen
 
 The peak is taken over the points of each traced curve and refined by the parabola through the
 largest point and its two neighbours in (ω, |Q1|), the same way for every tool. CPU time is the
-user + system time of the tool's process (nlrom: all threads; NLvib: Octave's cputime around
-solve_and_continue, so model setup and Octave start-up are excluded).
+user + system time of the tool's process (nlrom: the whole `nlrom solve` process, all threads;
+NLvib: Octave's cputime around solve_and_continue, so model setup and Octave start-up are
+excluded; pyHarm: the continuation after a warm-up run, see pyharm_run.py).
 """
 import argparse
 import json
@@ -267,12 +269,23 @@ def main():
     ap.add_argument("--nlrom", default=str(ROOT / "target/release/nlrom"))
     ap.add_argument("--no-pyharm", action="store_true")
     ap.add_argument("--no-nlvib", action="store_true")
+    ap.add_argument("--peer-results", type=Path, nargs="*", default=[],
+                    help="rows of an earlier run (its --json file or its printed JSON lines): "
+                         "peers found there are not run again (nlrom always is)")
     ap.add_argument("--markdown", type=Path)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
-    if not args.no_nlvib and not (args.nlvib and (Path(args.nlvib) / "SRC/HB_residual.m").exists()):
+    if not args.no_nlvib and not args.peer_results and not (args.nlvib and (Path(args.nlvib) / "SRC/HB_residual.m").exists()):
         sys.exit("give the NLvib checkout with --nlvib PATH or NLVIB=PATH (the folder holding SRC/HB_residual.m)")
     cases = args.cases or [str(ROOT / f"cases/nlvib/{c}.toml") for c in DEFAULT_CASES]
+    earlier = {}
+    for path in args.peer_results:
+        text = path.read_text().strip()
+        found = json.loads(text) if text.startswith("[") else [
+            json.loads(line) for line in text.splitlines() if line.startswith("{")]
+        for r in found:
+            if r["tool"] != "nlrom":
+                earlier[(r["case"], r["tool"])] = r
     rows = []
     with tempfile.TemporaryDirectory() as work:
         for case in cases:
@@ -284,12 +297,16 @@ def main():
                 tools = {"nlrom": dict(omega=om, amp=amp, points=len(om),
                                        whole=c["end"] == "reached_end", cpu_per_point=per_point,
                                        error=c["error"])}
-                if not args.no_nlvib:
+                if (p["name"], "NLvib") in earlier:
+                    tools["NLvib"] = earlier[(p["name"], "NLvib")]
+                elif not args.no_nlvib:
                     r = run_nlvib(p, args.nlvib, work)
                     if "cpu" in r:
                         r["cpu_per_point"] = r["cpu"] / max(r.get("points", 0), 1)
                     tools["NLvib"] = r
-                if not args.no_pyharm:
+                if (p["name"], "pyHarm") in earlier:
+                    tools["pyHarm"] = earlier[(p["name"], "pyHarm")]
+                elif not args.no_pyharm:
                     r = run_pyharm(p, work)
                     if "cpu" in r:
                         r["cpu_per_point"] = r["cpu"] / max(r.get("points", 0), 1)
@@ -299,7 +316,7 @@ def main():
                         t["peak_omega"], t["peak_amp"] = refined_peak(t["omega"], t["amp"])
                     rows.append(dict(case=p["name"], tool=name,
                                      **{k: v for k, v in t.items()
-                                        if k not in ("omega", "amp", "log")}))
+                                        if k not in ("omega", "amp", "log", "case", "tool")}))
                 print_rows(rows[-len(tools):])
     table = markdown(rows)
     print(table)
@@ -315,7 +332,7 @@ def print_rows(rows):
 
 
 def markdown(rows):
-    out = ["| case | tool | whole curve | points | CPU ms/point | nlrom speed-up | peak |Q1| | "
+    out = ["| case | tool | whole curve | points | CPU ms/point | nlrom speed-up | peak A1 | "
            "peak ω (rad/s) | Δ amplitude vs nlrom | Δ ω vs nlrom |",
            "|---|---|---|---|---|---|---|---|---|---|"]
     ref = {r["case"]: r for r in rows if r["tool"] == "nlrom"}

@@ -1,0 +1,336 @@
+//! Line-based reading of the large ASCII blocks of an MSH file (`$Nodes` and `$Elements`
+//! records) in parallel: the block is cut at line boundaries into chunks of whole records, one
+//! record per line as Gmsh writes them, and each chunk is read by its own rayon task.
+//!
+//! The readers here are strict: a record must sit on one line, with tokens separated by blanks
+//! (space, tab, CR). They return `None` on anything else — a malformed token, a record spread
+//! over several lines, a missing line — and never an error: the caller then reads the block again
+//! with the sequential token reader of [`super::msh`], which accepts any white-space layout and
+//! produces the error message naming the line. So a valid file reads the same either way and a
+//! broken one gives the same error.
+
+use rayon::prelude::*;
+
+/// Records per parallel task: chunks smaller than this are not worth a task.
+pub const CHUNK_LINES: usize = 1 << 13;
+
+/// The chunks of the next `n` lines of `i` (`i` starts at the first byte of the first line):
+/// (byte offset of the chunk's first line, number of lines), `per` lines per chunk, and the
+/// offset just after the n-th line's `\n`. `None` if `i` has fewer than `n` complete lines.
+///
+/// Newlines are counted 64 bytes at a time (a loop the compiler vectorises) up to the block that
+/// holds the next chunk boundary, which is then scanned byte by byte.
+pub fn line_chunks(i: &[u8], n: usize, per: usize) -> Option<(Vec<(usize, usize)>, usize)> {
+    if n == 0 {
+        return Some((Vec::new(), 0));
+    }
+    let per = per.max(1);
+    let mut chunks = Vec::with_capacity(n / per + 1);
+    chunks.push((0, per.min(n)));
+    let (mut count, mut pos) = (0usize, 0usize);
+    loop {
+        let target = ((count / per + 1) * per).min(n);
+        while let Some(block) = i.get(pos..pos + 64) {
+            let c = block.iter().filter(|&&b| b == b'\n').count();
+            if count + c >= target {
+                break;
+            }
+            count += c;
+            pos += 64;
+        }
+        while count < target {
+            let b = *i.get(pos)?;
+            pos += 1;
+            count += usize::from(b == b'\n');
+        }
+        if count == n {
+            return Some((chunks, pos));
+        }
+        chunks.push((pos, per.min(n - count)));
+    }
+}
+
+/// Lines per chunk for `n` records: at least [`CHUNK_LINES`], and about 4 chunks per thread so
+/// that uneven chunks balance.
+pub fn lines_per_chunk(n: usize) -> usize {
+    let tasks = 4 * rayon::current_num_threads().max(1);
+    n.div_ceil(tasks).max(CHUNK_LINES)
+}
+
+/// Skips blanks within the line (space, tab, CR).
+#[inline(always)]
+fn blank(i: &[u8]) -> &[u8] {
+    let mut k = 0;
+    while k < i.len() && matches!(i[k], b' ' | b'\t' | b'\r') {
+        k += 1;
+    }
+    &i[k..]
+}
+
+/// Whether a token may end before `i` (end of input or white space).
+#[inline(always)]
+fn ends_token(i: &[u8]) -> bool {
+    i.first().is_none_or(|c| c.is_ascii_whitespace())
+}
+
+/// The end of the line: blanks, then `\n`; returns the input after the `\n`.
+#[inline(always)]
+pub fn line_end(i: &[u8]) -> Option<&[u8]> {
+    let i = blank(i);
+    match i.first() {
+        Some(b'\n') => Some(&i[1..]),
+        _ => None,
+    }
+}
+
+/// The value of eight ASCII digits read as a little-endian `u64` (first digit in the lowest
+/// byte), by three multiplications instead of eight (Lemire's SWAR method, as in fast_float).
+#[inline(always)]
+fn eight_digits(v: u64) -> u64 {
+    const MASK: u64 = 0x0000_00FF_0000_00FF;
+    const MUL1: u64 = 0x000F_4240_0000_0064;
+    const MUL2: u64 = 0x0000_2710_0000_0001;
+    let v = v.wrapping_sub(0x3030_3030_3030_3030);
+    let v = v.wrapping_mul(10).wrapping_add(v >> 8);
+    let v1 = (v & MASK).wrapping_mul(MUL1);
+    let v2 = ((v >> 16) & MASK).wrapping_mul(MUL2);
+    u64::from((v1.wrapping_add(v2) >> 32) as u32)
+}
+
+/// An unsigned decimal integer of at most 19 digits on the current line.
+///
+/// A number of 1–7 digits followed by a blank or line end (every tag of a mesh below ten
+/// million) is read 8 bytes at a time: the digit bytes are found with bit masks and the number
+/// is converted by [`eight_digits`] after left-padding with `'0'`; others digit by digit.
+#[inline(always)]
+pub fn uint(i: &[u8]) -> Option<(&[u8], u64)> {
+    let i = blank(i);
+    if let Some(word) = i.get(..8) {
+        let x = u64::from_le_bytes(word.try_into().expect("8 bytes"));
+        // A byte is a digit iff its high nibble is 3 and adding 6 keeps it 3.
+        let hi = x & 0xF0F0_F0F0_F0F0_F0F0;
+        let carry = x.wrapping_add(0x0606_0606_0606_0606) & 0xF0F0_F0F0_F0F0_F0F0;
+        let not_digit = (hi ^ 0x3030_3030_3030_3030) | (carry ^ 0x3030_3030_3030_3030);
+        let n = (not_digit.trailing_zeros() / 8) as usize;
+        if (1..8).contains(&n) && i[n].is_ascii_whitespace() {
+            // Keep the n digits, put them in the high bytes, fill the low bytes with '0'.
+            let digits = x & ((1u64 << (8 * n)) - 1);
+            let shift = 8 * (8 - n);
+            let padded = (digits << shift) | (0x3030_3030_3030_3030 & ((1u64 << shift) - 1));
+            return Some((&i[n..], eight_digits(padded)));
+        }
+    }
+    let mut value: u64 = 0;
+    let mut n = 0;
+    while n < i.len() && n < 19 {
+        let d = i[n].wrapping_sub(b'0');
+        if d > 9 {
+            break;
+        }
+        value = value * 10 + u64::from(d);
+        n += 1;
+    }
+    (n > 0 && ends_token(&i[n..])).then(|| (&i[n..], value))
+}
+
+/// A signed integer that fits an `i32`, on the current line.
+#[inline(always)]
+pub fn int32(i: &[u8]) -> Option<(&[u8], i32)> {
+    let i = blank(i);
+    let (neg, digits) = match i.first() {
+        Some(b'-') => (true, &i[1..]),
+        Some(b'+') => (false, &i[1..]),
+        _ => (false, i),
+    };
+    if digits.first().is_none_or(|c| !c.is_ascii_digit()) {
+        return None;
+    }
+    let (rest, v) = uint(digits)?;
+    let v = if neg { -(v as i128) } else { v as i128 };
+    Some((rest, i32::try_from(v).ok()?))
+}
+
+/// A finite floating-point number on the current line.
+#[inline(always)]
+pub fn float(i: &[u8]) -> Option<(&[u8], f64)> {
+    let i = blank(i);
+    let (v, n) = fast_float2::parse_partial::<f64, _>(i).ok()?;
+    (n > 0 && v.is_finite() && ends_token(&i[n..])).then(|| (&i[n..], v))
+}
+
+/// Reads `n` one-line records starting at `i` in parallel into `out` (`width` values per
+/// record): `record(line, values)` reads one record from the start of its line into its `width`
+/// slots and returns the input after the record (before the line's end). Returns the input after
+/// the n-th line, or `None` if any record fails or a line holds more than its record.
+pub fn read_records<'a, T: Send>(
+    i: &'a [u8],
+    n: usize,
+    width: usize,
+    out: &mut [T],
+    record: impl Fn(&'a [u8], &mut [T]) -> Option<&'a [u8]> + Sync,
+) -> Option<&'a [u8]> {
+    debug_assert_eq!(out.len(), n * width);
+    let per = lines_per_chunk(n);
+    let (chunks, end) = line_chunks(i, n, per)?;
+    let ok =
+        out.par_chunks_mut(per * width)
+            .zip(chunks.par_iter())
+            .all(|(out, &(start, lines))| {
+                let mut r = &i[start..];
+                for slots in out.chunks_exact_mut(width).take(lines) {
+                    match record(r, slots).and_then(line_end) {
+                        Some(rest) => r = rest,
+                        None => return false,
+                    }
+                }
+                true
+            });
+    ok.then(|| &i[end..])
+}
+
+/// [`read_records`] with two outputs per record (`width_a` values into `out_a`, `width_b` into
+/// `out_b`), e.g. an element's tag and its nodes.
+pub fn read_records2<'a, A: Send, B: Send>(
+    i: &'a [u8],
+    n: usize,
+    (out_a, width_a): (&mut [A], usize),
+    (out_b, width_b): (&mut [B], usize),
+    record: impl Fn(&'a [u8], &mut [A], &mut [B]) -> Option<&'a [u8]> + Sync,
+) -> Option<&'a [u8]> {
+    debug_assert_eq!(out_a.len(), n * width_a);
+    debug_assert_eq!(out_b.len(), n * width_b);
+    let per = lines_per_chunk(n);
+    let (chunks, end) = line_chunks(i, n, per)?;
+    let ok = out_a
+        .par_chunks_mut(per * width_a)
+        .zip(out_b.par_chunks_mut(per * width_b))
+        .zip(chunks.par_iter())
+        .all(|((a, b), &(start, lines))| {
+            let mut r = &i[start..];
+            for (sa, sb) in a
+                .chunks_exact_mut(width_a)
+                .zip(b.chunks_exact_mut(width_b))
+                .take(lines)
+            {
+                match record(r, sa, sb).and_then(line_end) {
+                    Some(rest) => r = rest,
+                    None => return false,
+                }
+            }
+            true
+        });
+    ok.then(|| &i[end..])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chunks_cover_the_lines_exactly() {
+        let text = b"1 a\n2 b\n3 c\n4 d\n5 e\nrest";
+        let (chunks, end) = line_chunks(text, 5, 2).unwrap();
+        assert_eq!(chunks, vec![(0, 2), (8, 2), (16, 1)]);
+        assert_eq!(&text[end..], b"rest");
+        assert!(line_chunks(text, 6, 2).is_none());
+        // Lines of 1 to 150 bytes: the chunk starts are the line starts after every `per` lines.
+        let mut long = Vec::new();
+        let mut starts = vec![0];
+        for k in 0..2000usize {
+            long.extend(std::iter::repeat_n(b'x', (k * 37) % 150));
+            long.push(b'\n');
+            starts.push(long.len());
+        }
+        long.extend_from_slice(b"tail");
+        for (n, per) in [(2000, 7), (2000, 2000), (1999, 64), (1, 5), (640, 1)] {
+            let (chunks, end) = line_chunks(&long, n, per).unwrap();
+            let want: Vec<(usize, usize)> = (0..n)
+                .step_by(per)
+                .map(|l| (starts[l], per.min(n - l)))
+                .collect();
+            assert_eq!(chunks, want, "n {n} per {per}");
+            assert_eq!(end, starts[n]);
+        }
+        assert!(line_chunks(&long, 2001, 100).is_none());
+    }
+
+    #[test]
+    fn integers_read_eight_bytes_at_a_time_equal_the_digit_loop() {
+        for v in [
+            0u64,
+            7,
+            10,
+            99,
+            12_345,
+            1_000_000,
+            9_999_999,
+            10_000_000,
+            123_456_789_012,
+        ] {
+            for tail in [" 5\n", "\n", "\r\n", "\t", " ", ""] {
+                let text = format!("{v}{tail}");
+                let (rest, got) = uint(text.as_bytes()).unwrap();
+                assert_eq!(got, v, "{text:?}");
+                assert_eq!(rest, tail.as_bytes());
+            }
+            assert!(uint(format!("{v}x").as_bytes()).is_none());
+            assert!(uint(format!("{v}.5 ").as_bytes()).is_none());
+        }
+        assert!(uint(b"-12345678").is_none());
+        assert!(uint(b"x2345678").is_none());
+        assert_eq!(uint(b"  00042  ").map(|r| r.1), Some(42));
+    }
+
+    #[test]
+    fn tokens_must_end_at_white_space() {
+        assert_eq!(uint(b" 12 x").map(|r| r.1), Some(12));
+        assert!(uint(b"12x").is_none());
+        assert!(uint(b"\n12").is_none()); // a record does not continue on the next line
+        assert_eq!(int32(b"-7\n").map(|r| r.1), Some(-7));
+        assert!(int32(b"-\n").is_none());
+        assert_eq!(float(b"\t-1.5e-3\r\n").map(|r| r.1), Some(-1.5e-3));
+        assert!(float(b"1.5.2 ").is_none());
+        assert!(float(b"inf ").is_none());
+        assert!(float(b"nan ").is_none());
+        assert_eq!(line_end(b" \r\nnext"), Some(&b"next"[..]));
+        assert!(line_end(b" 3\n").is_none());
+    }
+
+    #[test]
+    fn records_read_in_parallel_equal_the_sequential_values() {
+        let n = 3 * CHUNK_LINES + 17;
+        let mut text = String::new();
+        for k in 0..n {
+            text += &format!("{} {:.17e}\n", k + 1, (k as f64).sqrt() - 3.25);
+        }
+        text += "$End";
+        let mut out = vec![0.0; 2 * n];
+        let rest = read_records(text.as_bytes(), n, 2, &mut out, |line, slots| {
+            let (r, tag) = uint(line)?;
+            let (r, x) = float(r)?;
+            slots[0] = tag as f64;
+            slots[1] = x;
+            Some(r)
+        })
+        .unwrap();
+        assert_eq!(rest, b"$End");
+        for k in 0..n {
+            assert_eq!(out[2 * k], (k + 1) as f64);
+            let want: f64 = format!("{:.17e}", (k as f64).sqrt() - 3.25)
+                .parse()
+                .unwrap();
+            assert_eq!(out[2 * k + 1], want);
+        }
+        // A record spread over two lines: refused.
+        let broken = text.replacen("1 ", "1\n", 1);
+        assert!(
+            read_records(broken.as_bytes(), n, 2, &mut out, |line, slots| {
+                let (r, _) = uint(line)?;
+                let (r, x) = float(r)?;
+                slots[0] = x;
+                Some(r)
+            })
+            .is_none()
+        );
+    }
+}
