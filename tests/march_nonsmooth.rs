@@ -2,6 +2,9 @@
 //! against closed forms, an event-driven reference, continuum solutions and Siconos' published
 //! reference data.
 
+// The Siconos reference rows are copied digit for digit as printed in the reference files.
+#![allow(clippy::excessive_precision)]
+
 use nlrom::march::carpenter::{carpenter, stability_limits};
 use nlrom::march::moreau_jean::moreau_jean;
 use nlrom::march::obstacle::{NonsmoothHistory, NonsmoothSettings, NonsmoothSystem, Obstacle};
@@ -758,4 +761,132 @@ fn bad_step_and_gamma_are_errors_naming_the_key() {
     assert!(e.to_string().contains("march.gamma_thermal"), "{e}");
     let e = carpenter(&sys, &settings(-1e-5, 10, 0.5)).unwrap_err();
     assert!(e.to_string().contains("march.time_step_s"), "{e}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// The command line on the bundled case
+// ---------------------------------------------------------------------------------------------
+
+fn march_json(case: &std::path::Path, out: &std::path::Path, extra: &[&str]) -> serde_json::Value {
+    let res = std::process::Command::new(env!("CARGO_BIN_EXE_nlrom"))
+        .arg("march")
+        .arg(case)
+        .arg("-o")
+        .arg(out)
+        .arg("--json")
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(
+        res.status.success(),
+        "{}",
+        String::from_utf8_lossy(&res.stderr)
+    );
+    serde_json::from_slice(&res.stdout).unwrap()
+}
+
+#[test]
+fn nlrom_march_runs_both_nonsmooth_schemes_on_the_bundled_wall_case() {
+    let case = std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cases/oscillator_wall.toml"
+    ));
+    let dir = std::env::temp_dir().join(format!("nlrom_wall_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mj_out = dir.join("mj.h5");
+    let r = march_json(case, &mj_out, &[]);
+    assert_eq!(r["scheme"], "moreau-jean");
+    assert_eq!(r["steps"], 9000);
+    assert!(r["steps_with_impulse"].as_u64().unwrap() > 100);
+    assert!(r["max_energy_residual_j"].as_f64().unwrap() < 1e-12);
+    let c_out = dir.join("c.h5");
+    let rc = march_json(case, &c_out, &["--scheme", "carpenter"]);
+    assert_eq!(rc["scheme"], "carpenter");
+    // 2/ω = 2/(2π·1300) = 2.449e-4 s.
+    let limit = rc["stability_limit_s"].as_f64().unwrap();
+    assert!((limit - 2.0 / (2.0 * std::f64::consts::PI * 1300.0)).abs() < 1e-9 * limit);
+    let a = nlrom::output::read_results(&mj_out).unwrap().march.unwrap();
+    let b = nlrom::output::read_results(&c_out).unwrap().march.unwrap();
+    assert_eq!(a.time.len(), 9001);
+    assert_eq!(a.element_names, ["wall"]);
+    // The two schemes agree on the displacement to within their O(h) errors (h = 1e-5 s).
+    let num: f64 = a
+        .response
+        .iter()
+        .zip(&b.response)
+        .map(|(x, y)| (x - y).abs())
+        .sum();
+    let den: f64 = a.response.iter().map(|x| x.abs()).sum();
+    assert!(num / den < 0.02, "{}", num / den);
+    // The mean contact force over the run: the same to within a few per cent.
+    let fa: f64 = a.contact_force.iter().skip(1).step_by(2).sum();
+    let fb: f64 = b.contact_force.iter().skip(1).step_by(2).sum();
+    assert!((fa - fb).abs() < 0.05 * fa, "{fa} vs {fb}");
+    // An obstacle case marched by a smooth scheme is refused, naming the key.
+    let res = std::process::Command::new(env!("CARGO_BIN_EXE_nlrom"))
+        .args(["march", case.to_str().unwrap(), "-o"])
+        .arg(dir.join("x.h5"))
+        .args(["--scheme", "newmark"])
+        .output()
+        .unwrap();
+    assert_eq!(res.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&res.stderr).contains("obstacle"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_obstacle_and_gamma_keys_are_reported_with_their_path() {
+    let dir = std::env::temp_dir().join(format!("nlrom_wall_bad_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let base = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cases/oscillator_wall.toml"
+    ))
+    .unwrap()
+    .replace(
+        "\"wall/",
+        &format!("\"{}/cases/wall/", env!("CARGO_MANIFEST_DIR")),
+    );
+    for (from, to, key) in [
+        ("gamma = 0.5", "gamma = 0.4", "march.gamma"),
+        (
+            "time_step_s = 1e-5",
+            "time_step_s = -1e-5",
+            "march.time_step_s",
+        ),
+        (
+            "restitution = 0.0",
+            "restitution = 1.5",
+            "obstacle[0].restitution",
+        ),
+        (
+            "weights = [-1.0] }",
+            "weights = [-1.0, 2.0] }",
+            "obstacle[0].normal.weights",
+        ),
+        (
+            "dofs = [0], weights = [-1.0]",
+            "dofs = [3], weights = [-1.0]",
+            "obstacle[0].normal.dofs",
+        ),
+        (
+            "restitution = 0.0",
+            "restitution = 0.0\nmu = 0.2",
+            "obstacle[0].mu",
+        ),
+    ] {
+        let path = dir.join("bad.toml");
+        std::fs::write(&path, base.replace(from, to)).unwrap();
+        let res = std::process::Command::new(env!("CARGO_BIN_EXE_nlrom"))
+            .arg("march")
+            .arg(&path)
+            .arg("-o")
+            .arg(dir.join("bad.h5"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&res.stderr);
+        assert_eq!(res.status.code(), Some(2), "{to}: {err}");
+        assert!(err.contains(key), "{to}: {err}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -419,7 +419,7 @@ impl DenseLu {
             .fold((f64::INFINITY, 0.0_f64), |(lo, hi), d| {
                 (lo.min(d), hi.max(d))
             });
-        if n > 0 && !(lo > 1e-15 * hi) {
+        if n > 0 && (lo.is_nan() || lo <= 1e-15 * hi) {
             return Err(Error::Compute(format!(
                 "{what} is singular (pivot ratio {:.1e})",
                 lo / hi
