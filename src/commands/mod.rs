@@ -29,6 +29,7 @@ pub mod law;
 pub mod march;
 pub mod mesh_info;
 pub mod modes;
+pub mod nonsmooth;
 pub mod progress;
 pub mod reduce;
 pub mod solve;
