@@ -237,8 +237,12 @@ pub fn solve_dense_signed(a: &Mat<f64>, b: &[f64]) -> Option<(Vec<f64>, f64)> {
         return None;
     }
     let negative_pivots = (0..n).filter(|&i| u[(i, i)] < 0.0).count();
-    let sign =
-        permutation_sign(lu.P().arrays().0) * if negative_pivots % 2 == 0 { 1.0 } else { -1.0 };
+    let sign = permutation_sign(lu.P().arrays().0)
+        * if negative_pivots.is_multiple_of(2) {
+            1.0
+        } else {
+            -1.0
+        };
     let mut x = Col::from_fn(b.len(), |i| b[i]);
     lu.solve_in_place(x.as_mut());
     let x: Vec<f64> = (0..b.len()).map(|i| x[i]).collect();
@@ -259,7 +263,7 @@ fn permutation_sign(perm: &[usize]) -> f64 {
         }
         transpositions += length.saturating_sub(1);
     }
-    if transpositions % 2 == 0 {
+    if transpositions.is_multiple_of(2) {
         1.0
     } else {
         -1.0
