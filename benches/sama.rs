@@ -11,8 +11,8 @@
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use nlrom::interface::surface::{SurfaceFace, TargetSurface};
 use nlrom::mesh::ElementType;
-use nlrom::sama::surface::{SurfaceFace, TargetSurface};
 
 /// Cells per side: 2 × 708² = 1 002 528 triangles.
 const CELLS: usize = 708;

@@ -15,7 +15,7 @@ use nlrom::hbm::frf::frequency_response;
 use nlrom::hbm::ResponseOptions;
 use nlrom::problem::sector::SectorProblem;
 use nlrom::problem::settings::case_continuation;
-use nlrom::{model, reduction, sama, Error};
+use nlrom::{interface, model, reduction, Error};
 
 fn main() -> nlrom::Result<()> {
     let path = std::env::args()
@@ -54,7 +54,7 @@ fn main() -> nlrom::Result<()> {
 
     // 4. The contact pairs of every [[contact]] (SAMA or node-to-node), target placed by cyclic
     //    symmetry.
-    let interfaces = sama::build_interfaces(&case, mesh, rom.cyclic.as_ref())?;
+    let interfaces = interface::build_interfaces(&case, mesh, rom.cyclic.as_ref())?;
     for iface in &interfaces {
         println!(
             "contact '{}': {} elements, σ = {}",

@@ -20,7 +20,7 @@
 //! | model | [`eigen`] | sparse shift-invert eigensolver K φ = λ M φ (lowest modes), reusable factorisation |
 //! | model | [`reduction`] | Craig–Bampton (streamed static modes), cyclic transform per k, GSI, the ROM of a case |
 //! | contact | [`contact`] | friction contact law, AFT evaluation, analytic Jacobians, contact pairs |
-//! | contact | [`sama`] | contact interfaces: target placement, projection, SAMA weights (Battiato 2021, eqs 28–32), node-to-node |
+//! | contact | [`interface`] | contact interfaces: target placement, projection, SAMA weights (Battiato 2021, eqs 28–32), node-to-node |
 //! | solvers | [`nonlinear`] | r(x, λ) = 0: `ParameterSystem`, Newton |
 //! | solvers | [`continuation`] | pseudo-arc-length continuation in ω (or the excitation level) through folds |
 //! | solvers | [`hbm`] | harmonic balance: per-harmonic dynamic stiffness, condensation on the nonlinear DOFs, residual, stability |
@@ -42,6 +42,7 @@ pub mod error;
 pub mod fe;
 pub mod harmonics;
 pub mod hbm;
+pub mod interface;
 pub mod march;
 pub mod matrix_io;
 pub mod mesh;
@@ -51,7 +52,6 @@ pub mod output;
 pub mod problem;
 pub mod reduction;
 pub mod rom;
-pub mod sama;
 pub mod vec3;
 
 pub use error::{Error, Result};

@@ -13,12 +13,12 @@ mod common;
 use faer::linalg::solvers::Solve;
 use faer::{c64, Mat};
 use nlrom::case::{Case, MarchScheme};
+use nlrom::interface::build_interfaces;
 use nlrom::march::{march, MarchOutcome};
 use nlrom::model;
 use nlrom::problem::march_case::{case_march, CaseMarch};
 use nlrom::problem::sector::SectorProblem;
 use nlrom::reduction::reduce;
-use nlrom::sama::build_interfaces;
 
 use common::cli::root;
 use common::sector_hb::hb_outputs;

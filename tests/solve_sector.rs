@@ -15,13 +15,13 @@ use nlrom::contact::pairs::PairState;
 use nlrom::cyclic::{phase, CyclicGeometry, CyclicTransform};
 use nlrom::harmonics::HarmonicForce;
 use nlrom::hbm::{FrequencyPath, HbmSystem};
+use nlrom::interface::build_interfaces;
 use nlrom::mesh::Mesh;
 use nlrom::model::{self, StructuralModel};
 use nlrom::nonlinear::{solve_fixed, NewtonOptions};
 use nlrom::problem::sector::SectorProblem;
 use nlrom::reduction::{free_frontier_pairs, reduce};
 use nlrom::rom::Rom;
-use nlrom::sama::build_interfaces;
 
 const N: usize = 8;
 /// Rayleigh damping C = αM + βK (exactly projected by the reduction, so the full model has the

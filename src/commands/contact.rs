@@ -11,9 +11,9 @@ use super::Reporter;
 use crate::case::Case;
 use crate::cyclic::CyclicGeometry;
 use crate::error::{Error, Result};
+use crate::interface::build_interfaces;
+use crate::interface::report::{interface_json, interfaces_text};
 use crate::mesh::msh::read_msh;
-use crate::sama::build_interfaces;
-use crate::sama::report::{interface_json, interfaces_text};
 
 /// `nlrom contact`: the contact pairs of every `[[contact]]` of the case (SAMA or node-to-node).
 pub fn contact_command(case_path: &Path, rep: &Reporter, as_json: bool) -> Result<()> {

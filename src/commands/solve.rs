@@ -33,6 +33,7 @@ use crate::error::{Error, Result};
 use crate::harmonics::{HarmonicForce, HarmonicLayout};
 use crate::hbm::frf::frequency_response;
 use crate::hbm::{HbmSystem, ResponseOptions};
+use crate::interface::{build_interfaces, ContactInterface};
 use crate::mesh::Mesh;
 use crate::model::{self, StructuralModel};
 use crate::output::{
@@ -44,7 +45,6 @@ use crate::problem::rom_store::{create_parent, sector_rom, RomOrigin, RomPolicy}
 use crate::problem::sector::SectorProblem;
 use crate::problem::settings::case_continuation;
 use crate::rom::Rom;
-use crate::sama::{build_interfaces, ContactInterface};
 
 /// How `solve` runs a case.
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -3,7 +3,7 @@
 //! §2–4).
 //!
 //! [`SectorProblem`] ties the ROM of every harmonic index k_n = n·m mod N
-//! ([`crate::rom::Rom`]), the contact pairs of every `[[contact]]` ([`crate::sama`]) and the
+//! ([`crate::rom::Rom`]), the contact pairs of every `[[contact]]` ([`crate::interface`]) and the
 //! engine-order excitation into the [`crate::hbm::LinearModel`] + [`PairSet`] that
 //! [`crate::hbm::HbmSystem`] and [`crate::continuation`] solve. The time march of the same sector
 //! ([`super::sector_march`]) shares its excitation, output-DOF and ROM-row helpers.
@@ -31,10 +31,10 @@ use crate::error::{Error, Result};
 use crate::harmonics::HarmonicLayout;
 use crate::hbm::preload::FromStaticEquilibrium;
 use crate::hbm::{HbmSystem, LinearModel, MatrixBlock};
+use crate::interface::elements::VirtualNodes;
+use crate::interface::ContactInterface;
 use crate::mesh::Mesh;
 use crate::rom::{HarmonicRom, Rom};
-use crate::sama::elements::VirtualNodes;
-use crate::sama::ContactInterface;
 
 /// A physical DOF of the reference sector: Gmsh node tag and component 0/1/2 = x/y/z (global).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -69,7 +69,7 @@ pub struct SectorProblem {
 impl SectorProblem {
     /// Builds the problem of `case` on its ROM `rom` (which must hold every k_n), the sector
     /// `mesh` (for the excitation and response groups) and the contact `interfaces` of
-    /// [`crate::sama::build_interfaces`].
+    /// [`crate::interface::build_interfaces`].
     ///
     /// Errors ([`Error::Input`]): no `[excitation]`, an excitation given on matrix rows, a cyclic
     /// case without engine order, a harmonic index missing from the ROM, a contact, target,

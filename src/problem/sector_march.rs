@@ -3,7 +3,7 @@
 //!
 //! The pieces are those of the harmonic balance ([`super::sector::SectorProblem`]): the ROM of
 //! [`super::rom_store`] (read from `[rom] file` when its key matches, else reduced),
-//! the contact pairs of [`crate::sama::build_interfaces`] on the ROM's physical master rows, the
+//! the contact pairs of [`crate::interface::build_interfaces`] on the ROM's physical master rows, the
 //! excitation and response groups. A time-domain model of the reference sector is real when its
 //! ROM is (`docs/conventions.md` §2):
 //! - no `[cyclic]`: the Craig–Bampton structure, frontiers as they are;
@@ -31,6 +31,7 @@ use super::Log;
 use crate::case::{Case, ContactElement};
 use crate::contact::pairs::PairElement;
 use crate::error::{Error, Result};
+use crate::interface::{build_interfaces, ContactInterface};
 use crate::march::element::{Direction, Element};
 use crate::march::schemes::{add_contact_force, evaluate_law};
 use crate::march::signal::Harmonic;
@@ -38,7 +39,6 @@ use crate::march::{InitialCondition, MarchSystem};
 use crate::mesh::Mesh;
 use crate::output::ResponseDof;
 use crate::rom::{HarmonicRom, ReducedDof, Rom};
-use crate::sama::{build_interfaces, ContactInterface};
 
 /// The marched sector model, its reported rows and their node labels.
 pub struct SectorMarch {

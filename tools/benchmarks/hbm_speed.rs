@@ -35,11 +35,11 @@ use nlrom::contact::pairs::{PairElement, PairSet};
 use nlrom::continuation::trace;
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel};
+use nlrom::interface::build_interfaces;
 use nlrom::nonlinear::{solve_dense, Linearization, ParameterSystem};
 use nlrom::problem::sector::SectorProblem;
 use nlrom::problem::settings::case_continuation;
 use nlrom::reduction::reduce;
-use nlrom::sama::build_interfaces;
 use nlrom::{model, Result};
 
 const REPEAT: usize = 2;

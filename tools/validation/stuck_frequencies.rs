@@ -32,11 +32,11 @@ use nlrom::case::{Case, Excitation, ExcitationLoad, SamaCoupling};
 use nlrom::cyclic::{phase, CyclicGeometry};
 use nlrom::eigen::self_adjoint_eigen_qr;
 use nlrom::error::Result;
+use nlrom::interface::{build_interfaces, ContactInterface};
 use nlrom::mesh::{ElementBlock, ElementType, Mesh, PhysicalGroup};
 use nlrom::model;
 use nlrom::reduction::reduce;
 use nlrom::rom::HarmonicRom;
-use nlrom::sama::{build_interfaces, ContactInterface};
 
 /// One spring: r = Σ (node tag, coefficient, is_target) with diag(k_t, k_t, k_n) in `frame`.
 struct Spring {

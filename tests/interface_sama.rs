@@ -7,10 +7,10 @@ use std::process::Command;
 use faer::c64;
 use nlrom::case::{Case, ContactModel};
 use nlrom::cyclic::{match_frontiers, CyclicGeometry};
+use nlrom::interface::{build_interfaces, ContactInterface, ContactPair};
 use nlrom::mesh::faces::group_faces;
 use nlrom::mesh::msh::read_msh;
 use nlrom::mesh::Mesh;
-use nlrom::sama::{build_interfaces, ContactInterface, ContactPair};
 
 fn case(name: &str) -> Case {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("cases/{name}.toml"));

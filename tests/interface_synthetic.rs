@@ -3,11 +3,11 @@
 //! against a brute-force search over every face), and the area lumping rule.
 
 use nlrom::case::{Contact, ContactElement, ContactModel, Misalignment, Rotation};
+use nlrom::interface::project::closest_on_face;
+use nlrom::interface::surface::{SurfaceFace, TargetSurface};
+use nlrom::interface::weights::lumped_face_area;
+use nlrom::interface::{build_interface, ContactInterface};
 use nlrom::mesh::{ElementBlock, ElementType, Mesh, MshFormat, MshVersion, PhysicalGroup};
-use nlrom::sama::project::closest_on_face;
-use nlrom::sama::surface::{SurfaceFace, TargetSurface};
-use nlrom::sama::weights::lumped_face_area;
-use nlrom::sama::{build_interface, ContactInterface};
 
 /// Nodes and hexa8 elements of an `n × n × 1` block over [0, 2]² × [z0, z0 + 1], with the quad4
 /// faces of its bottom (`top = false`) or top layer of nodes.
@@ -123,7 +123,7 @@ fn node_at(m: &Mesh, x: [f64; 3], lower: bool) -> u64 {
     m.node_tags[i]
 }
 
-fn pair_of(iface: &ContactInterface, node: u64) -> &nlrom::sama::ContactPair {
+fn pair_of(iface: &ContactInterface, node: u64) -> &nlrom::interface::ContactPair {
     iface.pairs.iter().find(|p| p.contact_node == node).unwrap()
 }
 

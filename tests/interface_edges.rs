@@ -19,9 +19,9 @@ use std::path::Path;
 
 use nlrom::case::{Case, Contact, ContactElement, ContactModel, Misalignment, SamaCoupling};
 use nlrom::cyclic::CyclicGeometry;
+use nlrom::interface::{build_interface_with, build_interfaces_with, ContactInterface};
 use nlrom::mesh::msh::read_msh;
 use nlrom::mesh::{ElementBlock, ElementType, Mesh, MshFormat, MshVersion, PhysicalGroup};
-use nlrom::sama::{build_interface_with, build_interfaces_with, ContactInterface};
 
 const R_IN: f64 = 0.09;
 const R_OUT: f64 = 0.1;
@@ -576,7 +576,7 @@ fn curved_tilted_nonconforming_interfaces_pair_every_contact_node() {
                             bf.face_distance
                         );
                         assert_eq!(p.face, q.face);
-                        let got = |pp: &nlrom::sama::ContactPair| -> Vec<(u64, f64)> {
+                        let got = |pp: &nlrom::interface::ContactPair| -> Vec<(u64, f64)> {
                             pp.targets
                                 .iter()
                                 .copied()

@@ -36,7 +36,7 @@ pub fn element_name(element: ContactElement) -> &'static str {
 impl ContactData {
     /// The friction elements of a SAMA / node-to-node interface, in the order of the harmonic
     /// balance's elements: with the array coupling one per target node t_j of each contact node,
-    /// with the weights, frames and eq. 31 parameters `sama` computed; with the interpolated
+    /// with the weights, frames and eq. 31 parameters [`crate::interface`] computed; with the interpolated
     /// coupling one per contact node (weight 1, the node's k_t, k_n and n0_c), whose
     /// `target_node` is the target node of the largest shape-function share.
     pub fn from_interface(interface: &ContactInterface) -> Self {

@@ -13,12 +13,12 @@ use faer::{c64, Mat};
 use nlrom::case::{Case, SamaCoupling};
 use nlrom::cyclic::phase;
 use nlrom::harmonics::HarmonicForce;
+use nlrom::interface::{build_interfaces, ContactInterface};
 use nlrom::model;
 use nlrom::output::ContactData;
 use nlrom::problem::sector::SectorProblem;
 use nlrom::reduction::reduce;
 use nlrom::rom::{HarmonicRom, Rom};
-use nlrom::sama::{build_interfaces, ContactInterface};
 
 use common::sector_hb::hb_outputs;
 
