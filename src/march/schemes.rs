@@ -313,10 +313,10 @@ impl Cache {
         let cols = lowrank::columns(&sys.elements, states);
         let mut factor = None;
         if 2 * cols.len() < n {
-            if !self.stick.contains_key(&dt_key) {
+            if let std::collections::hash_map::Entry::Vacant(e) = self.stick.entry(dt_key) {
                 step_matrix(&sys.stick_states(), k);
                 if let Some(inv) = dense::inverse(k, n) {
-                    self.stick.insert(dt_key, inv);
+                    e.insert(inv);
                     self.factorisations += 1;
                 }
             }
