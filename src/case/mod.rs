@@ -564,6 +564,32 @@ pub struct FrictionElement {
     /// Damping coefficient c (N·s²/m²) of `quadratic_damper`: f = c ẋ|ẋ|.
     #[serde(default)]
     pub c: Option<f64>,
+    /// How a `friction` element is evaluated on harmonic vectors: `aft` (default, any H) or
+    /// `analytic` (exact single-harmonic cycle, Cigeroglu, An & Menq 2007; needs H = 1).
+    #[serde(default)]
+    pub evaluation: Evaluation,
+}
+
+/// How a 1-D friction element is evaluated on harmonic vectors.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Evaluation {
+    /// Alternating frequency/time: the time-discrete law marched over N_t samples (any H).
+    #[default]
+    Aft,
+    /// The exact continuous-time stick–slip–separation cycle under single-harmonic motion
+    /// (Cigeroglu, An & Menq 2007, eqs 4–29): no sampling error; only with H = 1.
+    Analytic,
+}
+
+impl Evaluation {
+    /// The name used in case files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Evaluation::Aft => "aft",
+            Evaluation::Analytic => "analytic",
+        }
+    }
 }
 
 /// The largest exponent of a `polynomial_spring`.
@@ -605,7 +631,7 @@ impl ElementKind {
     /// The keys of this kind besides `kind` and the coordinate: (required, optional).
     pub fn keys(self) -> (&'static [&'static str], &'static [&'static str]) {
         match self {
-            ElementKind::Friction => (&["kt", "mu", "n0"], &["normal", "kn"]),
+            ElementKind::Friction => (&["kt", "mu", "n0"], &["normal", "kn", "evaluation"]),
             ElementKind::CubicSpring => (&["k3"], &[]),
             ElementKind::PolynomialSpring => (&["coefficients", "exponents"], &[]),
             ElementKind::UnilateralSpring => (&["k"], &["gap"]),
@@ -642,6 +668,7 @@ impl FrictionElement {
         add("k", self.k.is_some());
         add("gap", self.gap.is_some());
         add("c", self.c.is_some());
+        add("evaluation", self.evaluation != Evaluation::Aft);
         out
     }
 }

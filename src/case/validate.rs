@@ -272,6 +272,16 @@ impl Case {
                 self.check_weighted(&format!("{key}.normal"), n)?;
             }
             self.check_element_values(&key, e)?;
+            self.require(
+                e.evaluation != Evaluation::Analytic || self.harmonic_balance.harmonics == 1,
+                &format!("{key}.evaluation"),
+                || {
+                    format!(
+                        "evaluation = \"analytic\" is the exact single-harmonic cycle and needs [harmonic_balance] harmonics = 1 (this case has {}); use evaluation = \"aft\" for H > 1",
+                        self.harmonic_balance.harmonics
+                    )
+                },
+            )?;
         }
         Ok(())
     }
