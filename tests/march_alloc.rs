@@ -126,7 +126,7 @@ fn steps_allocate_nothing_after_the_first_period() {
     .unwrap();
     let jenkins = jenkins_oscillator();
     let mut report: Vec<(bool, String)> = Vec::new();
-    for scheme in MarchScheme::ALL {
+    for scheme in MarchScheme::ALL.into_iter().filter(|s| !s.is_nonsmooth()) {
         let cm = case_march(&case, Some(scheme), &mut |_| {}).unwrap();
         let damper = MarchSettings {
             periods: 5,

@@ -22,7 +22,10 @@ use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::vec3::norm;
 
+pub use obstacle::ObstacleTable;
+
 mod groups;
+mod obstacle;
 mod parse;
 mod sweep;
 mod validate;
@@ -60,6 +63,10 @@ pub struct Case {
     /// `[[element]]`: friction elements on DOF combinations of a matrix model, in file order.
     #[serde(default)]
     pub element: Vec<FrictionElement>,
+    /// `[[obstacle]]`: rigid obstacles with unilateral contact on DOF combinations of a matrix
+    /// model (the nonsmooth schemes of `nlrom march`), in file order.
+    #[serde(default)]
+    pub obstacle: Vec<ObstacleTable>,
     /// `[harmonic_balance]`: number of harmonics and time samples (default: 1 harmonic).
     #[serde(default)]
     pub harmonic_balance: HarmonicBalance,
@@ -876,6 +883,13 @@ pub struct March {
     pub steady_tolerance: Option<f64>,
     /// Stop at the first period whose end state repeats the previous one (default false).
     pub stop_at_steady: bool,
+    /// θ-method parameter γ ∈ [1/2, 1] of the `moreau-jean` scheme (`None`: 1/2).
+    pub gamma: Option<f64>,
+    /// γ_θ ∈ [1/2, 1] of the heat rows of `moreau-jean` (`None`: = γ).
+    pub gamma_thermal: Option<f64>,
+    /// Activation tolerance ε_g (m) of `moreau-jean`: an obstacle is active when its predicted
+    /// gap is ≤ ε_g (`None`: 0).
+    pub activation_tolerance: Option<f64>,
 }
 
 impl March {
@@ -901,6 +915,9 @@ struct MarchSpec {
     steady_tolerance: Option<f64>,
     #[serde(default)]
     stop_at_steady: bool,
+    gamma: Option<f64>,
+    gamma_thermal: Option<f64>,
+    activation_tolerance: Option<f64>,
 }
 
 impl TryFrom<MarchSpec> for March {
@@ -923,6 +940,9 @@ impl TryFrom<MarchSpec> for March {
             tolerance: s.tolerance,
             steady_tolerance: s.steady_tolerance,
             stop_at_steady: s.stop_at_steady,
+            gamma: s.gamma,
+            gamma_thermal: s.gamma_thermal,
+            activation_tolerance: s.activation_tolerance,
         })
     }
 }
@@ -943,16 +963,23 @@ pub enum MarchScheme {
     AdaptivePiecewiseLinear,
     /// Quasi-static stepping (no inertia).
     QuasiStatic,
+    /// The Moreau–Jean θ-method on `[[obstacle]]` unilateral contacts (Thorin et al. 2018).
+    MoreauJean,
+    /// Carpenter's explicit forward-increment Lagrange multipliers on `[[obstacle]]` contacts
+    /// (Carpenter, Taylor & Katona 1991).
+    Carpenter,
 }
 
 impl MarchScheme {
     /// All schemes, in documentation order.
-    pub const ALL: [MarchScheme; 5] = [
+    pub const ALL: [MarchScheme; 7] = [
         MarchScheme::Newmark,
         MarchScheme::Adaptive,
         MarchScheme::PiecewiseLinear,
         MarchScheme::AdaptivePiecewiseLinear,
         MarchScheme::QuasiStatic,
+        MarchScheme::MoreauJean,
+        MarchScheme::Carpenter,
     ];
 
     /// The spelling in the case file and on the command line.
@@ -963,7 +990,14 @@ impl MarchScheme {
             MarchScheme::PiecewiseLinear => "piecewise-linear",
             MarchScheme::AdaptivePiecewiseLinear => "adaptive-piecewise-linear",
             MarchScheme::QuasiStatic => "quasi-static",
+            MarchScheme::MoreauJean => "moreau-jean",
+            MarchScheme::Carpenter => "carpenter",
         }
+    }
+
+    /// Whether the scheme is one of the nonsmooth (unilateral contact) schemes.
+    pub fn is_nonsmooth(self) -> bool {
+        matches!(self, MarchScheme::MoreauJean | MarchScheme::Carpenter)
     }
 }
 
@@ -975,7 +1009,7 @@ impl std::str::FromStr for MarchScheme {
             .into_iter()
             .find(|m| m.as_str() == s)
             .ok_or_else(|| {
-                format!("unknown scheme '{s}'; expected newmark, adaptive, piecewise-linear, adaptive-piecewise-linear or quasi-static")
+                format!("unknown scheme '{s}'; expected newmark, adaptive, piecewise-linear, adaptive-piecewise-linear, quasi-static, moreau-jean or carpenter")
             })
     }
 }
