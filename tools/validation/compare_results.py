@@ -5,7 +5,8 @@
 
 Every dataset and attribute present in both files is compared: numbers (real, complex and the
 numeric fields of compound records) by the largest difference relative to the dataset's largest
-magnitude, max|a - b| / max|a| <= rtol; strings, enums and integers exactly. The root attributes `created` and `version` (the run's clock and the program version) are not
+magnitude, max|a - b| / max|a| <= rtol; strings, enums and integers exactly. The attributes
+`created`, `version` and `wall_seconds` (the clock, the program version, a timing) are not
 compared. Datasets or attributes present in one file only are listed and count as differences
 unless --allow-extra names them (a substring of their path).
 
@@ -19,7 +20,7 @@ import sys
 import h5py
 import numpy as np
 
-SKIP_ATTRS = {"created", "version"}
+SKIP_ATTRS = {"created", "version", "wall_seconds"}
 
 
 def walk(f):
@@ -28,7 +29,8 @@ def walk(f):
 
     def visit(name, obj):
         for k, v in obj.attrs.items():
-            attrs[(name, k)] = v
+            if k not in SKIP_ATTRS:
+                attrs[(name, k)] = v
         if isinstance(obj, h5py.Dataset):
             datasets[name] = obj[()]
 
