@@ -22,7 +22,10 @@ use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::vec3::norm;
 
+pub use obstacle::ObstacleTable;
+
 mod groups;
+mod obstacle;
 mod parse;
 mod sweep;
 mod validate;
@@ -60,6 +63,10 @@ pub struct Case {
     /// `[[element]]`: friction elements on DOF combinations of a matrix model, in file order.
     #[serde(default)]
     pub element: Vec<FrictionElement>,
+    /// `[[obstacle]]`: rigid obstacles with unilateral contact on DOF combinations of a matrix
+    /// model (the nonsmooth schemes of `nlrom march`), in file order.
+    #[serde(default)]
+    pub obstacle: Vec<ObstacleTable>,
     /// `[harmonic_balance]`: number of harmonics and time samples (default: 1 harmonic).
     #[serde(default)]
     pub harmonic_balance: HarmonicBalance,
@@ -564,6 +571,32 @@ pub struct FrictionElement {
     /// Damping coefficient c (N·s²/m²) of `quadratic_damper`: f = c ẋ|ẋ|.
     #[serde(default)]
     pub c: Option<f64>,
+    /// How a `friction` element is evaluated on harmonic vectors: `aft` (default, any H) or
+    /// `analytic` (exact single-harmonic cycle, Cigeroglu, An & Menq 2007; needs H = 1).
+    #[serde(default)]
+    pub evaluation: Evaluation,
+}
+
+/// How a 1-D friction element is evaluated on harmonic vectors.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Evaluation {
+    /// Alternating frequency/time: the time-discrete law marched over N_t samples (any H).
+    #[default]
+    Aft,
+    /// The exact continuous-time stick–slip–separation cycle under single-harmonic motion
+    /// (Cigeroglu, An & Menq 2007, eqs 4–29): no sampling error; only with H = 1.
+    Analytic,
+}
+
+impl Evaluation {
+    /// The name used in case files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Evaluation::Aft => "aft",
+            Evaluation::Analytic => "analytic",
+        }
+    }
 }
 
 /// The largest exponent of a `polynomial_spring`.
@@ -605,7 +638,7 @@ impl ElementKind {
     /// The keys of this kind besides `kind` and the coordinate: (required, optional).
     pub fn keys(self) -> (&'static [&'static str], &'static [&'static str]) {
         match self {
-            ElementKind::Friction => (&["kt", "mu", "n0"], &["normal", "kn"]),
+            ElementKind::Friction => (&["kt", "mu", "n0"], &["normal", "kn", "evaluation"]),
             ElementKind::CubicSpring => (&["k3"], &[]),
             ElementKind::PolynomialSpring => (&["coefficients", "exponents"], &[]),
             ElementKind::UnilateralSpring => (&["k"], &["gap"]),
@@ -642,6 +675,7 @@ impl FrictionElement {
         add("k", self.k.is_some());
         add("gap", self.gap.is_some());
         add("c", self.c.is_some());
+        add("evaluation", self.evaluation != Evaluation::Aft);
         out
     }
 }
@@ -849,6 +883,13 @@ pub struct March {
     pub steady_tolerance: Option<f64>,
     /// Stop at the first period whose end state repeats the previous one (default false).
     pub stop_at_steady: bool,
+    /// θ-method parameter γ ∈ [1/2, 1] of the `moreau-jean` scheme (`None`: 1/2).
+    pub gamma: Option<f64>,
+    /// γ_θ ∈ [1/2, 1] of the heat rows of `moreau-jean` (`None`: = γ).
+    pub gamma_thermal: Option<f64>,
+    /// Activation tolerance ε_g (m) of `moreau-jean`: an obstacle is active when its predicted
+    /// gap is ≤ ε_g (`None`: 0).
+    pub activation_tolerance: Option<f64>,
 }
 
 impl March {
@@ -874,6 +915,9 @@ struct MarchSpec {
     steady_tolerance: Option<f64>,
     #[serde(default)]
     stop_at_steady: bool,
+    gamma: Option<f64>,
+    gamma_thermal: Option<f64>,
+    activation_tolerance: Option<f64>,
 }
 
 impl TryFrom<MarchSpec> for March {
@@ -896,6 +940,9 @@ impl TryFrom<MarchSpec> for March {
             tolerance: s.tolerance,
             steady_tolerance: s.steady_tolerance,
             stop_at_steady: s.stop_at_steady,
+            gamma: s.gamma,
+            gamma_thermal: s.gamma_thermal,
+            activation_tolerance: s.activation_tolerance,
         })
     }
 }
@@ -916,16 +963,23 @@ pub enum MarchScheme {
     AdaptivePiecewiseLinear,
     /// Quasi-static stepping (no inertia).
     QuasiStatic,
+    /// The Moreau–Jean θ-method on `[[obstacle]]` unilateral contacts (Thorin et al. 2018).
+    MoreauJean,
+    /// Carpenter's explicit forward-increment Lagrange multipliers on `[[obstacle]]` contacts
+    /// (Carpenter, Taylor & Katona 1991).
+    Carpenter,
 }
 
 impl MarchScheme {
     /// All schemes, in documentation order.
-    pub const ALL: [MarchScheme; 5] = [
+    pub const ALL: [MarchScheme; 7] = [
         MarchScheme::Newmark,
         MarchScheme::Adaptive,
         MarchScheme::PiecewiseLinear,
         MarchScheme::AdaptivePiecewiseLinear,
         MarchScheme::QuasiStatic,
+        MarchScheme::MoreauJean,
+        MarchScheme::Carpenter,
     ];
 
     /// The spelling in the case file and on the command line.
@@ -936,7 +990,14 @@ impl MarchScheme {
             MarchScheme::PiecewiseLinear => "piecewise-linear",
             MarchScheme::AdaptivePiecewiseLinear => "adaptive-piecewise-linear",
             MarchScheme::QuasiStatic => "quasi-static",
+            MarchScheme::MoreauJean => "moreau-jean",
+            MarchScheme::Carpenter => "carpenter",
         }
+    }
+
+    /// Whether the scheme is one of the nonsmooth (unilateral contact) schemes.
+    pub fn is_nonsmooth(self) -> bool {
+        matches!(self, MarchScheme::MoreauJean | MarchScheme::Carpenter)
     }
 }
 
@@ -948,7 +1009,7 @@ impl std::str::FromStr for MarchScheme {
             .into_iter()
             .find(|m| m.as_str() == s)
             .ok_or_else(|| {
-                format!("unknown scheme '{s}'; expected newmark, adaptive, piecewise-linear, adaptive-piecewise-linear or quasi-static")
+                format!("unknown scheme '{s}'; expected newmark, adaptive, piecewise-linear, adaptive-piecewise-linear, quasi-static, moreau-jean or carpenter")
             })
     }
 }

@@ -15,6 +15,7 @@ impl Case {
         self.validate_excitation()?;
         self.validate_response()?;
         self.validate_elements()?;
+        self.validate_obstacles()?;
         self.validate_harmonic_balance()?;
         self.validate_continuation()?;
         self.validate_march()?;
@@ -272,6 +273,16 @@ impl Case {
                 self.check_weighted(&format!("{key}.normal"), n)?;
             }
             self.check_element_values(&key, e)?;
+            self.require(
+                e.evaluation != Evaluation::Analytic || self.harmonic_balance.harmonics == 1,
+                &format!("{key}.evaluation"),
+                || {
+                    format!(
+                        "evaluation = \"analytic\" is the exact single-harmonic cycle and needs [harmonic_balance] harmonics = 1 (this case has {}); use evaluation = \"aft\" for H > 1",
+                        self.harmonic_balance.harmonics
+                    )
+                },
+            )?;
         }
         Ok(())
     }
@@ -442,6 +453,19 @@ impl Case {
         }
         if let Some(t) = m.steady_tolerance {
             self.positive("march.steady_tolerance", t)?;
+        }
+        for (key, g) in [
+            ("march.gamma", m.gamma),
+            ("march.gamma_thermal", m.gamma_thermal),
+        ] {
+            if let Some(g) = g {
+                self.require((0.5..=1.0).contains(&g), key, || {
+                    format!("γ must lie in [1/2, 1], where the θ-method is unconditionally stable (found {g})")
+                })?;
+            }
+        }
+        if let Some(t) = m.activation_tolerance {
+            self.non_negative("march.activation_tolerance", t)?;
         }
         Ok(())
     }

@@ -1,4 +1,5 @@
-//! `nlrom march`: time marching of a `[damper]`, matrix-defined or sector ROM case, and the
+//! `nlrom march`: time marching of a `[damper]`, matrix-defined or sector ROM case (the
+//! nonsmooth schemes on `[[obstacle]]` contacts in [`super::nonsmooth`]), and the
 //! `/march/` group of the results file it writes (`docs/results-file.md`): a march as the
 //! [`MarchData`] of [`crate::output::results`], whose [`write_results`] owns the file. The layout's
 //! datasets (`time`, `response` [T, R], `response_dofs`, `contact_force` [T, E, 2] and
@@ -25,9 +26,10 @@ use faer::c64;
 
 use serde_json::json;
 
+use super::nonsmooth::nonsmooth_command;
 use super::Reporter;
 use crate::case::{Case, MarchScheme};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::march::{march, MarchOutcome};
 use crate::output::{write_results, Attr, Data, Dataset, FileInfo, Group, MarchData, ResultsFile};
 use crate::problem::march_case::{case_march, CaseMarch};
@@ -44,6 +46,16 @@ pub fn march_command(
 ) -> Result<()> {
     let start = Instant::now();
     let case = Case::load(case_path)?;
+    let chosen = scheme.or(case.march.as_ref().map(|m| m.scheme));
+    if let Some(s) = chosen.filter(|s| s.is_nonsmooth()) {
+        return nonsmooth_command(&case, s, output, rep, as_json);
+    }
+    if !case.obstacle.is_empty() {
+        return Err(Error::input(format!(
+            "{}: key 'obstacle': `[[obstacle]]` contacts are marched by `--scheme moreau-jean` or `--scheme carpenter` (or `scheme` in [march])",
+            case_path.display()
+        )));
+    }
     let cm = case_march(&case, scheme, &mut |l| rep.info(l))?;
     let out = march(&cm.system, &cm.settings)?;
     write_march_results(output, &file_info(&case), &cm, &out)?;

@@ -27,6 +27,7 @@ pub mod export;
 pub mod march;
 pub mod mesh_info;
 pub mod modes;
+pub mod nonsmooth;
 pub mod progress;
 pub mod reduce;
 pub mod solve;

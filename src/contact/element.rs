@@ -30,8 +30,10 @@
 use faer::linalg::matmul::matmul;
 use faer::{Accum, MatMut, MatRef, Par};
 
+use crate::case::Evaluation;
 use crate::contact::aft::{Aft, AftScratch};
 use crate::contact::law::{self, ContactParams, Regime, Variant};
+use crate::contact::microslip;
 use crate::error::{Error, Result};
 
 /// Most periods marched before the last one is accepted without a repeated state.
@@ -136,6 +138,21 @@ pub struct Workspace {
     /// Whether the 1-D Jacobian may come from the stored samples ([`jacobian_1d`]) where it
     /// applies (false only in the test that it equals the general differentiated march).
     samples_path: bool,
+    /// The exact cycles of the last evaluation when it was analytic ([`evaluate_as`]); the
+    /// report and the hysteresis loop then come from them.
+    analytic: Option<AnalyticPeriod>,
+}
+
+/// The last analytic evaluation of an element ([`microslip`]): the input and the cycle of each
+/// tangential direction.
+#[derive(Clone, Debug)]
+pub(crate) struct AnalyticPeriod {
+    pub(crate) params: ContactParams,
+    pub(crate) tangential: usize,
+    pub(crate) u: [[f64; 3]; 2],
+    pub(crate) v: [f64; 3],
+    pub(crate) cycles: Vec<microslip::Cycle>,
+    pub(crate) energy: f64,
 }
 
 impl Workspace {
@@ -163,7 +180,67 @@ impl Workspace {
             jacobian_cols: 0,
             derivative: DerivativeBuffers::default(),
             samples_path: true,
+            analytic: None,
         }
+    }
+
+    /// Stores the results of an analytic evaluation: the local Jacobian (row-major, `cols`
+    /// columns) and the cycles.
+    pub(crate) fn set_analytic(
+        &mut self,
+        jacobian: Option<(&[f64], usize)>,
+        period: AnalyticPeriod,
+    ) {
+        if let Some((j, cols)) = jacobian {
+            self.jacobian.clear();
+            self.jacobian.extend_from_slice(j);
+            self.jacobian_cols = cols;
+        }
+        self.marching = Marching {
+            periods: 1,
+            converged: true,
+        };
+        self.analytic = Some(period);
+    }
+
+    /// The samples τ_j = 2πj/N_t of an analytic period into the sample buffers.
+    fn sample_analytic(&self) -> Option<HysteresisLoop> {
+        let a = self.analytic.as_ref()?;
+        let n_t = self.n_t;
+        let zeros = || vec![0.0; n_t];
+        let mut out = HysteresisLoop {
+            u: [zeros(), zeros()],
+            v: zeros(),
+            ft: [zeros(), zeros()],
+            fnormal: zeros(),
+            w: [zeros(), zeros()],
+            regime: vec![[Regime::Stick; 2]; n_t],
+        };
+        for j in 0..n_t {
+            let t = std::f64::consts::TAU * j as f64 / n_t as f64;
+            let (s, c) = t.sin_cos();
+            out.v[j] = a.v[0] + a.v[1] * c - a.v[2] * s;
+            for d in 0..a.tangential {
+                let u = a.u[d];
+                out.u[d][j] = u[0] + u[1] * c - u[2] * s;
+                let (f, n, w, kind) = microslip::state_at(&a.params, u, a.v, &a.cycles[d], t);
+                out.ft[d][j] = f;
+                out.fnormal[j] = n;
+                out.w[d][j] = w;
+                out.regime[j][d] = match kind {
+                    microslip::PhaseKind::Stick { .. } => Regime::Stick,
+                    microslip::PhaseKind::Separation => Regime::Separation,
+                    _ => Regime::Slip,
+                };
+            }
+            if a.tangential == 1 {
+                out.regime[j][1] = match out.regime[j][0] {
+                    Regime::Separation => Regime::Separation,
+                    _ => Regime::Stick,
+                };
+            }
+        }
+        Some(out)
     }
 
     /// The local Jacobian of the last [`evaluate`] with `jacobian = true`: row-major with
@@ -185,6 +262,31 @@ impl Workspace {
 
     /// State report of the last evaluated period.
     pub fn report(&self) -> ElementReport {
+        if let Some(a) = &self.analytic {
+            // Exact fractions for one direction; for two, the fractions of the samples.
+            let [stick, plus, minus, separation] = a.cycles[0].fractions();
+            let (stick, slip, separation) = if a.tangential == 1 {
+                (stick, plus + minus, separation)
+            } else {
+                let l = self.sample_analytic().expect("analytic period");
+                let n = self.n_t as f64;
+                let count = |f: &dyn Fn(&[Regime; 2]) -> bool| {
+                    l.regime.iter().filter(|r| f(r)).count() as f64 / n
+                };
+                (
+                    count(&|r| r[0] == Regime::Stick && r[1] == Regime::Stick),
+                    count(&|r| r[0] == Regime::Slip || r[1] == Regime::Slip),
+                    count(&|r| r[0] == Regime::Separation),
+                )
+            };
+            return ElementReport {
+                stick,
+                slip,
+                separation,
+                dissipated_energy: a.energy,
+                marching: self.marching,
+            };
+        }
         let n_t = self.n_t;
         let (mut stick, mut slip, mut sep) = (0usize, 0usize, 0usize);
         for r in &self.regime {
@@ -215,6 +317,9 @@ impl Workspace {
 
     /// Time samples of the last evaluated period.
     pub fn hysteresis(&self) -> HysteresisLoop {
+        if let Some(l) = self.sample_analytic() {
+            return l;
+        }
         HysteresisLoop {
             u: self.u.clone(),
             v: self.v.clone(),
@@ -242,6 +347,7 @@ pub fn evaluate(
     ws: &mut Workspace,
 ) -> Result<Marching> {
     element.check()?;
+    ws.analytic = None;
     let m = ws.m;
     let nsig = element.signals();
     debug_assert_eq!(x.len(), nsig * m);
@@ -329,6 +435,38 @@ pub fn evaluate(
         finish_jacobian(element, aft, ws);
     }
     Ok(marching)
+}
+
+/// [`evaluate`] with the chosen evaluation: `Aft` is [`evaluate`]; `Analytic` is the exact
+/// single-harmonic cycle of [`microslip`] (Cigeroglu, An & Menq 2007) for the 1-D law and H = 1,
+/// with the same inputs, outputs, slider state and Jacobian layout.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_as(
+    evaluation: Evaluation,
+    element: &LocalElement,
+    aft: &Aft,
+    x: &[f64],
+    slider: &mut [f64; 2],
+    force: &mut [f64],
+    jacobian: bool,
+    ws: &mut Workspace,
+) -> Result<Marching> {
+    match evaluation {
+        Evaluation::Aft => evaluate(element, aft, x, slider, force, jacobian, ws),
+        Evaluation::Analytic => {
+            element.check()?;
+            microslip::evaluate_element(
+                element,
+                aft.layout().harmonics,
+                x,
+                slider,
+                force,
+                jacobian,
+                ws,
+            )?;
+            Ok(ws.marching)
+        }
+    }
 }
 
 /// Whether the 1-D Jacobian can be built from the stored samples of the last period

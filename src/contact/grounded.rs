@@ -18,11 +18,11 @@ use std::sync::Arc;
 
 use faer::MatMut;
 
-use crate::case::{ElementKind, FrictionElement, WeightedDofs};
+use crate::case::{ElementKind, Evaluation, FrictionElement, WeightedDofs};
 use crate::contact::aft::{check_finite, global_index, Aft, AftCache};
 use crate::contact::assembly::{assemble, Outputs, Slot, SlotStorage, Wanted};
 use crate::contact::element::{
-    evaluate as evaluate_element, ElementReport, HysteresisLoop, LocalElement, Workspace,
+    evaluate_as, ElementReport, HysteresisLoop, LocalElement, Workspace,
 };
 use crate::contact::law::{ContactParams, Variant};
 use crate::contact::memoryless::{self, Law, LocalOutputs};
@@ -70,6 +70,8 @@ pub struct MemorylessElement {
 pub struct DofElements {
     n_dofs: usize,
     elements: Vec<DofElement>,
+    /// How each friction element is evaluated (default AFT).
+    evaluations: Vec<Evaluation>,
     memoryless: Vec<MemorylessElement>,
     aft: AftCache,
     slots: SlotStorage,
@@ -91,6 +93,7 @@ impl DofElements {
     /// [`DofElements::memoryless`], each list in file order).
     pub fn from_case(elements: &[FrictionElement], n_dofs: usize) -> Result<Self> {
         let mut friction = Vec::new();
+        let mut evaluations = Vec::new();
         let mut others = Vec::new();
         for (i, e) in elements.iter().enumerate() {
             let key = format!("element[{i}]");
@@ -119,6 +122,7 @@ impl DofElements {
                             &key,
                         )?,
                     });
+                    evaluations.push(e.evaluation);
                     continue;
                 }
                 ElementKind::CubicSpring => Law::Cubic {
@@ -157,7 +161,7 @@ impl DofElements {
                 law,
             });
         }
-        let mut out = Self::new(friction, n_dofs)?;
+        let mut out = Self::new(friction, n_dofs)?.with_evaluations(evaluations)?;
         out.memoryless = others;
         Ok(out)
     }
@@ -195,11 +199,31 @@ impl DofElements {
         }
         Ok(DofElements {
             n_dofs,
+            evaluations: vec![Evaluation::Aft; elements.len()],
             elements,
             memoryless: Vec::new(),
             aft: AftCache::default(),
             slots: SlotStorage::default(),
         })
+    }
+
+    /// Sets how each friction element is evaluated (one entry per element, in order; the
+    /// default is [`Evaluation::Aft`] for all). `analytic` needs H = 1, checked at evaluation.
+    pub fn with_evaluations(mut self, evaluations: Vec<Evaluation>) -> Result<Self> {
+        if evaluations.len() != self.elements.len() {
+            return Err(Error::Compute(format!(
+                "friction elements: {} evaluation choices for {} elements",
+                evaluations.len(),
+                self.elements.len()
+            )));
+        }
+        self.evaluations = evaluations;
+        Ok(self)
+    }
+
+    /// How each friction element is evaluated.
+    pub fn evaluations(&self) -> &[Evaluation] {
+        &self.evaluations
     }
 
     /// The elements.
@@ -221,9 +245,10 @@ impl DofElements {
         let mut out = Vec::with_capacity(self.elements.len());
         let m = layout.coefficients();
         let (mut x, mut g) = (vec![0.0; 2 * m], vec![0.0; 2 * m]);
-        for (e, &w) in self.elements.iter().zip(state) {
+        for (i, (e, &w)) in self.elements.iter().zip(state).enumerate() {
             let mut slider = [w, 0.0];
             self.local_eval(
+                i,
                 e,
                 &aft,
                 layout,
@@ -258,6 +283,7 @@ impl DofElements {
     #[allow(clippy::too_many_arguments)]
     fn local_eval(
         &self,
+        i: usize,
         e: &DofElement,
         aft: &Aft,
         layout: &HarmonicLayout,
@@ -279,7 +305,8 @@ impl DofElements {
                 }
             }
         }
-        evaluate_element(
+        evaluate_as(
+            self.evaluations[i],
             &local,
             aft,
             &x[..ns * m],
@@ -287,7 +314,11 @@ impl DofElements {
             &mut g[..ns * m],
             jacobian,
             ws,
-        )?;
+        )
+        .map_err(|err| match err {
+            Error::Input(msg) => Error::input(format!("friction element {i} (from 0): {msg}")),
+            other => other,
+        })?;
         Ok(())
     }
 
@@ -311,7 +342,7 @@ impl DofElements {
         let local_jacobian = wanted.jacobian || wanted.dn0;
         let mut slider = [*w, 0.0];
         let (x, g, ws) = (&mut b.x, &mut b.g, &mut b.ws);
-        self.local_eval(e, aft, layout, q, &mut slider, local_jacobian, x, g, ws)?;
+        self.local_eval(i, e, aft, layout, q, &mut slider, local_jacobian, x, g, ws)?;
         *w = slider[0];
         // (signal, weight) of each node-space DOF, in entry order.
         let mut np = 0;

@@ -27,4 +27,5 @@ pub mod kinematics;
 pub mod law;
 pub mod mapped;
 pub mod memoryless;
+pub mod microslip;
 pub mod pairs;

@@ -68,6 +68,12 @@ impl MarchSettings {
     /// Checks the ranges (input errors name the setting and what to do).
     pub fn validate(&self) -> Result<()> {
         let bad = |msg: String| Err(Error::input(format!("march settings: {msg}")));
+        if self.scheme.is_nonsmooth() {
+            return bad(format!(
+                "the scheme `{}` marches `[[obstacle]]` contacts (`march::moreau_jean`, `march::carpenter`), not friction elements",
+                self.scheme
+            ));
+        }
         if !(self.omega.is_finite() && self.omega > 0.0) {
             return bad(format!(
                 "the excitation frequency must be > 0 (found {} rad/s)",
@@ -454,6 +460,10 @@ fn step(
         MarchScheme::QuasiStatic => {
             schemes::quasi_static_step(&ctx, &cur.kin, &cur.states(), &sliders, cache)
         }
+        MarchScheme::MoreauJean | MarchScheme::Carpenter => Err(Error::input(format!(
+            "the scheme `{}` does not march friction elements",
+            s.scheme
+        ))),
     }
 }
 

@@ -18,15 +18,23 @@
 //! | [`integrate`] | the time loop, adaptive step, records, counts |
 //! | [`periodic`] | steady-state detection and harmonics of the last period |
 //! | [`dense`] | small dense linear algebra |
+//! | [`obstacle`] | rigid obstacles with unilateral contact, the nonsmooth (thermo-mechanical) model, records |
+//! | [`lcp`] | the per-step linear complementarity problem: Lemke, enumeration |
+//! | [`moreau_jean`] | the Moreau–Jean θ-method (Thorin et al. 2018, eqs 12–18) |
+//! | [`carpenter`] | Carpenter's explicit forward-increment Lagrange multiplier scheme (Carpenter et al. 1991) |
 //!
 //! The march of a case file (a `[damper]`, a model on matrix rows, a reduced sector) is built by
 //! [`crate::problem::march_case`].
 
+pub mod carpenter;
 pub mod dense;
 pub mod element;
 pub mod integrate;
 pub mod law;
+pub mod lcp;
 pub mod lowrank;
+pub mod moreau_jean;
+pub mod obstacle;
 pub mod periodic;
 pub mod schemes;
 pub mod signal;

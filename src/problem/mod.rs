@@ -9,6 +9,7 @@
 //! | [`sector`] | the harmonic balance problem of a reduced sector with its contact interfaces |
 //! | [`sector_march`] | the real ROM of a sector (no cyclic symmetry, k = 0, k = N/2) as a time-marching model |
 //! | [`damper`] | the underplatform damper of a `[damper]` table as a time-marching model |
+//! | [`nonsmooth_case`] | a matrix case with `[[obstacle]]` contacts as the model of the nonsmooth schemes |
 //! | [`march_case`] | any case as a time-marching model, by [`crate::case::Case::kind`] |
 //! | [`settings`] | the solver settings of a case's `[continuation]` table |
 //!
@@ -18,6 +19,7 @@
 pub mod damper;
 pub mod march_case;
 pub mod matrix_case;
+pub mod nonsmooth_case;
 pub mod rom_store;
 pub mod sector;
 pub mod sector_march;
