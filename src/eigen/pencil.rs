@@ -110,8 +110,8 @@ fn ascending_lambda(mu: &[f64]) -> Vec<f64> {
 
 /// Every mode of (K, M), both n × n self-adjoint (lower triangles read), M positive definite,
 /// K positive semi-definite: eigenvalues λ = ω² ascending, modes X mass-normalised (Xᴴ M X = I).
-/// When K is positive definite, in the inverse form of [`generalized`] (the lowest modes accurate
-/// to ε relative); otherwise (a model with rigid-body modes) in the direct form
+/// When K is positive definite, in the inverse form of [`hermitian_modes`] (the lowest modes
+/// accurate to ε relative); otherwise (a model with rigid-body modes) in the direct form
 /// M = L Lᴴ, L⁻¹ K L⁻ᴴ = U Λ Uᴴ, X = L⁻ᴴ U, whose eigenvalues are accurate to ε·λ_max absolute.
 ///
 /// Errors ([`Error::Compute`]): M is not positive definite, or the eigensolver fails.
