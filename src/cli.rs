@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand};
 
-use crate::case::MarchScheme;
+use crate::case::{Evaluation, MarchScheme};
 use crate::commands::modes::{ModesOptions, Stage};
 use crate::commands::{self, Reporter};
 use crate::error::Result;
@@ -47,6 +47,9 @@ enum Command {
     Batch(BatchArgs),
     /// Run the bundled demo case end to end.
     Demo(DemoArgs),
+    /// One friction contact point under a prescribed harmonic relative motion: force and
+    /// normal-force harmonics, energy per cycle, regime, transition angles, hysteresis loop.
+    Law(LawArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -238,6 +241,73 @@ struct DemoArgs {
     verbosity: Verbosity,
 }
 
+#[derive(Debug, Args)]
+struct LawArgs {
+    /// A TOML file with any of the keys kt, kn, mu, n0, u, v, slider, evaluation,
+    /// time_samples (the options below override it).
+    #[arg(long, value_name = "FILE")]
+    input: Option<PathBuf>,
+    /// Tangential stiffness k_t (N/m).
+    #[arg(long, allow_negative_numbers = true)]
+    kt: Option<f64>,
+    /// Normal stiffness k_n (N/m); default 0.
+    #[arg(long, allow_negative_numbers = true)]
+    kn: Option<f64>,
+    /// Friction coefficient μ.
+    #[arg(long, allow_negative_numbers = true)]
+    mu: Option<f64>,
+    /// Static normal load n0 (N); negative: an initial gap −n0/k_n.
+    #[arg(long, allow_negative_numbers = true)]
+    n0: Option<f64>,
+    /// Tangential relative displacement U0,ReU1,ImU1[,ReU2,ImU2,…] (m):
+    /// u(τ) = U0 + Σ (Re Un cos nτ − Im Un sin nτ).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_negative_numbers = true,
+        value_name = "U0,RE1,IM1"
+    )]
+    u: Option<Vec<f64>>,
+    /// Normal approach V0,ReV1,ImV1[,…] (m; v > 0 loads the contact); default none.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_negative_numbers = true,
+        value_name = "V0,RE1,IM1"
+    )]
+    v: Option<Vec<f64>>,
+    /// Slider position at τ = 0 before the first period (m); default 0.
+    #[arg(long, allow_negative_numbers = true)]
+    slider: Option<f64>,
+    /// `analytic`: the exact single-harmonic cycle (default, H = 1); `aft`: the time-discrete law
+    /// over N_t samples (any H).
+    #[arg(long, value_parser = evaluation_parser())]
+    evaluation: Option<Evaluation>,
+    /// AFT samples per period N_t (default 1024).
+    #[arg(long)]
+    time_samples: Option<usize>,
+    /// Write the hysteresis loop samples (tau_rad, u, v, f, n, w, state) to this CSV file
+    /// (plot: tools/post/plot_law.py).
+    #[arg(long = "loop", value_name = "FILE.csv")]
+    loop_csv: Option<PathBuf>,
+    /// Samples of the loop of the analytic evaluation (default 256).
+    #[arg(long)]
+    loop_samples: Option<usize>,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    verbosity: Verbosity,
+}
+
+/// `--evaluation`: `analytic` or `aft`.
+fn evaluation_parser() -> impl TypedValueParser<Value = Evaluation> {
+    PossibleValuesParser::new(["analytic", "aft"]).map(|s| match s.as_str() {
+        "aft" => Evaluation::Aft,
+        _ => Evaluation::Analytic,
+    })
+}
+
 /// Parses the command line, runs the command and returns the exit status; errors go to stderr.
 pub fn main() -> i32 {
     let cli = Cli::parse();
@@ -305,5 +375,25 @@ fn run(cli: Cli) -> Result<()> {
             a.json,
         ),
         Command::Demo(a) => commands::demo_command(&a.out, &a.verbosity.reporter(), a.json),
+        Command::Law(a) => commands::law::law_command(
+            a.input.as_deref(),
+            commands::law::LawInput {
+                kt: a.kt,
+                kn: a.kn,
+                mu: a.mu,
+                n0: a.n0,
+                u: a.u,
+                v: a.v,
+                slider: a.slider,
+                evaluation: a.evaluation,
+                time_samples: a.time_samples,
+            },
+            &commands::law::LawOptions {
+                loop_csv: a.loop_csv,
+                loop_samples: a.loop_samples,
+            },
+            &a.verbosity.reporter(),
+            a.json,
+        ),
     }
 }

@@ -15,6 +15,7 @@
 //! * [`batch`]: `nlrom batch`, many cases (or many meshes with one template case) in a rayon
 //!   pool of `--jobs` threads, one results file each and a summary table (`summary.csv`).
 //! * [`demo`]: `nlrom demo`, the bundled demo case end to end, then the plots.
+//! * [`law`]: `nlrom law`, one friction contact point under a prescribed harmonic motion.
 //! * [`progress`]: log lines (`--quiet`, `-v`) and indicatif progress bars on stderr.
 //!
 //! Exit status (`crate::error::Error::exit_code`): 0 success, 1 a failed computation (a
@@ -24,6 +25,7 @@ pub mod batch;
 pub mod contact;
 pub mod demo;
 pub mod export;
+pub mod law;
 pub mod march;
 pub mod mesh_info;
 pub mod modes;
