@@ -12,7 +12,8 @@
 //!   the excitation level, `hbm::frf`);
 //! - tangent predictor: t solves [∂r/∂u  ∂r/∂μ; t_prevᵀ] t = [0; 1], normalised, so that
 //!   t · t_prev > 0: the orientation is carried over and folds (where dλ/ds changes sign) are
-//!   passed;
+//!   passed; the orientation σ = sign det [∂r/∂u ∂r/∂μ; tᵀ] is kept with it (Allgower &
+//!   Georg 1990, §2.1);
 //! - corrector: Newton on the bordered system r(x, λ) = 0, t · (y − y_pred) = 0 (the
 //!   hyperplane through the predicted point, orthogonal to the tangent); a corrected point
 //!   farther than one step from the prediction is rejected (a jump to another branch) — except
@@ -20,17 +21,24 @@
 //!   point is step · tan θ at a corner turning by θ, independent of the step, so smaller steps
 //!   cannot help there (a non-smooth point of contact: stick, slip or separation setting in
 //!   within one AFT sample), and a segment shorter than the initial step is not skipped;
+//! - corners: the sampled friction law is piecewise linear in the harmonics, so the path is a
+//!   chain of straight segments. Where it turns by more than 60° (only accepted at the minimum
+//!   step) the new tangent takes the orientation σ rather than the angle to the old one, so a
+//!   fold sharper than 90° is followed instead of reversed; where the corrector fails even at
+//!   the minimum step, the corner step (see `corner_step`) fixes one coordinate at a time,
+//!   ahead along the secant of the last two points;
 //! - step: s ← s · clamp(n_target / n_iter, ½, 2) after a converged point; on a failed
 //!   corrector, or a tangent turning by more than 60°, the step is halved and the point retried
-//!   (never skipped) — below the minimum step the path stops with a reported failure and the
-//!   points converged so far, each with its accepted residual;
+//!   (never skipped) — below the minimum step the corner step is tried, and when it fails too
+//!   the path stops with a reported failure and the points converged so far, each with its
+//!   accepted residual;
 //! - end: the first point beyond λ_end is replaced by the solution at exactly λ_end.
 
 use faer::Mat;
 
 use crate::error::{Error, Result};
 use crate::nonlinear::{
-    newton_core, norm, solve_dense, solve_fixed, Iterate, Linearization, NewtonOptions,
+    newton_core, norm, solve_dense_signed, solve_fixed, Iterate, Linearization, NewtonOptions,
     NewtonSolution, ParameterSystem,
 };
 
@@ -133,6 +141,9 @@ pub struct Path<S> {
     pub end: PathEnd,
     /// Steps that were rejected and retried with half the step.
     pub retries: usize,
+    /// Points found by the corner step (see [`trace_from`]) after the corrector failed at the
+    /// minimum step.
+    pub corner_steps: usize,
 }
 
 /// Scaling of the unknowns and the parameter.
@@ -189,13 +200,14 @@ pub fn trace_from<S: ParameterSystem>(
         lambda: range,
         residual: system.residual_scale(),
     };
-    let mut tangent =
-        initial_tangent(&start.linearization, &scales, direction).ok_or_else(|| {
-            Error::Compute(format!(
+    let first = initial_tangent(&start.linearization, &scales, direction).ok_or_else(|| {
+        Error::Compute(format!(
             "the Jacobian at the start point (parameter {}) is singular; try another start value",
             opts.start
         ))
-        })?;
+    })?;
+    let mut orientation = first.orientation;
+    let mut tangent = first.t;
     let mut step = opts.initial_step / range / tangent[tangent.len() - 1].abs().max(1e-3);
     let min_step = opts.min_step.map_or(step / 1000.0, |m| m / range);
     let max_step = opts
@@ -208,6 +220,7 @@ pub fn trace_from<S: ParameterSystem>(
         points: vec![],
         end: PathEnd::MaxPoints,
         retries: 0,
+        corner_steps: 0,
     };
     let mut current = point_from(start, 0.0, tangent[tangent.len() - 1]);
     on_point(&current);
@@ -217,7 +230,8 @@ pub fn trace_from<S: ParameterSystem>(
         let predicted: Vec<f64> = y.iter().zip(&tangent).map(|(y, t)| y + step * t).collect();
         // the corrector's largest offset from the prediction in steps: one, or at the minimum
         // step (a corner) one initial step
-        let allowance = if step <= 2.0 * min_step {
+        let at_min = step <= 2.0 * min_step;
+        let allowance = if at_min {
             (initial_step / step).max(1.0)
         } else {
             1.0
@@ -231,8 +245,12 @@ pub fn trace_from<S: ParameterSystem>(
             &scales,
             opts,
         );
-        let (sol, new_tangent) = match outcome {
-            Ok((sol, Some(t))) if dot(&t, &tangent) >= 0.5 || step <= 2.0 * min_step => (sol, t),
+        let (sol, new_tangent, length) = match outcome {
+            Ok((sol, Some(t))) if dot(&t.t, &tangent) >= 0.5 => (sol, t, step),
+            // a sharp turn at the minimum step: a corner of the piecewise-linear path, the
+            // forward direction from the orientation (at a fold of more than 90° the new
+            // tangent points back against the old one)
+            Ok((sol, Some(t))) if at_min => (sol, t.oriented(orientation), step),
             other => {
                 let why = match other {
                     Err(f) => f,
@@ -241,21 +259,36 @@ pub fn trace_from<S: ParameterSystem>(
                 };
                 step *= 0.5;
                 path.retries += 1;
-                if step < min_step {
+                if step >= min_step {
+                    continue;
+                }
+                let before = path.points.len().checked_sub(2).map(|i| &path.points[i]);
+                let corner = corner_step(
+                    system,
+                    (before, &current),
+                    (&tangent, orientation),
+                    &scales,
+                    min_step,
+                    opts,
+                );
+                let Some(found) = corner else {
                     path.end = PathEnd::Failed(format!(
-                        "continuation stopped after the point at parameter {:.9e}: {why} even with the minimum step {:.3e} (λ units); the {} points converged so far are kept",
+                        "continuation stopped after the point at parameter {:.9e}: {why} even with the minimum step {:.3e} (λ units), and no corner step converged; the {} points converged so far are kept",
                         current.parameter,
                         min_step * range,
                         path.points.len()
                     ));
                     return Ok(path);
-                }
-                continue;
+                };
+                path.corner_steps += 1;
+                step = (2.0 * found.2).clamp(min_step, max_step);
+                found
             }
         };
+        orientation = new_tangent.orientation;
         let iterations = sol.iterations;
-        let arc = current.arc_length + step;
-        let mut next = point_from(sol, arc, new_tangent[new_tangent.len() - 1]);
+        let arc = current.arc_length + length;
+        let mut next = point_from(sol, arc, new_tangent.t[new_tangent.t.len() - 1]);
         if direction * (next.parameter - opts.end) >= 0.0 {
             next = end_point(system, &current, next, opts).unwrap_or_else(|p| p);
             on_point(&next);
@@ -272,7 +305,7 @@ pub fn trace_from<S: ParameterSystem>(
         on_point(&next);
         path.points.push(next.clone());
         current = next;
-        tangent = rescale(new_tangent, &mut scales, norm(&current.x));
+        tangent = rescale(new_tangent.t, &mut scales, norm(&current.x));
         let factor = (opts.target_iterations as f64 / iterations.max(1) as f64).clamp(0.5, 2.0);
         step = (step * factor).clamp(min_step, max_step);
     }
@@ -364,21 +397,56 @@ fn bordered(lin: &Linearization, s: &Scales, border: &[f64]) -> Mat<f64> {
 }
 
 /// The unit tangent at the start, oriented so that λ moves towards the end.
-fn initial_tangent(lin: &Linearization, s: &Scales, direction: f64) -> Option<Vec<f64>> {
+fn initial_tangent(lin: &Linearization, s: &Scales, direction: f64) -> Option<Tangent> {
     let n = lin.residual.len();
     let mut border = vec![0.0; n + 1];
     border[n] = direction;
     tangent_with(lin, s, &border)
 }
 
-/// Solves [∂r/∂u ∂r/∂μ; bᵀ] t = [0; 1] and normalises t (so that t·b > 0).
-fn tangent_with(lin: &Linearization, s: &Scales, border: &[f64]) -> Option<Vec<f64>> {
+/// A unit tangent and its orientation: the sign (±1) of det [∂r/∂u ∂r/∂μ; tᵀ].
+///
+/// The orientation is constant along a regular path, through folds and across the corners of
+/// a piecewise-linear path, however sharp (Allgower & Georg 1990, §2.1 and §12.1): it tells the
+/// forward direction where the angle to the previous tangent cannot.
+#[derive(Clone, Debug)]
+struct Tangent {
+    t: Vec<f64>,
+    orientation: f64,
+}
+
+impl Tangent {
+    /// The tangent reversed (its orientation changes sign with it).
+    fn reversed(self) -> Tangent {
+        Tangent {
+            t: self.t.iter().map(|v| -v).collect(),
+            orientation: -self.orientation,
+        }
+    }
+
+    /// The tangent oriented as `orientation`.
+    fn oriented(self, orientation: f64) -> Tangent {
+        if self.orientation == orientation {
+            self
+        } else {
+            self.reversed()
+        }
+    }
+}
+
+/// Solves [∂r/∂u ∂r/∂μ; bᵀ] t = [0; 1] and normalises t (so that t·b > 0). det [J; tᵀ] has the
+/// sign of det [J; bᵀ]: with c the cofactor vector of J (J c = 0), det [J; vᵀ] = v · c and
+/// t ∥ c / (b · c).
+fn tangent_with(lin: &Linearization, s: &Scales, border: &[f64]) -> Option<Tangent> {
     let a = bordered(lin, s, border);
     let mut rhs = vec![0.0; border.len()];
     rhs[border.len() - 1] = 1.0;
-    let t = solve_dense(&a, &rhs)?;
+    let (t, orientation) = solve_dense_signed(&a, &rhs)?;
     let len = norm(&t);
-    (len > 0.0 && len.is_finite()).then(|| t.iter().map(|v| v / len).collect())
+    (len > 0.0 && len.is_finite()).then(|| Tangent {
+        t: t.iter().map(|v| v / len).collect(),
+        orientation,
+    })
 }
 
 /// The corrector from the predicted point; returns the solution and the new tangent (oriented
@@ -399,7 +467,7 @@ fn correct<S: ParameterSystem>(
     (step, allowance): (f64, f64),
     s: &Scales,
     opts: &ContinuationOptions,
-) -> std::result::Result<(NewtonSolution<S::State>, Option<Vec<f64>>), String> {
+) -> std::result::Result<(NewtonSolution<S::State>, Option<Tangent>), String> {
     let done = correct_on(system, state, predicted, tangent, tangent, s, opts)?;
     let mut y: Vec<f64> = done.0.x.iter().map(|x| x / s.x).collect();
     y.push(done.0.parameter / s.lambda);
@@ -426,7 +494,7 @@ fn correct_on<S: ParameterSystem>(
     tangent: &[f64],
     s: &Scales,
     opts: &ContinuationOptions,
-) -> std::result::Result<(NewtonSolution<S::State>, Option<Vec<f64>>), String> {
+) -> std::result::Result<(NewtonSolution<S::State>, Option<Tangent>), String> {
     let n = system.dim();
     let mut eval = |z: &[f64]| -> Result<Iterate<(Linearization, S::State)>> {
         let x: Vec<f64> = z[..n].iter().map(|u| u * s.x).collect();
@@ -470,6 +538,78 @@ fn correct_on<S: ParameterSystem>(
         linearization: lin,
     };
     Ok((sol, new_tangent))
+}
+
+/// The corner step: the next point when the pseudo-arc-length corrector fails even at the minimum
+/// step h_min.
+///
+/// The sampled friction force is piecewise linear in the harmonics (a stick–slip or separation
+/// instant moves by whole AFT samples), so the solution path is a chain of straight segments with
+/// corners. At a corner the predictor along the incoming tangent lands off the outgoing segment,
+/// and Newton on the hyperplane orthogonal to that tangent can cycle between two facets of the
+/// law, neither of whose linearisations has its root inside itself — at any step size. A
+/// hyperplane of another orientation crosses the outgoing segment where Newton converges at
+/// once. This is the local parametrisation of Rheinboldt (1986): the path is parametrised by
+/// one coordinate of y = (u, μ) at a time, fixed at its predicted value,
+/// e_k · (y − y_pred) = 0, with y_pred = y_c + h·d along the secant d of the last two points
+/// (the unit tangent at the start). The coordinates k are tried in the order of |d_k|, largest
+/// first (the coordinate that varies most along the path, so the hyperplane is never tangent to
+/// it at a fold), up to three of them, each at h = 1, 4 and 16 h_min.
+///
+/// A point is accepted only if it lies ahead of the current one — its tangent, oriented as the
+/// path, points away from the current point — and within 4h of it (no jump to another
+/// branch). Returns the solution, its unit tangent (with the path's orientation,
+/// which tells the forward direction also where the path folds back at the corner) and the arc
+/// length to it; `None` if no candidate converged.
+#[allow(clippy::type_complexity)]
+fn corner_step<S: ParameterSystem>(
+    system: &S,
+    (before, current): (Option<&PathPoint<S::State>>, &PathPoint<S::State>),
+    (tangent, orientation): (&[f64], f64),
+    s: &Scales,
+    min_step: f64,
+    opts: &ContinuationOptions,
+) -> Option<(NewtonSolution<S::State>, Tangent, f64)> {
+    let y_c = scaled(current, s);
+    let secant = before.and_then(|b| {
+        let d: Vec<f64> = y_c.iter().zip(scaled(b, s)).map(|(c, b)| c - b).collect();
+        let len = norm(&d);
+        (len > 0.0 && len.is_finite()).then(|| d.iter().map(|v| v / len).collect::<Vec<f64>>())
+    });
+    let direction = secant.unwrap_or_else(|| tangent.to_vec());
+    let mut order: Vec<usize> = (0..direction.len()).collect();
+    order.sort_by(|&a, &b| direction[b].abs().total_cmp(&direction[a].abs()));
+    for &k in order.iter().take(3) {
+        let mut border = vec![0.0; direction.len()];
+        border[k] = 1.0;
+        for factor in [1.0, 4.0, 16.0] {
+            let h = factor * min_step;
+            let predicted: Vec<f64> = y_c.iter().zip(&direction).map(|(y, d)| y + h * d).collect();
+            let Ok((sol, Some(t))) = correct_on(
+                system,
+                &current.state,
+                &predicted,
+                &border,
+                &direction,
+                s,
+                opts,
+            ) else {
+                continue;
+            };
+            let mut y: Vec<f64> = sol.x.iter().map(|x| x / s.x).collect();
+            y.push(sol.parameter / s.lambda);
+            let moved: Vec<f64> = y.iter().zip(&y_c).map(|(a, b)| a - b).collect();
+            let length = norm(&moved);
+            let t = t.oriented(orientation);
+            // ahead of the current point: the path leaves it towards the candidate, whose
+            // oriented tangent points away from it (a point of the incoming segment has its
+            // tangent pointing back at the current point)
+            if dot(&moved, &t.t) > 0.0 && length <= 4.0 * h {
+                return Some((sol, t, length));
+            }
+        }
+    }
+    None
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
