@@ -162,18 +162,7 @@ pub fn element_to_outer(
 ) {
     let (pi, po) = (n_in * m, n_out * m);
     for (vy, vx) in vectors.iter_mut() {
-        vx[..po].fill(0.0);
-        for d in 0..n_in {
-            for k in 0..n_out {
-                let c = b[d * n_out + k];
-                if c == 0.0 {
-                    continue;
-                }
-                for l in 0..m {
-                    vx[k * m + l] += c * vy[d * m + l];
-                }
-            }
-        }
+        transpose_apply(b, (n_in, n_out, m), vy, &mut vx[..po]);
     }
     let Some((jy, jx)) = jacobian else {
         return;
@@ -199,17 +188,21 @@ pub fn element_to_outer(
     // J_x = Bᵀ T, column by column.
     for col in 0..po {
         let t = &work[col * pi..(col + 1) * pi];
-        let out = &mut jx[col * po..(col + 1) * po];
-        out.fill(0.0);
-        for d in 0..n_in {
-            for k in 0..n_out {
-                let c = b[d * n_out + k];
-                if c == 0.0 {
-                    continue;
-                }
-                for l in 0..m {
-                    out[k * m + l] += c * t[d * m + l];
-                }
+        transpose_apply(b, (n_in, n_out, m), t, &mut jx[col * po..(col + 1) * po]);
+    }
+}
+
+/// out = B_eᵀ v on node-space vectors (entry d·m + l; `out` of length n_out·m).
+fn transpose_apply(b: &[f64], (n_in, n_out, m): (usize, usize, usize), v: &[f64], out: &mut [f64]) {
+    out.fill(0.0);
+    for d in 0..n_in {
+        for k in 0..n_out {
+            let c = b[d * n_out + k];
+            if c == 0.0 {
+                continue;
+            }
+            for l in 0..m {
+                out[k * m + l] += c * v[d * m + l];
             }
         }
     }
