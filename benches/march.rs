@@ -1,95 +1,232 @@
-//! The speed comparison of Gastaldi & Berruti 2018 §6 / Fig. 8 on the demonstrator
-//! (cases/damper.toml, 200 Hz, one period after the static start), all in one run:
-//! 1. per scheme its steps and corrector iterations relative to standard Newmark;
-//! 2. wall and CPU time per march, the schemes interleaved round-robin (so a changing machine load
-//!    hits them alike), minimum over the rounds, and their ratios to standard Newmark — CPU time is
-//!    the thread's on-CPU time from /proc/thread-self/schedstat (ns), which a loaded machine
-//!    inflates far less than the wall time;
-//! 3. criterion's wall-time estimates (`damper_200hz_one_period/<scheme>`).
+//! The speed comparison of Gastaldi & Berruti 2018 §6 / Fig. 8, all in one run, on three models:
+//! - the underplatform damper (cases/damper.toml, 200 Hz, one period after the static start);
+//! - a one-DOF oscillator with a Jenkins element (m = 1 kg, k = 4 N/m, k_t = 5 N/m, slip force
+//!   0.5 N, F = 2 N at ω = 1 rad/s, below resonance), 10 periods from rest, 300 steps per period;
+//! - the reduced sector of cases/sector8_march.toml (k = 0, shroud contact in micro-slip, 170 Hz),
+//!   two periods from rest with the paper's settings: Newmark at the step compatible with full
+//!   stick (Δτ = 0.15 𝕋_stick, at most 1/300 of the period), the quasi-static method at 300 steps
+//!   per period.
 //!
-//! `cargo bench --bench march` — the printed table is the one of docs/performance.md, next to the paper's Fig. 8.
+//! Per model and scheme: steps, corrector iterations and single-iteration steps; the wall time of
+//! one whole march (minimum over rounds interleaving the schemes, so a changing machine load hits
+//! them alike) and its ratio to standard Newmark; and the largest difference of the contact forces from standard Newmark's
+//! over the last period (relative to standard Newmark's largest force), the "same loops" check.
+//! Then criterion's wall-time estimates on the damper and the oscillator.
+//!
+//! `cargo bench --bench march` — the printed tables are those of docs/performance.md.
 
 use std::path::Path;
 use std::time::Instant;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nlrom::case::{Case, MarchScheme};
-use nlrom::march::march;
-use nlrom::problem::march_case::{case_march, CaseMarch};
+use nlrom::march::element::{Direction, Element};
+use nlrom::march::law::FrictionParams;
+use nlrom::march::signal::Harmonic;
+use nlrom::march::{march, InitialCondition, MarchOutcome, MarchSettings, MarchSystem};
+use nlrom::problem::march_case::case_march;
 
-/// Interleaved rounds of the timing table.
-const ROUNDS: usize = 40;
-
-fn setup(scheme: MarchScheme) -> CaseMarch {
-    let path = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/cases/damper.toml"));
-    let case = Case::load(path).expect("bundled damper case");
-    let mut cm = case_march(&case, Some(scheme), &mut |_| {}).expect("damper march");
-    cm.settings.periods = 1;
-    cm
+/// The schemes of Gastaldi & Berruti 2018 (friction elements), standard Newmark first.
+fn schemes() -> Vec<MarchScheme> {
+    MarchScheme::ALL
+        .into_iter()
+        .filter(|s| !s.is_nonsmooth())
+        .collect()
 }
 
-/// On-CPU time of the calling thread (s), `None` where /proc/thread-self/schedstat is missing.
-fn thread_cpu_seconds() -> Option<f64> {
-    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
-    let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
-    Some(ns * 1e-9)
+/// A marched model and the settings of its standard-Newmark run.
+struct Model {
+    name: &'static str,
+    system: MarchSystem,
+    settings: MarchSettings,
+    rounds: usize,
 }
 
-/// Minimum wall and CPU time (s) of one march per scheme over [`ROUNDS`] interleaved rounds.
-fn timing_table(cases: &[(MarchScheme, CaseMarch)]) -> Vec<(f64, f64)> {
-    let mut best = vec![(f64::INFINITY, f64::INFINITY); cases.len()];
-    for _ in 0..ROUNDS {
-        for ((_, cm), b) in cases.iter().zip(&mut best) {
-            let (c0, t0) = (thread_cpu_seconds(), Instant::now());
-            let out = march(&cm.system, &cm.settings).expect("march");
-            let wall = t0.elapsed().as_secs_f64();
-            let cpu = match (c0, thread_cpu_seconds()) {
-                (Some(a), Some(b)) => b - a,
-                _ => f64::NAN,
-            };
+fn case(name: &str) -> Case {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("cases")
+        .join(name);
+    Case::load(&path).expect("bundled case")
+}
+
+fn damper() -> Model {
+    let cm = case_march(&case("damper.toml"), None, &mut |_| {}).expect("damper march");
+    Model {
+        name: "underplatform damper (3 DOF, 3 contacts)",
+        system: cm.system,
+        settings: MarchSettings {
+            periods: 1,
+            ..cm.settings
+        },
+        rounds: 40,
+    }
+}
+
+fn jenkins() -> Model {
+    let mut system = MarchSystem {
+        n: 1,
+        mass: vec![1.0],
+        damping: vec![0.02 * 2.0 * 3.0],
+        stiffness: vec![4.0],
+        force: vec![Harmonic::cosine(2.0, 0.0)],
+        damping_force: Vec::new(),
+        elements: vec![Element {
+            name: "jenkins".into(),
+            tangential: Direction {
+                weights: vec![(0, 1.0)],
+                prescribed: Harmonic::default(),
+            },
+            normal: None,
+            params: FrictionParams {
+                kt: 5.0,
+                kn: 0.0,
+                mu: 1.0,
+                n0: 0.5,
+            },
+            applies_normal: true,
+        }],
+        dof_names: vec!["q".into()],
+        initial: InitialCondition::Rest,
+        displacement_scale: 1.0,
+    };
+    system.displacement_scale = system.default_displacement_scale();
+    Model {
+        name: "Jenkins oscillator (1 DOF)",
+        system,
+        settings: MarchSettings {
+            omega: 1.0,
+            periods: 10,
+            steps_per_period: 300,
+            ..MarchSettings::default()
+        },
+        rounds: 40,
+    }
+}
+
+fn sector() -> Model {
+    let cm = case_march(&case("sector8_march.toml"), None, &mut |_| {}).expect("sector march");
+    let name = "sector8 ROM, k = 0, shroud contact";
+    eprintln!(
+        "{name}: {} ROM coordinates, {} friction elements",
+        cm.system.n,
+        cm.system.elements.len()
+    );
+    Model {
+        name,
+        system: cm.system,
+        settings: MarchSettings {
+            periods: 2,
+            steps_per_period: 300,
+            time_step: None,
+            stop_at_steady: false,
+            ..cm.settings
+        },
+        rounds: 2,
+    }
+}
+
+/// The settings of `model` with `scheme`.
+fn with_scheme(model: &Model, scheme: MarchScheme) -> MarchSettings {
+    MarchSettings {
+        scheme,
+        ..model.settings.clone()
+    }
+}
+
+/// Minimum wall time (s) of one march per scheme over the model's interleaved rounds.
+fn timing(model: &Model) -> Vec<f64> {
+    let settings: Vec<MarchSettings> = schemes()
+        .into_iter()
+        .map(|s| with_scheme(model, s))
+        .collect();
+    let mut best = vec![f64::INFINITY; settings.len()];
+    for _ in 0..model.rounds {
+        for (s, b) in settings.iter().zip(&mut best) {
+            let t0 = Instant::now();
+            let out = march(&model.system, s).expect("march");
+            *b = b.min(t0.elapsed().as_secs_f64());
             std::hint::black_box(out.steps);
-            b.0 = b.0.min(wall);
-            b.1 = b.1.min(cpu);
         }
     }
     best
 }
 
-fn bench(c: &mut Criterion) {
-    let cases: Vec<(MarchScheme, CaseMarch)> = MarchScheme::ALL
+/// Largest |f(t) − f_ref(t)| over the last period of `out` (both components of every element,
+/// the reference interpolated linearly in time), relative to the largest reference force there.
+fn force_difference(out: &MarchOutcome, reference: &MarchOutcome) -> f64 {
+    let (h, r) = (&out.history, &reference.history);
+    let ne2 = h.force.len() / h.len();
+    let np = out.periods.len();
+    let t0 = h.time[if np >= 2 {
+        out.periods[np - 2].end_index
+    } else {
+        0
+    }];
+    let (mut worst, mut scale) = (0.0f64, 0.0f64);
+    for k in 0..h.len() {
+        let t = h.time[k];
+        if t < t0 {
+            continue;
+        }
+        let j = r.time.partition_point(|&x| x <= t).clamp(1, r.len() - 1);
+        let (ta, tb) = (r.time[j - 1], r.time[j]);
+        let w = ((t - ta) / (tb - ta)).clamp(0.0, 1.0);
+        for c in 0..ne2 {
+            let f_ref = (1.0 - w) * r.force[(j - 1) * ne2 + c] + w * r.force[j * ne2 + c];
+            worst = worst.max((h.force[k * ne2 + c] - f_ref).abs());
+            scale = scale.max(f_ref.abs());
+        }
+    }
+    worst / scale.max(f64::MIN_POSITIVE)
+}
+
+/// Prints the comparison table of one model.
+fn table(model: &Model) {
+    let outs: Vec<MarchOutcome> = schemes()
         .into_iter()
-        .map(|s| (s, setup(s)))
+        .map(|s| march(&model.system, &with_scheme(model, s)).expect("march"))
         .collect();
-    let outs: Vec<_> = cases
-        .iter()
-        .map(|(_, cm)| march(&cm.system, &cm.settings).expect("march"))
-        .collect();
-    let times = timing_table(&cases);
+    let times = timing(model);
     let (r_out, r_time) = (&outs[0], times[0]);
-    eprintln!("scheme | steps (ratio) | iterations (ratio) | one-iteration steps | wall ms (ratio) | CPU ms (ratio)");
-    for (((s, _), out), (wall, cpu)) in cases.iter().zip(&outs).zip(&times) {
+    eprintln!("\n{} — {} period(s)", model.name, model.settings.periods);
+    eprintln!("scheme | steps (ratio) | iterations (ratio) | one-iteration steps | wall ms (ratio) | force difference");
+    for ((s, out), wall) in schemes().iter().zip(&outs).zip(&times) {
         eprintln!(
-            "{s} | {} ({:.3}) | {} ({:.3}) | {:.1} % | {:.3} ({:.3}) | {:.3} ({:.3})",
+            "{s} | {} ({:.3}) | {} ({:.3}) | {:.1} % | {:.3} ({:.3}) | {:.2e}",
             out.steps,
             out.steps as f64 / r_out.steps as f64,
             out.total_iterations,
             out.total_iterations as f64 / r_out.total_iterations as f64,
             100.0 * out.single_iteration_fraction(),
             wall * 1e3,
-            wall / r_time.0,
-            cpu * 1e3,
-            cpu / r_time.1,
+            wall / r_time,
+            force_difference(out, r_out),
         );
     }
-    let mut group = c.benchmark_group("damper_200hz_one_period");
-    group.sample_size(20);
-    group.measurement_time(std::time::Duration::from_secs(2));
-    for (scheme, cm) in &cases {
-        group.bench_function(scheme.as_str(), |b| {
-            b.iter(|| march(&cm.system, &cm.settings).expect("march"))
-        });
+}
+
+fn bench(c: &mut Criterion) {
+    let (damper, jenkins) = (damper(), jenkins());
+    table(&damper);
+    table(&jenkins);
+    if std::env::var_os("NLROM_BENCH_NO_SECTOR").is_none() {
+        table(&sector());
     }
-    group.finish();
+    for (group, model) in [
+        ("damper_200hz_one_period", &damper),
+        ("jenkins_oscillator_ten_periods", &jenkins),
+    ] {
+        let mut g = c.benchmark_group(group);
+        g.sample_size(20);
+        g.measurement_time(std::time::Duration::from_secs(2));
+        for scheme in schemes() {
+            let s = with_scheme(model, scheme);
+            g.bench_function(scheme.as_str(), |b| {
+                b.iter(|| march(&model.system, &s).expect("march"))
+            });
+        }
+        g.finish();
+    }
 }
 
 criterion_group!(benches, bench);

@@ -16,8 +16,8 @@
 //! | model | [`rom`] | the reduced-order model per harmonic index: matrices and reduced-DOF description |
 //! | model | [`output`] | HDF5 files: the ROM file and the results file (atomic writes, h5py-readable) |
 //! | model | [`fe`] | 3-D elasticity: shape functions, quadrature, parallel assembly of K and M, clamping |
-//! | model | [`model`] | the structural model of a case: assembled or imported K, M after clamping |
-//! | model | [`eigen`] | sparse shift-invert eigensolver K φ = λ M φ (lowest modes), reusable factorisation |
+//! | model | [`eigen`] | sparse shift-invert eigensolver K φ = λ M φ (lowest modes), reusable factorisation; dense eigenproblems and pencils |
+//! | model | [`model`] | the structural model of a case: assembled or imported K, M after clamping; the damping matrix of a dense model |
 //! | model | [`reduction`] | Craig–Bampton (streamed static modes), cyclic transform per k, GSI, the ROM of a case |
 //! | contact | [`contact`] | friction contact law, AFT evaluation, analytic Jacobians, contact pairs |
 //! | contact | [`interface`] | contact interfaces: target placement, projection, SAMA weights (Battiato 2021, eqs 28–32), node-to-node |

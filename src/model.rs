@@ -4,6 +4,11 @@
 //! External matrices relate to the mesh through the DOF map (`dofs.csv`, row → node tag and
 //! component); without one, row `3i + c` is component `c` of node index `i` (`docs/conventions.md` §1).
 //! A model defined by matrices alone (no mesh) has no groups and therefore no clamp.
+//!
+//! [`damping`] builds the damping matrix C of any dense model (matrix case or ROM) from the
+//! case's damping specification.
+
+pub mod damping;
 
 use std::path::Path;
 use std::time::Instant;

@@ -16,9 +16,10 @@ use cyclic_common::{
 use faer::{c64, Mat};
 use nlrom::case::Case;
 use nlrom::cyclic::{match_frontiers, CyclicGeometry};
+use nlrom::eigen::hermitian_modes;
 use nlrom::mesh::msh::read_msh;
 use nlrom::model::{self, StructuralModel};
-use nlrom::reduction::{hermitian_modes, Sector};
+use nlrom::reduction::Sector;
 use nlrom::Error;
 
 const N: usize = 8;

@@ -18,9 +18,10 @@ use cyclic_common::{
 };
 use nlrom::case::Case;
 use nlrom::cyclic::{axis_basis, match_frontiers, CyclicGeometry};
+use nlrom::eigen::hermitian_modes;
 use nlrom::mesh::msh::read_msh;
 use nlrom::model::{self, StructuralModel};
-use nlrom::reduction::{free_frontier_pairs, hermitian_modes, Sector};
+use nlrom::reduction::{free_frontier_pairs, Sector};
 
 const N: usize = 8;
 

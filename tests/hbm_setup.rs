@@ -12,7 +12,8 @@ use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::frf::frequency_response;
 use nlrom::hbm::{HbmSystem, ResponseOptions};
 use nlrom::model;
-use nlrom::problem::matrix_case::{matrix_setup, modal_damping};
+use nlrom::model::damping::modal_damping;
+use nlrom::problem::matrix_case::matrix_setup;
 use nlrom::problem::settings::case_continuation;
 
 /// A 3-DOF chain ground–1–2–3 (springs 2, 1, 1; masses 1, 1, 2) in Matrix Market files.

@@ -890,3 +890,130 @@ fn bad_obstacle_and_gamma_keys_are_reported_with_their_path() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+// ---------------------------------------------------------------------------------------------
+// A thermoelastic FE bar (fe::thermal) against a wall with frictional heating
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn thermoelastic_fe_bar_hitting_a_wall_closes_its_energy_and_heat_balances() {
+    use nlrom::fe::structured::StructuredBox;
+    use nlrom::fe::thermal::{assemble_thermal, ThermalMaterial};
+    use nlrom::fe::{assemble, Material, Materials, Quadrature};
+    use nlrom::mesh::ElementType;
+    let size = [0.05, 0.01, 0.01];
+    let mesh = StructuredBox::new(ElementType::Hexa8, [4, 1, 1], size)
+        .build()
+        .unwrap();
+    let mat = Material {
+        young: 110e9,
+        poisson: 0.3,
+        density: 4430.0,
+    };
+    let th = ThermalMaterial {
+        conductivity: 6.7,
+        specific_heat: 520.0,
+        expansion: 9e-6,
+    };
+    let quad = Quadrature::default();
+    let mech = assemble(&mesh, &Materials::uniform(mat), &quad).unwrap();
+    let therm = assemble_thermal(&mesh, &Materials::uniform(mat), &th, &quad).unwrap();
+    let nodes = mesh.coords.len();
+    // Mechanical DOF: every node off the clamped face x = 0; thermal DOF: every node (insulated).
+    let free: Vec<usize> = (0..3 * nodes)
+        .filter(|&p| mesh.coords[p / 3][0] > 1e-12)
+        .collect();
+    let (nu, nt) = (free.len(), nodes);
+    let n = nu + nt;
+    let (k, m) = (mech.k.to_dense(), mech.m.to_dense());
+    let (kt, ct, ku) = (
+        therm.conductance.to_dense(),
+        therm.capacity.to_dense(),
+        therm.coupling.to_dense(),
+    );
+    let mut kk = vec![0.0; n * n];
+    let mut mm = vec![0.0; n * n];
+    let mut cc = vec![0.0; n * n];
+    for (i, &p) in free.iter().enumerate() {
+        for (j, &q) in free.iter().enumerate() {
+            kk[i * n + j] = k[(p, q)];
+            mm[i * n + j] = m[(p, q)];
+            cc[i * n + j] = 1e-6 * k[(p, q)];
+        }
+        for b in 0..nt {
+            kk[i * n + nu + b] = ku[(p, b)];
+        }
+    }
+    for a in 0..nt {
+        for b in 0..nt {
+            kk[(nu + a) * n + nu + b] = kt[(a, b)];
+            cc[(nu + a) * n + nu + b] = ct[(a, b)];
+        }
+    }
+    let mut sys = NonsmoothSystem {
+        n,
+        n_mech: nu,
+        mass: mm,
+        damping: cc,
+        stiffness: kk,
+        force: vec![Harmonic::default(); n],
+        omega: 2.0 * std::f64::consts::PI * 2000.0,
+        obstacles: Vec::new(),
+        dof_names: (0..n).map(|i| format!("dof {i}")).collect(),
+        x0: vec![0.0; n],
+        v0: vec![0.0; n],
+    };
+    // The four tip nodes pushed along +x by 200 N at 2 kHz against a wall 0.1 µm away, with
+    // friction along +y (μ = 0.15) and the frictional heat α λ into each tip node.
+    let alpha = 0.1;
+    for (node, x) in mesh.coords.iter().enumerate() {
+        if (x[0] - size[0]).abs() < 1e-12 {
+            let ux = free.iter().position(|&p| p == 3 * node).unwrap();
+            let uy = free.iter().position(|&p| p == 3 * node + 1).unwrap();
+            sys.force[ux] = Harmonic {
+                mean: 0.0,
+                cos: 0.0,
+                sin: 200.0,
+            };
+            let mut o = Obstacle::new(&format!("tip {node}"), vec![(ux, -1.0)], 1e-7, 0.0);
+            o.mu = 0.15;
+            o.tangential = vec![(uy, 1.0)];
+            o.heating = alpha;
+            o.heated = vec![(nu + node, 1.0)];
+            sys.obstacles.push(o);
+        }
+    }
+    assert_eq!(sys.obstacles.len(), 4);
+    let h = moreau_jean(&sys, &settings(1e-6, 1000, 0.5)).unwrap();
+    let total_impulse: f64 = h.impulse.iter().sum();
+    assert!(total_impulse > 0.0 && h.impulse.iter().all(|&l| l >= 0.0));
+    // Energy balance every step (friction and heat included in the terms).
+    let scale = h
+        .energy
+        .iter()
+        .map(|e| e.external.abs().max(e.kinetic + e.strain))
+        .fold(0.0, f64::max);
+    let worst = h
+        .energy
+        .iter()
+        .map(|e| e.residual.abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-10 * scale, "energy residual {worst} of {scale}");
+    // Insulated body: the stored heat equals α Σλ (K^θθ 1 = 0), and the capacity-weighted mean
+    // temperature rise is α Σλ / (ρ c_p V).
+    let q = h.heat.last().unwrap();
+    assert!((q.frictional - alpha * total_impulse).abs() < 1e-12 * q.frictional);
+    assert!(
+        (q.stored - q.frictional).abs() < 1e-9 * q.frictional,
+        "{q:?}"
+    );
+    let theta = &h.x_final[nu..];
+    let c1: Vec<f64> = (0..nt).map(|a| (0..nt).map(|b| ct[(a, b)]).sum()).collect();
+    let mean = c1.iter().zip(theta).map(|(c, t)| c * t).sum::<f64>() / c1.iter().sum::<f64>();
+    let volume: f64 = size.iter().product();
+    let expected = alpha * total_impulse / (mat.density * th.specific_heat * volume);
+    assert!(
+        (mean - expected).abs() < 1e-9 * expected,
+        "{mean} vs {expected}"
+    );
+}

@@ -5,11 +5,9 @@
 use std::path::PathBuf;
 
 use nlrom::case::Case;
-use nlrom::eigen::{lowest_modes, EigenOptions};
+use nlrom::eigen::{lowest_modes, symmetric_modes, EigenOptions};
 use nlrom::model::{self, StructuralModel};
-use nlrom::reduction::{
-    case_master_groups, craig_bampton, dense, partition, CbOptions, CraigBampton,
-};
+use nlrom::reduction::{case_master_groups, craig_bampton, partition, CbOptions, CraigBampton};
 use nlrom::rom::MasterRole;
 use nlrom::Error;
 
@@ -95,7 +93,7 @@ fn error_table(cb: &CraigBampton, f_full: &[f64], n_interior: usize) -> (Vec<f64
         let n = n_b + n_m;
         let k = cb.stiffness.as_ref().submatrix(0, 0, n, n);
         let m = cb.mass.as_ref().submatrix(0, 0, n, n);
-        let (lambda, _) = dense::symmetric_modes(k, m).expect("CB modes");
+        let (lambda, _) = symmetric_modes(k, m).expect("CB modes");
         let f_cb: Vec<f64> = lambda[..n_ref]
             .iter()
             .map(|l| l.sqrt() / (2.0 * std::f64::consts::PI))

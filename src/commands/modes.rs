@@ -11,10 +11,11 @@ use serde_json::{json, Value};
 
 use super::Reporter;
 use crate::case::Case;
+use crate::eigen::hermitian_modes;
 use crate::eigen::{lowest_modes, EigenOptions};
 use crate::error::{Error, Result};
 use crate::model;
-use crate::reduction::{hermitian_modes, Sector};
+use crate::reduction::Sector;
 
 /// The stage of the pipeline whose model `modes` solves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -86,10 +86,14 @@ mod input;
 mod krylov;
 mod lanczos;
 mod ordering;
+pub mod pencil;
 pub mod rows;
 mod shift_invert;
 
 pub use dense::{self_adjoint_eigen_qr, self_adjoint_eigenvalues_qr};
+pub use pencil::{
+    frequencies_hz, hermitian_eigenvalues, hermitian_modes, symmetric_modes, DenseModes,
+};
 pub use rows::CholeskyFactor;
 pub use shift_invert::{FillOrdering, ShiftInvert};
 

@@ -118,7 +118,7 @@ fn det3(j: &[[f64; 3]; 3]) -> f64 {
 }
 
 /// det J at point `q`, or the bad point when it is not positive (or not finite).
-fn det_at(
+pub(crate) fn det_at(
     tab: &Tabulated,
     q: usize,
     xs: &[[f64; 3]],
@@ -136,7 +136,7 @@ fn det_at(
 }
 
 /// Physical gradients ∇Nₐ = J⁻ᵀ ∂Nₐ/∂ξ at point `q` into `grads`; returns det J.
-fn gradients(
+pub(crate) fn gradients(
     tab: &Tabulated,
     q: usize,
     xs: &[[f64; 3]],
@@ -313,7 +313,7 @@ pub(crate) fn unsupported(kind: ElementType) -> Error {
 }
 
 /// Tabulation of the rule of `degree` (or the type's default for the matrix `which`).
-fn table(
+pub(crate) fn table(
     kind: ElementType,
     xs: &[[f64; 3]],
     degree: Option<u32>,
@@ -331,7 +331,7 @@ fn table(
     Tabulated::for_degree(kind, d)
 }
 
-fn bad_element(kind: ElementType, b: BadJacobian) -> Error {
+pub(crate) fn bad_element(kind: ElementType, b: BadJacobian) -> Error {
     Error::input(format!(
         "{kind} element with a non-positive Jacobian determinant ({}): it is inverted or degenerate",
         b.describe()

@@ -19,6 +19,7 @@
 //! | [`bc`] | [`clamp`] → [`FreeModel`] (clamped DOF eliminated) |
 //! | [`checks`] | mesh volume, total mass, rigid-body modes |
 //! | [`structured`] | structured box meshes for tests and benchmarks |
+//! | [`thermal`] | heat capacity, conductance and thermoelastic coupling (same shape functions) |
 //!
 //! ## Default quadrature
 //!
@@ -64,6 +65,7 @@ pub mod material;
 pub mod quadrature;
 pub mod shape;
 pub mod structured;
+pub mod thermal;
 
 pub use assembly::{assemble, Assembled};
 pub use bc::{clamp, eliminate, FreeModel};

@@ -23,6 +23,15 @@ pub fn matvec_add(a: &[f64], x: &[f64], y: &mut [f64]) {
     }
 }
 
+/// y += α A x for row-major `a` (n×n).
+pub fn matvec_scaled_add(alpha: f64, a: &[f64], x: &[f64], y: &mut [f64]) {
+    let n = x.len();
+    for (i, yi) in y.iter_mut().enumerate() {
+        let row = &a[i * n..(i + 1) * n];
+        *yi += alpha * row.iter().zip(x).map(|(aij, xj)| aij * xj).sum::<f64>();
+    }
+}
+
 fn to_faer(a: &[f64], n: usize) -> Mat<f64> {
     Mat::from_fn(n, n, |i, j| a[i * n + j])
 }
@@ -54,6 +63,78 @@ pub fn inverse(a: &[f64], n: usize) -> Option<Vec<f64>> {
         }
     }
     (worst <= 1e-8).then_some(out)
+}
+
+/// An LU factorisation (partial pivoting, faer) held in buffers sized once, for a step matrix
+/// factored and used within one step only (the closing step of a period in the adaptive march):
+/// [`ScratchLu::factor`] and [`ScratchLu::solve`] allocate nothing.
+pub struct ScratchLu {
+    lu: Mat<f64>,
+    rhs: Mat<f64>,
+    perm: Vec<usize>,
+    perm_inv: Vec<usize>,
+    stack: faer::dyn_stack::MemBuffer,
+}
+
+impl ScratchLu {
+    /// Buffers for n × n matrices.
+    pub fn new(n: usize) -> Self {
+        use faer::linalg::lu::partial_pivoting::{factor, solve};
+        let par = faer::Par::Seq;
+        let req = factor::lu_in_place_scratch::<usize, f64>(n, n, par, Default::default())
+            .or(solve::solve_in_place_scratch::<usize, f64>(n, 1, par));
+        ScratchLu {
+            lu: Mat::zeros(n, n),
+            rhs: Mat::zeros(n, 1),
+            perm: vec![0; n],
+            perm_inv: vec![0; n],
+            stack: faer::dyn_stack::MemBuffer::new(req),
+        }
+    }
+
+    /// Factors row-major `a` (n×n); false when a pivot is zero or not finite (singular).
+    pub fn factor(&mut self, a: &[f64]) -> bool {
+        use faer::linalg::lu::partial_pivoting::factor;
+        let n = self.lu.nrows();
+        for j in 0..n {
+            for i in 0..n {
+                self.lu[(i, j)] = a[i * n + j];
+            }
+        }
+        factor::lu_in_place(
+            self.lu.as_mut(),
+            &mut self.perm,
+            &mut self.perm_inv,
+            faer::Par::Seq,
+            faer::dyn_stack::MemStack::new(&mut self.stack),
+            Default::default(),
+        );
+        (0..n).all(|i| {
+            let d = self.lu[(i, i)];
+            d.is_finite() && d != 0.0
+        })
+    }
+
+    /// x = A⁻¹ b with the last factored A.
+    pub fn solve(&mut self, b: &[f64], x: &mut [f64]) {
+        use faer::linalg::lu::partial_pivoting::solve;
+        let n = self.lu.nrows();
+        for (i, &bi) in b.iter().enumerate() {
+            self.rhs[(i, 0)] = bi;
+        }
+        let perm = faer::perm::PermRef::new_checked(&self.perm, &self.perm_inv, n);
+        solve::solve_in_place(
+            self.lu.as_ref(),
+            self.lu.as_ref(),
+            perm,
+            self.rhs.as_mut(),
+            faer::Par::Seq,
+            faer::dyn_stack::MemStack::new(&mut self.stack),
+        );
+        for (i, xi) in x.iter_mut().enumerate() {
+            *xi = self.rhs[(i, 0)];
+        }
+    }
 }
 
 /// The spectral radius max |λ| of row-major `a` (n×n, not necessarily symmetric).
@@ -103,6 +184,17 @@ mod tests {
             }
         }
         assert!(inverse(&[1.0, 2.0, 2.0, 4.0], 2).is_none());
+        // the scratch LU solves like the inverse
+        let mut lu = ScratchLu::new(3);
+        assert!(lu.factor(&a));
+        let b = [1.0, -2.0, 0.5];
+        let (mut x, mut y) = ([0.0; 3], [0.0; 3]);
+        lu.solve(&b, &mut x);
+        matvec(&inv, &b, &mut y);
+        for (p, q) in x.iter().zip(&y) {
+            assert!((p - q).abs() < 1e-14);
+        }
+        assert!(!lu.factor(&[1.0, 2.0, 0.0, 2.0, 4.0, 0.0, 0.0, 0.0, 1.0]));
         // rotation-like matrix: eigenvalues ±2i, spectral radius 2
         let r = spectral_radius(&[0.0, -2.0, 2.0, 0.0], 2).unwrap();
         assert!((r - 2.0).abs() < 1e-12);

@@ -84,6 +84,25 @@ impl Element {
         }
     }
 
+    /// The prescribed parts (p_t(t), p_n(t)) (m) at time `t`; p_n = 0 without a normal.
+    pub fn prescribed_at(&self, omega: f64, t: f64) -> (f64, f64) {
+        (
+            self.tangential.prescribed.at(omega, t),
+            self.normal
+                .as_ref()
+                .map_or(0.0, |n| n.prescribed.at(omega, t)),
+        )
+    }
+
+    /// (u_t, v) at displacement `q` with the prescribed parts `pt`, `pn` (m) of the instant
+    /// already evaluated ([`Element::prescribed_at`]).
+    pub fn local_with(&self, q: &[f64], pt: f64, pn: f64) -> Local {
+        Local {
+            ut: self.tangential.dot(q) + pt,
+            v: self.normal.as_ref().map_or(0.0, |n| n.dot(q) + pn),
+        }
+    }
+
     /// The time-discrete law at (u_t, v) with the slider at `w` (m) from the previous step.
     pub fn sample(&self, local: Local, w: f64) -> LawSample {
         let v = self.normal.as_ref().map(|_| local.v);
@@ -114,19 +133,35 @@ impl Element {
         k: &mut [f64],
         r: &mut [f64],
     ) {
+        let (pt, pn) = self.prescribed_at(omega, t);
+        self.add_linear_piece_with(state, w, pt, pn, Some(k), r);
+    }
+
+    /// [`Element::add_linear_piece`] with the prescribed parts `pt`, `pn` (m) of the instant
+    /// already evaluated; `k` = `None` adds r_c alone (the state's K_c is then factored already).
+    pub fn add_linear_piece_with(
+        &self,
+        state: ContactState,
+        w: f64,
+        pt: f64,
+        pn: f64,
+        mut k: Option<&mut [f64]>,
+        r: &mut [f64],
+    ) {
         let n = r.len();
         let p = &self.params;
         let gt = &self.tangential;
-        let pt = gt.prescribed.at(omega, t);
         // f_n = a_n + k_n g_n·q (a_n: the constant part), when in contact.
         let (an, gn) = match &self.normal {
-            Some(d) => (p.n0 + p.kn * d.prescribed.at(omega, t), Some(d)),
+            Some(d) => (p.n0 + p.kn * pn, Some(d)),
             None => (p.n0, None),
         };
         // −g_n f_n = −g_n (a_n + k_n g_n·q), when this element applies the normal force.
-        let add_normal = |k: &mut [f64], r: &mut [f64]| {
+        let add_normal = |k: &mut Option<&mut [f64]>, r: &mut [f64]| {
             if let Some(gn) = gn.filter(|_| self.applies_normal) {
-                outer_add(k, n, p.kn, gn, gn);
+                if let Some(k) = k.as_deref_mut() {
+                    outer_add(k, n, p.kn, gn, gn);
+                }
                 gn.axpy(-an, r);
             }
         };
@@ -134,17 +169,19 @@ impl Element {
             ContactState::Separated => {}
             ContactState::Stick => {
                 // −g_t k_t (g_t·q + p_t − w)
-                outer_add(k, n, p.kt, gt, gt);
+                if let Some(k) = k.as_deref_mut() {
+                    outer_add(k, n, p.kt, gt, gt);
+                }
                 gt.axpy(-p.kt * (pt - w), r);
-                add_normal(k, r);
+                add_normal(&mut k, r);
             }
             ContactState::Slip(s) => {
                 let sm = s.value() * p.mu;
                 gt.axpy(-sm * an, r);
-                if let Some(gn) = gn {
+                if let (Some(gn), Some(k)) = (gn, k.as_deref_mut()) {
                     outer_add(k, n, sm * p.kn, gt, gn);
                 }
-                add_normal(k, r);
+                add_normal(&mut k, r);
             }
         }
     }

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use super::law::{ContactState, LawSample};
 use super::periodic;
-use super::schemes::{self, Cache, Kinematics, StepContext, StepOutcome};
+use super::schemes::{self, Cache, Excitation, Kinematics, Snapshot, StepContext, Workspace};
 use super::system::{InitialCondition, MarchSystem};
 use crate::case::MarchScheme;
 use crate::error::{Error, Result};
@@ -159,20 +159,24 @@ impl MarchHistory {
         self.time.is_empty()
     }
 
-    fn push(
-        &mut self,
-        sys: &MarchSystem,
-        omega: f64,
-        t: f64,
-        kin: &Kinematics,
-        s: &[LawSample],
-        it: u32,
-    ) {
+    /// Room for `steps` more instants of `n` DOF and `ne` elements.
+    fn reserve(&mut self, steps: usize, n: usize, ne: usize) {
+        self.time.reserve(steps);
+        self.q.reserve(steps * n);
+        self.v.reserve(steps * n);
+        self.local.reserve(steps * ne * 2);
+        self.force.reserve(steps * ne * 2);
+        self.state.reserve(steps * ne);
+        self.iterations.reserve(steps);
+    }
+
+    /// Records the instant `t` (the prescribed parts of the elements from `exc`).
+    fn push(&mut self, sys: &MarchSystem, t: f64, now: &Snapshot, exc: &Excitation, it: u32) {
         self.time.push(t);
-        self.q.extend_from_slice(&kin.q);
-        self.v.extend_from_slice(&kin.v);
-        for (e, smp) in sys.elements.iter().zip(s) {
-            let l = e.local(&kin.q, omega, t);
+        self.q.extend_from_slice(&now.kin.q);
+        self.v.extend_from_slice(&now.kin.v);
+        for (i, (e, smp)) in sys.elements.iter().zip(&now.samples).enumerate() {
+            let l = e.local_with(&now.kin.q, exc.pt[i], exc.pn[i]);
             self.local.extend_from_slice(&[l.ut, l.v]);
             self.force.extend_from_slice(&[smp.f_t, smp.f_n]);
             self.state.push(smp.state.code());
@@ -253,152 +257,355 @@ impl MarchOutcome {
     }
 }
 
-/// The state the loop carries from one step to the next.
-struct Current {
+/// A march in progress, advanced one excitation period at a time ([`Marcher::march_period`]):
+/// the model, the settings, the caches of step matrices and factors, the excitation of every
+/// step of a period (fixed step) and the buffers of the steps, all set up by [`Marcher::new`], so
+/// that a period whose step sizes and contact states have been met allocates nothing.
+pub struct Marcher<'a> {
+    sys: &'a MarchSystem,
+    settings: &'a MarchSettings,
+    start: Instant,
+    cache: Cache,
+    ws: Workspace,
+    cur: Snapshot,
+    next: Snapshot,
     t: f64,
-    kin: Kinematics,
-    samples: Vec<LawSample>,
+    /// The excitation of the current step (adaptive step) or of t = 0.
+    excitation: Excitation,
+    /// Fixed step: (end time within the period, step, excitation at the end) of each step.
+    table: Vec<(f64, f64, Excitation)>,
+    tolerance: f64,
+    dt_max: f64,
+    /// Adaptive step per contact-state combination (codes).
+    adaptive_dt: HashMap<Vec<u8>, f64>,
+    codes: Vec<u8>,
+    history: MarchHistory,
+    summaries: Vec<PeriodSummary>,
+    steady_period: Option<usize>,
+    rejected: usize,
+    total_iterations: u64,
+    step_range: (f64, f64),
+    prev_q: Vec<f64>,
+    prev_v: Vec<f64>,
 }
 
-impl Current {
-    fn states(&self) -> Vec<ContactState> {
-        self.samples.iter().map(|s| s.state).collect()
-    }
-
-    fn sliders(&self) -> Vec<f64> {
-        self.samples.iter().map(|s| s.slider).collect()
-    }
-}
-
-/// Marches `sys` with `settings`.
-pub fn march(sys: &MarchSystem, settings: &MarchSettings) -> Result<MarchOutcome> {
-    settings.validate()?;
-    sys.validate("march model")?;
-    if settings.dynamic() && !sys.mass_is_positive_definite() {
-        return Err(Error::input(format!(
-            "the {} scheme integrates inertia, but the model's mass matrix is not positive definite (a model without mass); use the quasi-static scheme or give the model mass",
-            settings.scheme
-        )));
-    }
-    let start = Instant::now();
-    let mut cache = Cache::default();
-    let tol = settings.tolerance * sys.displacement_scale;
-    let period = settings.period();
-    let dt_max = period / settings.steps_per_period as f64;
-    let fixed_dt = fixed_step(sys, settings, dt_max)?;
-    let mut periods_dt: HashMap<Vec<u8>, f64> = HashMap::new();
-    let mut dt_for = |states: &[ContactState]| -> f64 {
-        let key: Vec<u8> = states.iter().map(|s| s.code()).collect();
-        *periods_dt.entry(key).or_insert_with(|| {
-            sys.shortest_period(states)
-                .map_or(dt_max, |t| (settings.step_ratio * t).min(dt_max))
-        })
-    };
-
-    let mut cur = initial_state(sys, settings, &mut cache)?;
-    let mut history = MarchHistory::default();
-    history.push(sys, settings.omega, 0.0, &cur.kin, &cur.samples, 0);
-    let mut summaries = Vec::new();
-    let mut steady_period = None;
-    let (mut rejected, mut total_it) = (0usize, 0u64);
-    let (mut dt_min, mut dt_maxu) = (f64::INFINITY, 0.0f64);
-    let mut prev_end = (cur.kin.q.clone(), cur.kin.v.clone());
-    for p in 0..settings.periods {
-        let t_end = (p + 1) as f64 * period;
-        let first_index = history.len() - 1;
-        while t_end - cur.t > 1e-9 * period {
-            let remaining = t_end - cur.t;
-            let mut dt = if settings.adaptive() {
-                dt_for(&cur.states())
-            } else {
-                fixed_dt
-            };
-            if dt > remaining * (1.0 - 1e-9) {
-                dt = remaining;
+impl<'a> Marcher<'a> {
+    /// Checks the model and the settings, finds the initial state (at rest or in static
+    /// equilibrium), prepares the step matrices of the fixed step with the excitation of every
+    /// step of a period, and reserves the history of all the periods.
+    pub fn new(sys: &'a MarchSystem, settings: &'a MarchSettings) -> Result<Self> {
+        settings.validate()?;
+        sys.validate("march model")?;
+        if settings.dynamic() && !sys.mass_is_positive_definite() {
+            return Err(Error::input(format!(
+                "the {} scheme integrates inertia, but the model's mass matrix is not positive definite (a model without mass); use the quasi-static scheme or give the model mass",
+                settings.scheme
+            )));
+        }
+        let start = Instant::now();
+        let (n, ne) = (sys.n, sys.elements.len());
+        let mut cache = Cache::default();
+        let period = settings.period();
+        let dt_max = period / settings.steps_per_period as f64;
+        let cur = initial_state(sys, settings, &mut cache)?;
+        let mut m = Marcher {
+            sys,
+            settings,
+            start,
+            cache,
+            ws: Workspace::new(sys),
+            next: cur.clone(),
+            cur,
+            t: 0.0,
+            excitation: Excitation::at(sys, settings.omega, 0.0, settings.dynamic()),
+            table: Vec::new(),
+            tolerance: settings.tolerance * sys.displacement_scale,
+            dt_max,
+            adaptive_dt: HashMap::new(),
+            codes: Vec::with_capacity(ne),
+            history: MarchHistory::default(),
+            summaries: Vec::with_capacity(settings.periods),
+            steady_period: None,
+            rejected: 0,
+            total_iterations: 0,
+            step_range: (f64::INFINITY, 0.0),
+            prev_q: Vec::new(),
+            prev_v: Vec::new(),
+        };
+        let steps_per_period = if settings.adaptive() {
+            // the stiffest state (full stick) sets the shortest adaptive step (paper §4.2)
+            let dt = m.step_for(&sys.stick_states());
+            (1.25 * period / dt).ceil() as usize + 2
+        } else {
+            let dt = fixed_step(sys, settings, dt_max)?;
+            let mut t = 0.0;
+            while period - t > 1e-9 * period {
+                let remaining = period - t;
+                let h = if dt > remaining * (1.0 - 1e-9) {
+                    remaining
+                } else {
+                    dt
+                };
+                t = if h == remaining { period } else { t + h };
+                let exc = Excitation::at(sys, settings.omega, t, settings.dynamic());
+                m.table.push((t, h, exc));
             }
-            let mut out = step(sys, settings, &cur, dt, tol, &mut cache)?;
-            let mut its = out.iterations as u64;
-            if settings.adaptive() {
+            m.table.len()
+        };
+        m.history
+            .reserve(settings.periods * steps_per_period + 1, n, ne);
+        m.history.push(sys, 0.0, &m.cur, &m.excitation, 0);
+        m.prev_q = m.cur.kin.q.clone();
+        m.prev_v = m.cur.kin.v.clone();
+        Ok(m)
+    }
+
+    /// The adaptive step of the contact `states`: min(r·𝕋(states), largest step) (paper §4.2,
+    /// eq. 8), computed once per state combination.
+    fn step_for(&mut self, states: &[ContactState]) -> f64 {
+        self.codes.clear();
+        self.codes.extend(states.iter().map(|s| s.code()));
+        adaptive_step(
+            &mut self.adaptive_dt,
+            self.sys,
+            self.settings,
+            self.dt_max,
+            &self.codes,
+            states.iter().copied(),
+        )
+    }
+
+    /// Step-matrix factorisations made so far (a state or step size met for the first time).
+    pub fn factorisations(&self) -> usize {
+        self.cache.factorisations
+    }
+
+    /// Periods marched so far.
+    pub fn periods_done(&self) -> usize {
+        self.summaries.len()
+    }
+
+    /// Marches one excitation period; returns whether its end state repeated the previous
+    /// period's within the steady tolerance.
+    pub fn march_period(&mut self) -> Result<bool> {
+        let (sys, s) = (self.sys, self.settings);
+        let p = self.summaries.len();
+        let period = s.period();
+        let t0 = p as f64 * period;
+        let t_end = t0 + period;
+        let first_index = self.history.len() - 1;
+        if !s.adaptive() {
+            for (t_rel, dt, exc) in &self.table {
+                let t1 = if *t_rel == period { t_end } else { t0 + t_rel };
+                let ctx = context(sys, s, self.tolerance, t1, *dt, exc, false);
+                let its = step(
+                    s,
+                    &ctx,
+                    &self.cur,
+                    &mut self.cache,
+                    &mut self.ws,
+                    &mut self.next,
+                )?;
+                self.total_iterations += its as u64;
+                self.step_range = (self.step_range.0.min(*dt), self.step_range.1.max(*dt));
+                std::mem::swap(&mut self.cur, &mut self.next);
+                self.t = t1;
+                self.history.push(sys, t1, &self.cur, exc, its);
+            }
+        } else {
+            while t_end - self.t > 1e-9 * period {
+                let remaining = t_end - self.t;
+                let states = self.cur.samples.iter().map(|x| x.state);
+                state_codes_into(&self.cur.samples, &mut self.codes);
+                let mut dt = adaptive_step(
+                    &mut self.adaptive_dt,
+                    sys,
+                    s,
+                    self.dt_max,
+                    &self.codes,
+                    states,
+                );
+                // the step closing the period (shortened to its end) is a one-off size
+                let end_time = |dt: f64, t: f64| {
+                    if dt > remaining * (1.0 - 1e-9) {
+                        (remaining, t_end, true)
+                    } else {
+                        (dt, t + dt, false)
+                    }
+                };
+                let (h, mut t1, mut one_off) = end_time(dt, self.t);
+                dt = h;
+                self.excitation.fill(sys, s.omega, t1, true);
+                let ctx = context(sys, s, self.tolerance, t1, dt, &self.excitation, one_off);
+                let mut its = step(
+                    s,
+                    &ctx,
+                    &self.cur,
+                    &mut self.cache,
+                    &mut self.ws,
+                    &mut self.next,
+                )? as u64;
                 // paper §4.2: re-run with the smaller step the new state asks for
                 for _ in 0..8 {
-                    let states: Vec<ContactState> = out.samples.iter().map(|s| s.state).collect();
-                    let dt_new = dt_for(&states);
+                    state_codes_into(&self.next.samples, &mut self.codes);
+                    let states = self.next.samples.iter().map(|x| x.state);
+                    let dt_new = adaptive_step(
+                        &mut self.adaptive_dt,
+                        sys,
+                        s,
+                        self.dt_max,
+                        &self.codes,
+                        states,
+                    );
                     if dt_new >= dt * (1.0 - 1e-12) {
                         break;
                     }
-                    dt = dt_new;
-                    rejected += 1;
-                    out = step(sys, settings, &cur, dt, tol, &mut cache)?;
-                    its += out.iterations as u64;
+                    (dt, t1, one_off) = end_time(dt_new, self.t);
+                    self.rejected += 1;
+                    self.excitation.fill(sys, s.omega, t1, true);
+                    let ctx = context(sys, s, self.tolerance, t1, dt, &self.excitation, one_off);
+                    its += step(
+                        s,
+                        &ctx,
+                        &self.cur,
+                        &mut self.cache,
+                        &mut self.ws,
+                        &mut self.next,
+                    )? as u64;
                 }
+                self.total_iterations += its;
+                self.step_range = (self.step_range.0.min(dt), self.step_range.1.max(dt));
+                std::mem::swap(&mut self.cur, &mut self.next);
+                self.t = t1;
+                self.history.push(
+                    sys,
+                    t1,
+                    &self.cur,
+                    &self.excitation,
+                    its.min(u32::MAX as u64) as u32,
+                );
             }
-            total_it += its;
-            dt_min = dt_min.min(dt);
-            dt_maxu = dt_maxu.max(dt);
-            cur = Current {
-                t: if dt == remaining { t_end } else { cur.t + dt },
-                kin: out.kin,
-                samples: out.samples,
-            };
-            history.push(
-                sys,
-                settings.omega,
-                cur.t,
-                &cur.kin,
-                &cur.samples,
-                its.min(u32::MAX as u64) as u32,
-            );
         }
-        let end_index = history.len() - 1;
+        let end_index = self.history.len() - 1;
         let summary = periodic::summarize(
-            &history,
+            &self.history,
             sys,
-            settings.omega,
+            s.omega,
             first_index,
             end_index,
-            &prev_end,
+            (&self.prev_q, &self.prev_v),
             p > 0,
         );
-        prev_end = (cur.kin.q.clone(), cur.kin.v.clone());
+        self.prev_q.copy_from_slice(&self.cur.kin.q);
+        self.prev_v.copy_from_slice(&self.cur.kin.v);
         let steady = summary
             .periodicity_error
-            .is_some_and(|e| e < settings.steady_tolerance);
-        summaries.push(summary);
-        if steady && steady_period.is_none() {
-            steady_period = Some(p + 1);
-            if settings.stop_at_steady {
-                break;
-            }
+            .is_some_and(|e| e < s.steady_tolerance);
+        self.summaries.push(summary);
+        if steady && self.steady_period.is_none() {
+            self.steady_period = Some(p + 1);
+        }
+        Ok(steady)
+    }
+
+    /// The outcome: the history, the period summaries and the harmonics of the last period.
+    pub fn finish(self) -> MarchOutcome {
+        let summaries = self.summaries;
+        let history = self.history;
+        let last_end = summaries.last().map_or(0, |p| p.end_index);
+        let first_of_last = if summaries.len() >= 2 {
+            summaries[summaries.len() - 2].end_index
+        } else {
+            0
+        };
+        let harmonics = if last_end > first_of_last {
+            periodic::harmonics(
+                &history,
+                self.sys.n,
+                self.settings.omega,
+                first_of_last,
+                last_end,
+                self.settings.harmonics,
+            )
+        } else {
+            vec![vec![(0.0, 0.0); self.settings.harmonics + 1]; self.sys.n]
+        };
+        let steps = history.len() - 1;
+        MarchOutcome {
+            scheme: self.settings.scheme,
+            history,
+            periods: summaries,
+            steady_period: self.steady_period,
+            harmonics,
+            steps,
+            rejected_steps: self.rejected,
+            total_iterations: self.total_iterations,
+            step_range: self.step_range,
+            factorisations: self.cache.factorisations,
+            wall_seconds: self.start.elapsed().as_secs_f64(),
         }
     }
-    let last = summaries.last().expect("at least one period");
-    let first_of_last = if summaries.len() >= 2 {
-        summaries[summaries.len() - 2].end_index
-    } else {
-        0
-    };
-    let harmonics = periodic::harmonics(
-        &history,
-        sys.n,
-        settings.omega,
-        first_of_last,
-        last.end_index,
-        settings.harmonics,
-    );
-    let steps = history.len() - 1;
-    Ok(MarchOutcome {
-        scheme: settings.scheme,
-        history,
-        periods: summaries,
-        steady_period,
-        harmonics,
-        steps,
-        rejected_steps: rejected,
-        total_iterations: total_it,
-        step_range: (dt_min, dt_maxu),
-        factorisations: cache.factorisations,
-        wall_seconds: start.elapsed().as_secs_f64(),
-    })
+}
+
+/// The context of a step ending at `t1` after `dt` with the excitation `excitation` there.
+fn context<'b>(
+    sys: &'b MarchSystem,
+    s: &MarchSettings,
+    tolerance: f64,
+    t1: f64,
+    dt: f64,
+    excitation: &'b Excitation,
+    one_off: bool,
+) -> StepContext<'b> {
+    StepContext {
+        sys,
+        omega: s.omega,
+        t1,
+        dt,
+        tolerance,
+        max_iterations: s.max_iterations,
+        excitation,
+        one_off,
+    }
+}
+
+/// State codes of `samples` into `out`.
+fn state_codes_into(samples: &[LawSample], out: &mut Vec<u8>) {
+    schemes::state_codes(samples, out);
+}
+
+/// The adaptive step of the state with `codes` (states `states`), from `cache` or computed:
+/// min(r·𝕋(states), largest step) (paper §4.2, eq. 8).
+fn adaptive_step(
+    cache: &mut HashMap<Vec<u8>, f64>,
+    sys: &MarchSystem,
+    s: &MarchSettings,
+    dt_max: f64,
+    codes: &[u8],
+    states: impl Iterator<Item = ContactState>,
+) -> f64 {
+    if let Some(&dt) = cache.get(codes) {
+        return dt;
+    }
+    let states: Vec<ContactState> = states.collect();
+    let dt = sys
+        .shortest_period(&states)
+        .map_or(dt_max, |t| (s.step_ratio * t).min(dt_max));
+    cache.insert(codes.to_vec(), dt);
+    dt
+}
+
+/// Marches `sys` with `settings`: [`Marcher::march_period`] for each of the settings' periods,
+/// stopping at the first steady period when asked.
+pub fn march(sys: &MarchSystem, settings: &MarchSettings) -> Result<MarchOutcome> {
+    let mut m = Marcher::new(sys, settings)?;
+    for _ in 0..settings.periods {
+        let steady = m.march_period()?;
+        if steady && settings.stop_at_steady {
+            break;
+        }
+    }
+    Ok(m.finish())
 }
 
 /// The fixed step of the non-adaptive schemes: the explicit `time_step` (checked for the standard
@@ -432,34 +639,23 @@ fn fixed_step(sys: &MarchSystem, s: &MarchSettings, dt_max: f64) -> Result<f64> 
     }
 }
 
-/// One step of the chosen scheme from `cur` over `dt`.
+/// One step of the chosen scheme from `cur` into `next`; returns the iterations.
 fn step(
-    sys: &MarchSystem,
     s: &MarchSettings,
-    cur: &Current,
-    dt: f64,
-    tol: f64,
+    ctx: &StepContext,
+    cur: &Snapshot,
     cache: &mut Cache,
-) -> Result<StepOutcome> {
-    let ctx = StepContext {
-        sys,
-        omega: s.omega,
-        t1: cur.t + dt,
-        dt,
-        tolerance: tol,
-        max_iterations: s.max_iterations,
-    };
-    let sliders = cur.sliders();
+    ws: &mut Workspace,
+    next: &mut Snapshot,
+) -> Result<u32> {
     match s.scheme {
         MarchScheme::Newmark | MarchScheme::Adaptive => {
-            schemes::standard_step(&ctx, &cur.kin, &sliders, cache)
+            schemes::standard_step(ctx, cur, cache, ws, next)
         }
         MarchScheme::PiecewiseLinear | MarchScheme::AdaptivePiecewiseLinear => {
-            schemes::piecewise_linear_step(&ctx, &cur.kin, &cur.states(), &sliders, cache)
+            schemes::piecewise_linear_step(ctx, cur, cache, ws, next)
         }
-        MarchScheme::QuasiStatic => {
-            schemes::quasi_static_step(&ctx, &cur.kin, &cur.states(), &sliders, cache)
-        }
+        MarchScheme::QuasiStatic => schemes::quasi_static_step(ctx, cur, cache, ws, next),
         MarchScheme::MoreauJean | MarchScheme::Carpenter => Err(Error::input(format!(
             "the scheme `{}` does not march friction elements",
             s.scheme
@@ -474,20 +670,21 @@ const STATIC_LOAD_STEPS: usize = 20;
 /// prescribed motions at their mean (every contact predicted in stick, sliders at zero), then the
 /// prescribed motions brought to their t = 0 values in [`STATIC_LOAD_STEPS`] quasi-static
 /// increments, the sliders carried along (friction makes the static state path-dependent).
-/// Returns q at t = 0 with the sliders of the path's end in `sliders`.
+/// Returns q at t = 0 with the samples of the path's end.
 fn static_start(
     sys: &MarchSystem,
     s: &MarchSettings,
     cache: &mut Cache,
-) -> Result<(Vec<f64>, Vec<f64>)> {
-    let n = sys.n;
-    let mut kin = Kinematics {
-        q: vec![0.0; n],
-        v: vec![0.0; n],
-        a: vec![0.0; n],
-    };
-    let mut states = sys.stick_states();
-    let mut sliders = vec![0.0; sys.elements.len()];
+) -> Result<(Vec<f64>, Vec<LawSample>)> {
+    let (n, ne) = (sys.n, sys.elements.len());
+    let mut cur = Snapshot::new(n, ne);
+    cur.samples.extend(sys.elements.iter().map(|_| LawSample {
+        f_t: 0.0,
+        f_n: 0.0,
+        state: ContactState::Stick,
+        slider: 0.0,
+    }));
+    let mut next = Snapshot::new(n, ne);
     for j in 0..=STATIC_LOAD_STEPS {
         let scale = j as f64 / STATIC_LOAD_STEPS as f64;
         let mut scaled = sys.clone();
@@ -497,6 +694,7 @@ fn static_start(
                 d.prescribed.sin *= scale;
             }
         }
+        let exc = Excitation::at(&scaled, s.omega, 0.0, false);
         let ctx = StepContext {
             sys: &scaled,
             omega: s.omega,
@@ -504,28 +702,45 @@ fn static_start(
             dt: 1.0,
             tolerance: 0.0,
             max_iterations: s.max_iterations,
+            excitation: &exc,
+            one_off: false,
         };
         let mut fresh = Cache::default();
-        let out = schemes::quasi_static_step(&ctx, &kin, &states, &sliders, &mut fresh)
+        let mut ws = Workspace::new(&scaled);
+        schemes::quasi_static_step(&ctx, &cur, &mut fresh, &mut ws, &mut next)
             .map_err(|e| Error::Compute(format!("initial static equilibrium: {e}")))?;
         cache.factorisations += fresh.factorisations;
-        states = out.samples.iter().map(|x| x.state).collect();
-        sliders = out.samples.iter().map(|x| x.slider).collect();
-        kin.q = out.kin.q;
+        std::mem::swap(&mut cur, &mut next);
+        cur.kin.v.iter_mut().for_each(|x| *x = 0.0);
     }
-    Ok((kin.q, sliders))
+    Ok((cur.kin.q, cur.samples))
 }
 
 /// The state at t = 0: at rest (q = 0) or in static equilibrium; the acceleration from the
 /// equation of motion, M q̈ = f_e + f_c − K q − C q̇.
-fn initial_state(sys: &MarchSystem, s: &MarchSettings, cache: &mut Cache) -> Result<Current> {
+fn initial_state(sys: &MarchSystem, s: &MarchSettings, cache: &mut Cache) -> Result<Snapshot> {
     let n = sys.n;
-    let mut samples = Vec::new();
+    let mut samples = Vec::with_capacity(sys.elements.len());
     let (q, sliders) = match sys.initial {
         InitialCondition::Rest => (vec![0.0; n], vec![0.0; sys.elements.len()]),
-        InitialCondition::Static => static_start(sys, s, cache)?,
+        InitialCondition::Static => {
+            let (q, path) = static_start(sys, s, cache)?;
+            (q, path.iter().map(|x| x.slider).collect())
+        }
     };
     schemes::evaluate_law(sys, s.omega, 0.0, &q, &sliders, &mut samples);
+    finish_initial(sys, s, q, samples)
+}
+
+/// The initial snapshot from q (q̇ = 0) and its samples: q̈ = M⁻¹(f_e + f_c − K q) for the
+/// dynamic schemes, 0 for the quasi-static one.
+fn finish_initial(
+    sys: &MarchSystem,
+    s: &MarchSettings,
+    q: Vec<f64>,
+    samples: Vec<LawSample>,
+) -> Result<Snapshot> {
+    let n = sys.n;
     let v = vec![0.0; n];
     let mut a = vec![0.0; n];
     if s.dynamic() {
@@ -539,8 +754,7 @@ fn initial_state(sys: &MarchSystem, s: &MarchSettings, cache: &mut Cache) -> Res
             .ok_or_else(|| Error::input("the mass matrix is singular"))?;
         super::dense::matvec(&minv, &f, &mut a);
     }
-    Ok(Current {
-        t: 0.0,
+    Ok(Snapshot {
         kin: Kinematics { q, v, a },
         samples,
     })

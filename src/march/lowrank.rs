@@ -93,20 +93,32 @@ impl LowRank {
 
     /// x = A⁻¹ b for A = A_stick + U Vᵀ, given A_stick⁻¹ (n × n).
     pub fn solve(&self, stick_inverse: &[f64], b: &[f64], x: &mut [f64]) {
+        self.solve_with(stick_inverse, b, x, &mut Vec::new());
+    }
+
+    /// [`LowRank::solve`] with caller-held scratch of 2r entries (no allocation once its
+    /// capacity holds the rank).
+    pub fn solve_with(
+        &self,
+        stick_inverse: &[f64],
+        b: &[f64],
+        x: &mut [f64],
+        scratch: &mut Vec<f64>,
+    ) {
         dense::matvec(stick_inverse, b, x);
         let r = self.v.len();
         if r == 0 {
             return;
         }
-        let w: Vec<f64> = self
-            .v
-            .iter()
-            .map(|v| v.iter().map(|&(i, c)| c * x[i]).sum())
-            .collect();
-        let mut s = vec![0.0; r];
-        dense::matvec(&self.capacitance_inverse, &w, &mut s);
+        scratch.clear();
+        scratch.resize(2 * r, 0.0);
+        let (w, s) = scratch.split_at_mut(r);
+        for (wi, v) in w.iter_mut().zip(&self.v) {
+            *wi = v.iter().map(|&(i, c)| c * x[i]).sum();
+        }
+        dense::matvec(&self.capacitance_inverse, w, s);
         for (xj, zj) in x.iter_mut().zip(self.z.chunks_exact(r)) {
-            *xj -= zj.iter().zip(&s).map(|(a, b)| a * b).sum::<f64>();
+            *xj -= zj.iter().zip(s.iter()).map(|(a, b)| a * b).sum::<f64>();
         }
     }
 

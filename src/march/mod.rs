@@ -40,5 +40,5 @@ pub mod schemes;
 pub mod signal;
 pub mod system;
 
-pub use integrate::{march, MarchHistory, MarchOutcome, MarchSettings, PeriodSummary};
+pub use integrate::{march, MarchHistory, MarchOutcome, MarchSettings, Marcher, PeriodSummary};
 pub use system::{InitialCondition, MarchSystem};

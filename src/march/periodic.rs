@@ -7,7 +7,6 @@
 //! q(t) = Re Σ Q⁽ⁿ⁾ e^{inωt} (`docs/conventions.md` §4); the integrals by the trapezoidal rule over the
 //! recorded (possibly non-uniform) instants.
 
-use super::dense::norm_inf;
 use super::integrate::{MarchHistory, PeriodSummary};
 use super::system::MarchSystem;
 
@@ -19,7 +18,7 @@ pub fn summarize(
     omega: f64,
     first: usize,
     last: usize,
-    prev_end: &(Vec<f64>, Vec<f64>),
+    prev_end: (&[f64], &[f64]),
     compare: bool,
 ) -> PeriodSummary {
     let n = sys.n;
@@ -41,9 +40,9 @@ pub fn summarize(
     let periodicity_error = compare.then(|| {
         let q = &h.q[last * n..(last + 1) * n];
         let v = &h.v[last * n..(last + 1) * n];
-        let dq: Vec<f64> = q.iter().zip(&prev_end.0).map(|(a, b)| a - b).collect();
-        let dv: Vec<f64> = v.iter().zip(&prev_end.1).map(|(a, b)| a - b).collect();
-        (norm_inf(&dq) / amp).max(norm_inf(&dv) / (omega * amp))
+        let dq = max_difference(q, prev_end.0);
+        let dv = max_difference(v, prev_end.1);
+        (dq / amp).max(dv / (omega * amp))
     });
     let state_changes = (first + 1..=last)
         .filter(|&k| h.state[k * ne..(k + 1) * ne] != h.state[(k - 1) * ne..k * ne])
@@ -54,6 +53,11 @@ pub fn summarize(
         state_changes,
         steps: last - first,
     }
+}
+
+/// max_i |a_i − b_i|.
+fn max_difference(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).fold(0.0, |m, (x, y)| m.max((x - y).abs()))
 }
 
 /// Harmonics 0..=`harmonics` of every DOF over the instants `first..=last` (one period), as

@@ -9,6 +9,11 @@
 //! Symbols: q, q̇, q̈ at τ_n (the [`Kinematics`]), Δτ the step (s), w the sliders at τ_n (m).
 //! Newmark's relations (eq. A7) in displacement form: q̈₁ = (q₁ − q*)/(βΔτ²), q̇₁ = v* + γΔτ q̈₁ with
 //! q* = q + Δτ q̇ + Δτ²(½ − β) q̈ and v* = q̇ + Δτ(1 − γ) q̈.
+//!
+//! A step allocates nothing once its step size and contact states have been met: the step
+//! matrices and their factors are kept per step size in the [`Cache`], the excitation of the step's
+//! end is evaluated once per step ([`Excitation`]), and every intermediate vector lives in the
+//! [`Workspace`]; the result is written into a caller-held [`Snapshot`].
 
 use std::collections::HashMap;
 
@@ -34,15 +39,133 @@ pub struct Kinematics {
     pub a: Vec<f64>,
 }
 
-/// The converged end of a step.
+impl Kinematics {
+    /// Zero vectors of `n` DOF.
+    pub fn zeros(n: usize) -> Self {
+        Kinematics {
+            q: vec![0.0; n],
+            v: vec![0.0; n],
+            a: vec![0.0; n],
+        }
+    }
+}
+
+/// The state at one instant: kinematics and the law's sample of every element (forces, states,
+/// sliders).
 #[derive(Clone, Debug)]
-pub struct StepOutcome {
-    /// q, q̇, q̈ at τ_{n+1}.
+pub struct Snapshot {
+    /// q, q̇, q̈.
     pub kin: Kinematics,
-    /// The law's sample of every element at τ_{n+1} (forces, states, updated sliders).
+    /// One sample per element.
     pub samples: Vec<LawSample>,
-    /// Corrector iterations (contact-law evaluations of the whole system) the step took.
-    pub iterations: u32,
+}
+
+impl Snapshot {
+    /// Zero kinematics of `n` DOF and room for the samples of `elements` elements.
+    pub fn new(n: usize, elements: usize) -> Self {
+        Snapshot {
+            kin: Kinematics::zeros(n),
+            samples: Vec::with_capacity(elements),
+        }
+    }
+}
+
+/// The excitation at one instant, evaluated once per step: the force side per DOF (N; the dynamic
+/// force f_e + f_d of [`MarchSystem::dynamic_force`] for the Newmark schemes, f_e alone for the
+/// quasi-static method) and the prescribed parts p_t, p_n of every element (m).
+#[derive(Clone, Debug, Default)]
+pub struct Excitation {
+    /// Force per DOF (N).
+    pub force: Vec<f64>,
+    /// p_t(t) per element (m).
+    pub pt: Vec<f64>,
+    /// p_n(t) per element (m, 0 without a normal).
+    pub pn: Vec<f64>,
+}
+
+impl Excitation {
+    /// Sized for `sys`, all zero.
+    pub fn new(sys: &MarchSystem) -> Self {
+        Excitation {
+            force: vec![0.0; sys.n],
+            pt: vec![0.0; sys.elements.len()],
+            pn: vec![0.0; sys.elements.len()],
+        }
+    }
+
+    /// The excitation of `sys` at time `t` (s) for the frequency `omega` (rad/s); `dynamic`
+    /// selects the dynamic force (with the damping force of prescribed velocities).
+    pub fn fill(&mut self, sys: &MarchSystem, omega: f64, t: f64, dynamic: bool) {
+        if dynamic {
+            sys.dynamic_force(omega, t, &mut self.force);
+        } else {
+            sys.external_force(omega, t, &mut self.force);
+        }
+        for ((e, pt), pn) in sys.elements.iter().zip(&mut self.pt).zip(&mut self.pn) {
+            (*pt, *pn) = e.prescribed_at(omega, t);
+        }
+    }
+
+    /// [`Excitation::new`] then [`Excitation::fill`].
+    pub fn at(sys: &MarchSystem, omega: f64, t: f64, dynamic: bool) -> Self {
+        let mut e = Excitation::new(sys);
+        e.fill(sys, omega, t, dynamic);
+        e
+    }
+}
+
+/// Every intermediate vector of a step (sized once for the model).
+pub struct Workspace {
+    qs: Vec<f64>,
+    vs: Vec<f64>,
+    b: Vec<f64>,
+    rhs: Vec<f64>,
+    g: Vec<f64>,
+    dq: Vec<f64>,
+    qt: Vec<f64>,
+    r: Vec<f64>,
+    r_trial: Vec<f64>,
+    aq: Vec<f64>,
+    k: Vec<f64>,
+    trial: Vec<LawSample>,
+    states: Vec<ContactState>,
+    codes: Vec<u8>,
+    law_codes: Vec<u8>,
+    seen: Vec<u8>,
+    scratch: Vec<f64>,
+    unused_r: Vec<f64>,
+    lu: dense::ScratchLu,
+    damped: bool,
+}
+
+impl Workspace {
+    /// Buffers for `sys` (the step-matrix buffer K + K_c is sized when a factor is first built).
+    pub fn new(sys: &MarchSystem) -> Self {
+        let (n, ne) = (sys.n, sys.elements.len());
+        let v = || vec![0.0; n];
+        Workspace {
+            qs: v(),
+            vs: v(),
+            b: v(),
+            rhs: v(),
+            g: v(),
+            dq: v(),
+            qt: v(),
+            r: v(),
+            r_trial: v(),
+            aq: v(),
+            k: Vec::new(),
+            trial: Vec::with_capacity(ne),
+            states: Vec::with_capacity(ne),
+            codes: Vec::with_capacity(ne),
+            law_codes: Vec::with_capacity(ne),
+            seen: Vec::with_capacity(16 * ne),
+            scratch: Vec::with_capacity(4 * ne),
+            unused_r: v(),
+            lu: dense::ScratchLu::new(n),
+            damped: sys.damping.iter().any(|&c| c != 0.0),
+        }
+    }
 }
 
 /// Most memory (bytes) the factors of one step size's contact states may take: a model with many
@@ -67,9 +190,11 @@ impl StepFactor {
     }
 }
 
-/// Factors of the step matrices, kept while the step and the contact states repeat.
+/// Step matrices and their factors, kept per step size (and per contact state).
 #[derive(Default)]
 pub struct Cache {
+    /// Δτ bits → M/(βΔτ²) + γC/(βΔτ) (the inertia part of every Newmark step matrix).
+    inertia: HashMap<u64, Vec<f64>>,
     /// Δτ bits → (M/(βΔτ²) + γC/(βΔτ) + K)⁻¹ for the standard corrector.
     structural: HashMap<u64, Vec<f64>>,
     /// Δτ bits (0 for the quasi-static method) → state codes → factor of the step matrix, with
@@ -82,11 +207,47 @@ pub struct Cache {
 }
 
 impl Cache {
+    /// Makes sure M/(βΔτ²) + γC/(βΔτ) of the step `dt` is held (key Δτ bits).
+    fn ensure_inertia(&mut self, sys: &MarchSystem, dt: f64) {
+        self.inertia.entry(dt.to_bits()).or_insert_with(|| {
+            let cm = 1.0 / (BETA * dt * dt);
+            let cc = GAMMA / (BETA * dt);
+            sys.mass
+                .iter()
+                .zip(&sys.damping)
+                .map(|(m, c)| cm * m + cc * c)
+                .collect()
+        });
+    }
+
+    /// Makes sure the inverse of the standard corrector's S = M/(βΔτ²) + γC/(βΔτ) + K is held.
+    fn ensure_structural(&mut self, sys: &MarchSystem, dt: f64) -> Result<()> {
+        let key = dt.to_bits();
+        if self.structural.contains_key(&key) {
+            return Ok(());
+        }
+        self.ensure_inertia(sys, dt);
+        let s: Vec<f64> = self.inertia[&key]
+            .iter()
+            .zip(&sys.stiffness)
+            .map(|(p, k)| p + k)
+            .collect();
+        let inv = dense::inverse(&s, sys.n).ok_or_else(|| {
+            Error::Compute(format!(
+                "the Newmark matrix M/(βΔτ²) + γC/(βΔτ) + K is singular (Δτ = {dt:e} s): the model needs mass"
+            ))
+        })?;
+        self.factorisations += 1;
+        self.structural.insert(key, inv);
+        Ok(())
+    }
+
     /// x = A⁻¹ b for the piecewise-linear step matrix A of the contact `states` (codes `codes`;
-    /// `k` = K + K_c(states); A adds M/(βΔτ²) + γC/(βΔτ) when `dynamic`): its factor is cached per
-    /// step size (key Δτ bits, 0 for the quasi-static method) within [`MAX_CACHED_BYTES`], as
-    /// the inverse, or as a low-rank change of the all-stick inverse when the states differ from
-    /// full stick by a rank below n/2 ([`super::lowrank`]).
+    /// A = K + K_c(states), plus M/(βΔτ²) + γC/(βΔτ) when `dynamic`): its factor is built on the
+    /// first visit of the state (into `k`, the n × n buffer) and cached per step size (key Δτ bits,
+    /// 0 for the quasi-static method) within [`MAX_CACHED_BYTES`], as the inverse, or as a low-rank
+    /// change of the all-stick inverse when the states differ from full stick by a rank below n/2
+    /// ([`super::lowrank`]).
     #[allow(clippy::too_many_arguments)]
     fn step_solve(
         &mut self,
@@ -94,56 +255,119 @@ impl Cache {
         dynamic: bool,
         states: &[ContactState],
         codes: &[u8],
-        k: &[f64],
         b: &[f64],
         x: &mut [f64],
+        k: &mut Vec<f64>,
+        scratch: &mut Vec<f64>,
+        one_off: Option<(&mut dense::ScratchLu, &mut Vec<f64>)>,
+    ) -> Result<()> {
+        if let (true, Some((lu, unused_r))) = (dynamic, one_off) {
+            let sys = ctx.sys;
+            one_off_matrix(sys, ctx.dt, states, k, unused_r);
+            if !lu.factor(k) {
+                return Err(singular(sys, step_name(dynamic), ctx.t1, codes));
+            }
+            lu.solve(b, x);
+            return Ok(());
+        }
+        let dt_key = if dynamic { ctx.dt.to_bits() } else { 0 };
+        let known = self
+            .piecewise
+            .get(&dt_key)
+            .is_some_and(|(per, _)| per.contains_key(codes));
+        if !known {
+            self.build_factor(ctx, dynamic, states, codes, k)?;
+        }
+        match &self.piecewise[&dt_key].0[codes] {
+            StepFactor::Full(inv) => dense::matvec(inv, b, x),
+            StepFactor::LowRank(l) => l.solve_with(&self.stick[&dt_key], b, x, scratch),
+        }
+        Ok(())
+    }
+
+    /// The factor of a state met for the first time ([`Cache::step_solve`]).
+    fn build_factor(
+        &mut self,
+        ctx: &StepContext,
+        dynamic: bool,
+        states: &[ContactState],
+        codes: &[u8],
+        k: &mut Vec<f64>,
     ) -> Result<()> {
         let (sys, n) = (ctx.sys, ctx.sys.n);
         let dt_key = if dynamic { ctx.dt.to_bits() } else { 0 };
-        let step_matrix = |k: &[f64]| {
-            if dynamic {
-                dynamic_matrix(sys, ctx.dt, k)
-            } else {
-                k.to_vec()
+        if dynamic {
+            self.ensure_inertia(sys, ctx.dt);
+        }
+        let inertia = dynamic.then(|| self.inertia[&dt_key].clone());
+        let step_matrix = |states: &[ContactState], k: &mut Vec<f64>| {
+            k.clear();
+            k.extend_from_slice(&sys.stiffness);
+            for (e, &s) in sys.elements.iter().zip(states) {
+                e.add_stiffness(s, k, n);
+            }
+            if let Some(p) = &inertia {
+                k.iter_mut().zip(p).for_each(|(a, b)| *a += b);
+            }
+        };
+        let cols = lowrank::columns(&sys.elements, states);
+        let mut factor = None;
+        if 2 * cols.len() < n {
+            if let std::collections::hash_map::Entry::Vacant(e) = self.stick.entry(dt_key) {
+                step_matrix(&sys.stick_states(), k);
+                if let Some(inv) = dense::inverse(k, n) {
+                    e.insert(inv);
+                    self.factorisations += 1;
+                }
+            }
+            factor = self
+                .stick
+                .get(&dt_key)
+                .and_then(|inv| LowRank::new(inv, n, cols).map(StepFactor::LowRank));
+        }
+        let factor = match factor {
+            Some(f) => f,
+            None => {
+                step_matrix(states, k);
+                StepFactor::Full(
+                    dense::inverse(k, n)
+                        .ok_or_else(|| singular(sys, step_name(dynamic), ctx.t1, codes))?,
+                )
             }
         };
         let (per, held) = self.piecewise.entry(dt_key).or_default();
-        if !per.contains_key(codes) {
-            let cols = lowrank::columns(&sys.elements, states);
-            let mut factor = None;
-            if 2 * cols.len() < n {
-                if let std::collections::hash_map::Entry::Vacant(e) = self.stick.entry(dt_key) {
-                    let a = step_matrix(&sys.effective_stiffness(&sys.stick_states()));
-                    if let Some(inv) = dense::inverse(&a, n) {
-                        e.insert(inv);
-                        self.factorisations += 1;
-                    }
-                }
-                factor = self
-                    .stick
-                    .get(&dt_key)
-                    .and_then(|inv| LowRank::new(inv, n, cols).map(StepFactor::LowRank));
-            }
-            let factor = match factor {
-                Some(f) => f,
-                None => StepFactor::Full(
-                    dense::inverse(&step_matrix(k), n)
-                        .ok_or_else(|| singular(sys, step_name(dynamic), ctx.t1, codes))?,
-                ),
-            };
-            if (*held + factor.entries()) * std::mem::size_of::<f64>() > MAX_CACHED_BYTES {
-                per.clear();
-                *held = 0;
-            }
-            *held += factor.entries();
-            per.insert(codes.to_vec(), factor);
-            self.factorisations += 1;
+        if (*held + factor.entries()) * std::mem::size_of::<f64>() > MAX_CACHED_BYTES {
+            per.clear();
+            *held = 0;
         }
-        match &per[codes] {
-            StepFactor::Full(inv) => dense::matvec(inv, b, x),
-            StepFactor::LowRank(l) => l.solve(&self.stick[&dt_key], b, x),
-        }
+        *held += factor.entries();
+        per.insert(codes.to_vec(), factor);
+        self.factorisations += 1;
         Ok(())
+    }
+}
+
+/// The step matrix M/(βΔτ²) + γC/(βΔτ) + K + K_c(states) (row-major) into `k` (resized to n²
+/// on first use), `r` an n-vector of scratch.
+fn one_off_matrix(
+    sys: &MarchSystem,
+    dt: f64,
+    states: &[ContactState],
+    k: &mut Vec<f64>,
+    r: &mut [f64],
+) {
+    let cm = 1.0 / (BETA * dt * dt);
+    let cc = GAMMA / (BETA * dt);
+    k.clear();
+    k.extend(
+        sys.stiffness
+            .iter()
+            .zip(&sys.mass)
+            .zip(&sys.damping)
+            .map(|((k, m), c)| k + cm * m + cc * c),
+    );
+    for (e, &s) in sys.elements.iter().zip(states) {
+        e.add_linear_piece_with(s, 0.0, 0.0, 0.0, Some(k), r);
     }
 }
 
@@ -171,6 +395,12 @@ pub struct StepContext<'a> {
     pub tolerance: f64,
     /// Most corrector iterations.
     pub max_iterations: u32,
+    /// The excitation at τ_{n+1} (dynamic force for the Newmark schemes, f_e for the
+    /// quasi-static method).
+    pub excitation: &'a Excitation,
+    /// A step size met once (the adaptive march's step closing a period): its step matrices
+    /// are factored in the [`Workspace`] and not cached.
+    pub one_off: bool,
 }
 
 /// The law at q for every element, from the sliders `w` at τ_n.
@@ -191,6 +421,25 @@ pub fn evaluate_law(
     );
 }
 
+/// The law at q for every element with the prescribed parts of `exc` and the sliders of `prev`
+/// (the samples at τ_n).
+pub fn evaluate_law_with(
+    sys: &MarchSystem,
+    exc: &Excitation,
+    q: &[f64],
+    prev: &[LawSample],
+    out: &mut Vec<LawSample>,
+) {
+    out.clear();
+    out.extend(
+        sys.elements
+            .iter()
+            .zip(prev)
+            .zip(exc.pt.iter().zip(&exc.pn))
+            .map(|((e, p), (&pt, &pn))| e.sample(e.local_with(q, pt, pn), p.slider)),
+    );
+}
+
 /// The contact force f_c = Σ −g_t f_t − g_n f_n of the samples, added to `f`.
 pub fn add_contact_force(sys: &MarchSystem, samples: &[LawSample], f: &mut [f64]) {
     for (e, s) in sys.elements.iter().zip(samples) {
@@ -204,42 +453,42 @@ pub fn state_codes(samples: &[LawSample], out: &mut Vec<u8>) {
     out.extend(samples.iter().map(|s| s.state.code()));
 }
 
-/// q* and v* of Newmark's relations.
-fn newmark_predictors(k: &Kinematics, dt: f64) -> (Vec<f64>, Vec<f64>) {
-    let qs = (0..k.q.len())
-        .map(|i| k.q[i] + dt * k.v[i] + dt * dt * (0.5 - BETA) * k.a[i])
-        .collect();
-    let vs = (0..k.q.len())
-        .map(|i| k.v[i] + dt * (1.0 - GAMMA) * k.a[i])
-        .collect();
-    (qs, vs)
+/// q* and v* of Newmark's relations into `qs`, `vs`.
+fn newmark_predictors(k: &Kinematics, dt: f64, qs: &mut [f64], vs: &mut [f64]) {
+    for i in 0..k.q.len() {
+        qs[i] = k.q[i] + dt * k.v[i] + dt * dt * (0.5 - BETA) * k.a[i];
+        vs[i] = k.v[i] + dt * (1.0 - GAMMA) * k.a[i];
+    }
 }
 
-/// q̈₁, q̇₁ from q₁ by Newmark's relations.
-fn newmark_rates(q1: &[f64], qs: &[f64], vs: &[f64], dt: f64) -> (Vec<f64>, Vec<f64>) {
-    let a1: Vec<f64> = q1
-        .iter()
-        .zip(qs)
-        .map(|(q, s)| (q - s) / (BETA * dt * dt))
-        .collect();
-    let v1 = vs
-        .iter()
-        .zip(&a1)
-        .map(|(v, a)| v + GAMMA * dt * a)
-        .collect();
-    (a1, v1)
+/// q̈₁, q̇₁ of `kin` from its q₁ by Newmark's relations.
+fn newmark_rates(kin: &mut Kinematics, qs: &[f64], vs: &[f64], dt: f64) {
+    for i in 0..kin.q.len() {
+        kin.a[i] = (kin.q[i] - qs[i]) / (BETA * dt * dt);
+        kin.v[i] = vs[i] + GAMMA * dt * kin.a[i];
+    }
 }
 
-/// The step matrix M/(βΔτ²) + γC/(βΔτ) + K_eff (row-major) for a stiffness `k_eff`.
-fn dynamic_matrix(sys: &MarchSystem, dt: f64, k_eff: &[f64]) -> Vec<f64> {
+/// The Newmark right-hand side b = f + M q*/(βΔτ²) + C (γ q*/(βΔτ) − v*) =
+/// f + P q* − C v* with P = M/(βΔτ²) + γC/(βΔτ), into `ws.b` (predictors in `ws.qs`, `ws.vs`).
+fn newmark_rhs(sys: &MarchSystem, p: &[f64], force: &[f64], ws: &mut Workspace) {
+    dense::matvec(p, &ws.qs, &mut ws.b);
+    if ws.damped {
+        dense::matvec_scaled_add(-1.0, &sys.damping, &ws.vs, &mut ws.b);
+    }
+    ws.b.iter_mut().zip(force).for_each(|(b, f)| *b += f);
+}
+
+/// [`newmark_rhs`] without the cached P: b = f + (M/(βΔτ²) + γC/(βΔτ)) q* − C v*.
+fn newmark_rhs_direct(sys: &MarchSystem, dt: f64, force: &[f64], ws: &mut Workspace) {
     let cm = 1.0 / (BETA * dt * dt);
     let cc = GAMMA / (BETA * dt);
-    k_eff
-        .iter()
-        .zip(&sys.mass)
-        .zip(&sys.damping)
-        .map(|((k, m), c)| k + cm * m + cc * c)
-        .collect()
+    ws.b.copy_from_slice(force);
+    dense::matvec_scaled_add(cm, &sys.mass, &ws.qs, &mut ws.b);
+    if ws.damped {
+        dense::matvec_scaled_add(cc, &sys.damping, &ws.qs, &mut ws.b);
+        dense::matvec_scaled_add(-1.0, &sys.damping, &ws.vs, &mut ws.b);
+    }
 }
 
 fn singular(sys: &MarchSystem, what: &str, t: f64, states: &[u8]) -> Error {
@@ -270,54 +519,66 @@ pub fn state_name(code: u8) -> &'static str {
 /// S = M/(βΔτ²) + γC/(βΔτ) + K (the paper's M/(βΔτ²) for the rigid damper), (A11) q̃ += Δq, until
 /// |Δq|_∞ < tol. The contact force is the law's, from the sliders at τ_n. The fixed point
 /// converges for Δτ/𝕋 < 1/π (paper §4.2, 0.318).
+///
+/// With R = S q̃ − b − f_c(q̃) (b = f + M q*/(βΔτ²) + C(γ q*/(βΔτ) − v*), the part of R that does
+/// not change within the step), the update is q̃ ← S⁻¹ b + S⁻¹ f_c(q̃): S⁻¹ b is computed once per
+/// step and an iteration costs one law evaluation and one product with S⁻¹ (the same iterates).
+/// Writes the step's end into `out`; returns the iterations.
 pub fn standard_step(
     ctx: &StepContext,
-    start: &Kinematics,
-    sliders: &[f64],
+    start: &Snapshot,
     cache: &mut Cache,
-) -> Result<StepOutcome> {
+    ws: &mut Workspace,
+    out: &mut Snapshot,
+) -> Result<u32> {
     let sys = ctx.sys;
-    let (n, dt) = (sys.n, ctx.dt);
-    let key = dt.to_bits();
-    let sinv = match cache.structural.entry(key) {
-        std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
-        std::collections::hash_map::Entry::Vacant(e) => {
-            let s = dynamic_matrix(sys, dt, &sys.stiffness);
-            let inv = dense::inverse(&s, n).ok_or_else(|| {
-                Error::Compute(format!(
-                    "the Newmark matrix M/(βΔτ²) + γC/(βΔτ) + K is singular (Δτ = {dt:e} s): the model needs mass"
-                ))
-            })?;
-            cache.factorisations += 1;
-            e.insert(inv)
+    let dt = ctx.dt;
+    newmark_predictors(&start.kin, dt, &mut ws.qs, &mut ws.vs);
+    let sinv = if ctx.one_off {
+        newmark_rhs_direct(sys, dt, &ctx.excitation.force, ws);
+        one_off_matrix(sys, dt, &[], &mut ws.k, &mut ws.unused_r);
+        if !ws.lu.factor(&ws.k) {
+            return Err(Error::Compute(format!(
+                "the Newmark matrix M/(βΔτ²) + γC/(βΔτ) + K is singular (Δτ = {dt:e} s): the model needs mass"
+            )));
         }
+        None
+    } else {
+        let key = dt.to_bits();
+        cache.ensure_structural(sys, dt)?;
+        newmark_rhs(sys, &cache.inertia[&key], &ctx.excitation.force, ws);
+        Some(&cache.structural[&key])
     };
-    let (qs, vs) = newmark_predictors(start, dt);
-    let mut q = start.q.clone();
-    let mut f = vec![0.0; n];
-    let mut r = vec![0.0; n];
-    let mut dq = vec![0.0; n];
-    let mut samples = Vec::with_capacity(sys.elements.len());
+    // S⁻¹ x into y
+    let solve = |lu: &mut dense::ScratchLu, x: &[f64], y: &mut [f64]| match sinv {
+        Some(inv) => dense::matvec(inv, x, y),
+        None => lu.solve(x, y),
+    };
+    // y0 = S⁻¹ b
+    solve(&mut ws.lu, &ws.b, &mut ws.rhs);
+    let q = &mut out.kin.q;
+    q.copy_from_slice(&start.kin.q);
     for it in 1..=ctx.max_iterations {
-        let (a1, v1) = newmark_rates(&q, &qs, &vs, dt);
-        evaluate_law(sys, ctx.omega, ctx.t1, &q, sliders, &mut samples);
-        sys.dynamic_force(ctx.omega, ctx.t1, &mut f);
-        add_contact_force(sys, &samples, &mut f);
-        // R = M a + C v + K q − f
-        dense::matvec(&sys.mass, &a1, &mut r);
-        dense::matvec_add(&sys.damping, &v1, &mut r);
-        dense::matvec_add(&sys.stiffness, &q, &mut r);
-        r.iter_mut().zip(&f).for_each(|(ri, fi)| *ri -= fi);
-        dense::matvec(sinv, &r, &mut dq);
-        q.iter_mut().zip(&dq).for_each(|(qi, d)| *qi -= d);
-        if dense::norm_inf(&dq) < ctx.tolerance {
-            let (a1, v1) = newmark_rates(&q, &qs, &vs, dt);
-            evaluate_law(sys, ctx.omega, ctx.t1, &q, sliders, &mut samples);
-            return Ok(StepOutcome {
-                kin: Kinematics { q, v: v1, a: a1 },
-                samples,
-                iterations: it,
-            });
+        evaluate_law_with(sys, ctx.excitation, q, &start.samples, &mut out.samples);
+        ws.g.iter_mut().for_each(|x| *x = 0.0);
+        add_contact_force(sys, &out.samples, &mut ws.g);
+        solve(&mut ws.lu, &ws.g, &mut ws.dq);
+        let mut change: f64 = 0.0;
+        for ((qi, y), d) in q.iter_mut().zip(&ws.rhs).zip(&ws.dq) {
+            let new = y + d;
+            change = change.max((new - *qi).abs());
+            *qi = new;
+        }
+        if change < ctx.tolerance {
+            newmark_rates(&mut out.kin, &ws.qs, &ws.vs, dt);
+            evaluate_law_with(
+                sys,
+                ctx.excitation,
+                &out.kin.q,
+                &start.samples,
+                &mut out.samples,
+            );
+            return Ok(it);
         }
     }
     Err(Error::Compute(format!(
@@ -327,53 +588,55 @@ pub fn standard_step(
 }
 
 /// The piecewise-linear solve shared by the dynamic and the quasi-static methods: with the states
-/// predicted unchanged from `states0`, solve A(states) q₁ = b(states) with
-/// A = `mass_term` + K + K_c(states) (`mass_term` adds M/(βΔτ²) + γC/(βΔτ) for Newmark, nothing for
-/// the quasi-static method) and b = f_e + r_c(states, w) + `b_extra`; verify the states with the
-/// law at q₁; re-solve with the law's states until they agree (Appendix A.4 steps 2–6, Appendix B).
+/// predicted unchanged from `start`, solve A(states) q₁ = b + r_c(states, w) with
+/// A = K + K_c(states) (+ M/(βΔτ²) + γC/(βΔτ) for Newmark) and b in `ws.b` (the force and, for
+/// Newmark, the predictor terms); verify the states with the law at q₁; re-solve with the law's
+/// states until they agree (Appendix A.4 steps 2–6, Appendix B). q₁ and the samples go to `out`.
 /// Returns `Err(iterations)` if the state iteration cycles or exceeds the iteration limit.
-#[allow(clippy::type_complexity)]
 fn state_iteration(
     ctx: &StepContext,
     dynamic: bool,
-    states0: &[ContactState],
-    sliders: &[f64],
-    b_extra: &[f64],
+    start: &Snapshot,
     cache: &mut Cache,
-) -> Result<std::result::Result<(Vec<f64>, Vec<LawSample>, u32), u32>> {
+    ws: &mut Workspace,
+    out: &mut Snapshot,
+) -> Result<std::result::Result<u32, u32>> {
     let sys = ctx.sys;
-    let n = sys.n;
-    let mut states: Vec<ContactState> = states0.to_vec();
-    let mut codes: Vec<u8> = states.iter().map(|s| s.code()).collect();
-    let mut seen: Vec<Vec<u8>> = Vec::new();
-    let mut k = vec![0.0; n * n];
-    let mut rc = vec![0.0; n];
-    let mut f = vec![0.0; n];
-    let mut q1 = vec![0.0; n];
-    let mut samples = Vec::with_capacity(states.len());
-    let mut law_codes = Vec::with_capacity(states.len());
+    let exc = ctx.excitation;
+    let ne = sys.elements.len();
+    ws.states.clear();
+    ws.states.extend(start.samples.iter().map(|s| s.state));
+    state_codes(&start.samples, &mut ws.codes);
+    ws.seen.clear();
     for it in 1..=ctx.max_iterations {
-        sys.linear_piece(&states, sliders, ctx.omega, ctx.t1, &mut k, &mut rc);
-        if dynamic {
-            sys.dynamic_force(ctx.omega, ctx.t1, &mut f);
-        } else {
-            sys.external_force(ctx.omega, ctx.t1, &mut f);
+        ws.rhs.copy_from_slice(&ws.b);
+        for (i, e) in sys.elements.iter().enumerate() {
+            let w = start.samples[i].slider;
+            e.add_linear_piece_with(ws.states[i], w, exc.pt[i], exc.pn[i], None, &mut ws.rhs);
         }
-        for i in 0..n {
-            f[i] += rc[i] + b_extra[i];
+        cache.step_solve(
+            ctx,
+            dynamic,
+            &ws.states,
+            &ws.codes,
+            &ws.rhs,
+            &mut out.kin.q,
+            &mut ws.k,
+            &mut ws.scratch,
+            ctx.one_off.then_some((&mut ws.lu, &mut ws.unused_r)),
+        )?;
+        evaluate_law_with(sys, exc, &out.kin.q, &start.samples, &mut out.samples);
+        state_codes(&out.samples, &mut ws.law_codes);
+        if ws.law_codes == ws.codes {
+            return Ok(Ok(it));
         }
-        cache.step_solve(ctx, dynamic, &states, &codes, &k, &f, &mut q1)?;
-        evaluate_law(sys, ctx.omega, ctx.t1, &q1, sliders, &mut samples);
-        state_codes(&samples, &mut law_codes);
-        if law_codes == codes {
-            return Ok(Ok((q1, samples, it)));
-        }
-        seen.push(std::mem::replace(&mut codes, law_codes.clone()));
-        if seen.contains(&codes) {
+        ws.seen.extend_from_slice(&ws.codes);
+        std::mem::swap(&mut ws.codes, &mut ws.law_codes);
+        if ws.seen.chunks_exact(ne).any(|c| c == ws.codes.as_slice()) {
             return Ok(Err(it));
         }
-        states.clear();
-        states.extend(samples.iter().map(|s| s.state));
+        ws.states.clear();
+        ws.states.extend(out.samples.iter().map(|s| s.state));
     }
     Ok(Err(ctx.max_iterations))
 }
@@ -383,182 +646,161 @@ fn state_iteration(
 /// states are verified by the law and the step re-solved only at a transition. If the state
 /// iteration cycles (a tie at a stick/slip boundary; frequent with many elements) the step falls
 /// back to damped Newton on the same piecewise-linear equation (unlike the standard corrector it
-/// needs no step limit), and the iterations of both are counted.
+/// needs no step limit), and the iterations of both are counted. Writes the step's end into
+/// `out`; returns the iterations.
 pub fn piecewise_linear_step(
     ctx: &StepContext,
-    start: &Kinematics,
-    states: &[ContactState],
-    sliders: &[f64],
+    start: &Snapshot,
     cache: &mut Cache,
-) -> Result<StepOutcome> {
+    ws: &mut Workspace,
+    out: &mut Snapshot,
+) -> Result<u32> {
     let sys = ctx.sys;
     let dt = ctx.dt;
-    let (qs, vs) = newmark_predictors(start, dt);
-    // b_extra = M q*/(βΔτ²) + C (γ q*/(βΔτ) − v*)
-    let cm = 1.0 / (BETA * dt * dt);
-    let cc = GAMMA / (BETA * dt);
-    let mq: Vec<f64> = qs.iter().map(|x| cm * x).collect();
-    let cq: Vec<f64> = qs.iter().zip(&vs).map(|(q, v)| cc * q - v).collect();
-    let mut extra = vec![0.0; sys.n];
-    dense::matvec(&sys.mass, &mq, &mut extra);
-    dense::matvec_add(&sys.damping, &cq, &mut extra);
-    let (q1, samples, iterations) =
-        match state_iteration(ctx, true, states, sliders, &extra, cache)? {
-            Ok(solved) => solved,
-            Err(tried) => {
-                let (q1, samples, its) =
-                    damped_newton(ctx, true, &start.q, sliders, &extra, cache)?;
-                (q1, samples, tried + its)
-            }
-        };
-    let (a1, v1) = newmark_rates(&q1, &qs, &vs, dt);
-    Ok(StepOutcome {
-        kin: Kinematics {
-            q: q1,
-            v: v1,
-            a: a1,
-        },
-        samples,
-        iterations,
-    })
+    newmark_predictors(&start.kin, dt, &mut ws.qs, &mut ws.vs);
+    if ctx.one_off {
+        newmark_rhs_direct(sys, dt, &ctx.excitation.force, ws);
+    } else {
+        cache.ensure_inertia(sys, dt);
+        newmark_rhs(
+            sys,
+            &cache.inertia[&dt.to_bits()],
+            &ctx.excitation.force,
+            ws,
+        );
+    }
+    let iterations = match state_iteration(ctx, true, start, cache, ws, out)? {
+        Ok(it) => it,
+        Err(tried) => tried + damped_newton(ctx, true, start, cache, ws, out)?,
+    };
+    newmark_rates(&mut out.kin, &ws.qs, &ws.vs, dt);
+    Ok(iterations)
 }
 
 /// Quasi-static step (paper §5.2, eq. 10, Appendix B, eqs A17–A20): (K + K_c) q₁ = f_e + r_c with
-/// the states predicted unchanged and verified by the law. q̇₁ = (q₁ − q_n)/Δτ, q̈₁ = 0.
+/// the states predicted unchanged and verified by the law. q̇₁ = (q₁ − q_n)/Δτ, q̈₁ = 0. Writes
+/// the step's end into `out`; returns the iterations.
 pub fn quasi_static_step(
     ctx: &StepContext,
-    start: &Kinematics,
-    states: &[ContactState],
-    sliders: &[f64],
+    start: &Snapshot,
     cache: &mut Cache,
-) -> Result<StepOutcome> {
-    let extra = vec![0.0; ctx.sys.n];
-    let (q1, samples, iterations) =
-        match state_iteration(ctx, false, states, sliders, &extra, cache)? {
-            Ok(found) => found,
-            Err(tried) => {
-                let (q, s, its) = damped_newton(ctx, false, &start.q, sliders, &extra, cache)?;
-                (q, s, tried + its)
-            }
-        };
-    let v1 = q1
-        .iter()
-        .zip(&start.q)
-        .map(|(a, b)| (a - b) / ctx.dt)
-        .collect();
-    Ok(StepOutcome {
-        kin: Kinematics {
-            q: q1,
-            v: v1,
-            a: vec![0.0; ctx.sys.n],
-        },
-        samples,
-        iterations,
-    })
+    ws: &mut Workspace,
+    out: &mut Snapshot,
+) -> Result<u32> {
+    ws.b.copy_from_slice(&ctx.excitation.force);
+    let iterations = match state_iteration(ctx, false, start, cache, ws, out)? {
+        Ok(it) => it,
+        Err(tried) => tried + damped_newton(ctx, false, start, cache, ws, out)?,
+    };
+    let kin = &mut out.kin;
+    for i in 0..kin.q.len() {
+        kin.v[i] = (kin.q[i] - start.kin.q[i]) / ctx.dt;
+        kin.a[i] = 0.0;
+    }
+    Ok(iterations)
 }
 
-/// ‖f + b_extra + f_c(q) − A q‖_∞ with the law's forces from the sliders `w`: the residual of
-/// the piecewise-linear step, A = M/(βΔτ²) + γC/(βΔτ) + K and f the dynamic force when
-/// `dynamic` (Newmark, eq. A13 with q̈₁, q̇₁ from q₁), else A = K and f = f_e (quasi-static).
+/// ‖b + f_c(q) − A q‖_∞ with the law's forces from the sliders of `prev`: the residual of the
+/// piecewise-linear step, A = M/(βΔτ²) + γC/(βΔτ) + K when `dynamic` (Newmark, eq. A13 with q̈₁,
+/// q̇₁ from q₁), else A = K (quasi-static); `b` holds the force and the predictor terms. The
+/// residual goes to `r`, the samples to `samples`; `aq`, `cq` are scratch.
 #[allow(clippy::too_many_arguments)]
 fn step_residual(
     ctx: &StepContext,
     dynamic: bool,
     q: &[f64],
-    w: &[f64],
-    b_extra: &[f64],
+    prev: &[LawSample],
+    b: &[f64],
     r: &mut [f64],
     aq: &mut [f64],
+    cq: &mut [f64],
     samples: &mut Vec<LawSample>,
 ) -> f64 {
     let sys = ctx.sys;
-    evaluate_law(sys, ctx.omega, ctx.t1, q, w, samples);
+    evaluate_law_with(sys, ctx.excitation, q, prev, samples);
+    r.copy_from_slice(b);
+    dense::matvec(&sys.stiffness, q, aq);
     if dynamic {
-        sys.dynamic_force(ctx.omega, ctx.t1, r);
         let cm = 1.0 / (BETA * ctx.dt * ctx.dt);
         let cc = GAMMA / (BETA * ctx.dt);
-        dense::matvec(&sys.mass, q, aq);
-        aq.iter_mut().for_each(|x| *x *= cm);
-        let mut cq = vec![0.0; sys.n];
-        dense::matvec(&sys.damping, q, &mut cq);
-        aq.iter_mut().zip(&cq).for_each(|(a, c)| *a += cc * c);
-        dense::matvec_add(&sys.stiffness, q, aq);
-    } else {
-        sys.external_force(ctx.omega, ctx.t1, r);
-        dense::matvec(&sys.stiffness, q, aq);
+        dense::matvec_scaled_add(cm, &sys.mass, q, aq);
+        dense::matvec(&sys.damping, q, cq);
+        aq.iter_mut().zip(cq.iter()).for_each(|(a, c)| *a += cc * c);
     }
     add_contact_force(sys, samples, r);
-    r.iter_mut()
-        .zip(aq.iter().zip(b_extra))
-        .for_each(|(ri, (a, b))| *ri += b - a);
+    r.iter_mut().zip(aq.iter()).for_each(|(ri, a)| *ri -= a);
     dense::norm_inf(r)
 }
 
 /// Fallback of the piecewise-linear and quasi-static steps when the state iteration cycles (the
 /// solution sits on a stick/slip or slip-sign boundary, frequent with many elements): Newton on
 /// the continuous piecewise-linear residual of [`step_residual`] with the state's tangent
-/// A + K_c and a backtracking line search on ‖r‖_∞, from `q0`, until the update is below the
-/// tolerance (or 1e-9 of the displacement scale).
+/// A + K_c and a backtracking line search on ‖r‖_∞, from q_n, until the update is below the
+/// tolerance (or 1e-9 of the displacement scale). q₁ and its samples go to `out`.
 fn damped_newton(
     ctx: &StepContext,
     dynamic: bool,
-    q0: &[f64],
-    sliders: &[f64],
-    b_extra: &[f64],
+    start: &Snapshot,
     cache: &mut Cache,
-) -> Result<(Vec<f64>, Vec<LawSample>, u32)> {
+    ws: &mut Workspace,
+    out: &mut Snapshot,
+) -> Result<u32> {
     let sys = ctx.sys;
-    let n = sys.n;
     let tol = ctx.tolerance.max(1e-9 * sys.displacement_scale);
-    let mut q = q0.to_vec();
-    let mut samples = Vec::new();
-    let mut trial_samples = Vec::new();
-    let mut r = vec![0.0; n];
-    let mut r_trial = vec![0.0; n];
-    let mut aq = vec![0.0; n];
-    let mut k = vec![0.0; n * n];
-    let mut rc = vec![0.0; n];
-    let mut codes = Vec::new();
+    out.kin.q.copy_from_slice(&start.kin.q);
     let mut norm = step_residual(
         ctx,
         dynamic,
-        &q,
-        sliders,
-        b_extra,
-        &mut r,
-        &mut aq,
-        &mut samples,
+        &out.kin.q,
+        &start.samples,
+        &ws.b,
+        &mut ws.r,
+        &mut ws.aq,
+        &mut ws.g,
+        &mut out.samples,
     );
     for it in 1..=ctx.max_iterations {
-        let states: Vec<ContactState> = samples.iter().map(|s| s.state).collect();
-        state_codes(&samples, &mut codes);
-        sys.linear_piece(&states, sliders, ctx.omega, ctx.t1, &mut k, &mut rc);
-        let mut dq = vec![0.0; n];
-        cache.step_solve(ctx, dynamic, &states, &codes, &k, &r, &mut dq)?;
+        ws.states.clear();
+        ws.states.extend(out.samples.iter().map(|s| s.state));
+        state_codes(&out.samples, &mut ws.codes);
+        cache.step_solve(
+            ctx,
+            dynamic,
+            &ws.states,
+            &ws.codes,
+            &ws.r,
+            &mut ws.dq,
+            &mut ws.k,
+            &mut ws.scratch,
+            ctx.one_off.then_some((&mut ws.lu, &mut ws.unused_r)),
+        )?;
         let mut lambda = 1.0;
         loop {
-            let qt: Vec<f64> = q.iter().zip(&dq).map(|(a, d)| a + lambda * d).collect();
+            for ((t, q), d) in ws.qt.iter_mut().zip(&out.kin.q).zip(&ws.dq) {
+                *t = q + lambda * d;
+            }
             let nt = step_residual(
                 ctx,
                 dynamic,
-                &qt,
-                sliders,
-                b_extra,
-                &mut r_trial,
-                &mut aq,
-                &mut trial_samples,
+                &ws.qt,
+                &start.samples,
+                &ws.b,
+                &mut ws.r_trial,
+                &mut ws.aq,
+                &mut ws.g,
+                &mut ws.trial,
             );
             if nt < (1.0 - 1e-4 * lambda) * norm || lambda < 1e-6 {
-                q = qt;
+                std::mem::swap(&mut out.kin.q, &mut ws.qt);
                 norm = nt;
-                std::mem::swap(&mut r, &mut r_trial);
-                std::mem::swap(&mut samples, &mut trial_samples);
+                std::mem::swap(&mut ws.r, &mut ws.r_trial);
+                std::mem::swap(&mut out.samples, &mut ws.trial);
                 break;
             }
             lambda *= 0.5;
         }
-        if lambda * dense::norm_inf(&dq) < tol {
-            return Ok((q, samples, it));
+        if lambda * dense::norm_inf(&ws.dq) < tol {
+            return Ok(it);
         }
     }
     Err(Error::Compute(format!(

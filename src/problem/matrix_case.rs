@@ -3,19 +3,20 @@
 //! combinations): dense K, M, C over the free rows, the excitation on harmonic 1, the nonlinear
 //! rows (every row an element reads) and the output rows.
 //!
-//! Damping: `matrix` (read, same size as K), `rayleigh = [α, β]` (C = αM + βK) or `modal = ζ`
-//! (C = M Φ diag(2ζω_j) Φᵀ M over all modes of the dense problem, Φ mass-normalised).
+//! Damping ([`crate::model::damping`]): `matrix` (read, same size as K), `rayleigh = [α, β]`
+//! (C = αM + βK) or `modal = ζ` (C = M Φ diag(2ζω_j) Φᵀ M over all modes of the dense problem, Φ
+//! mass-normalised).
 //!
 //! One map from case rows to free rows ([`free_row`]) and one damping builder
 //! ([`damping_matrix`]) serve both solvers: the harmonic balance ([`matrix_setup`],
 //! [`matrix_elements`]) and the time march ([`matrix_march`]).
 
-use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
-use faer::{Mat, MatRef, Par, Side};
+use std::path::Path;
+
+use faer::{Mat, MatRef};
 
 use crate::case::{Case, Damping, ElementKind, ExcitationLoad, FrictionElement, WeightedDofs};
 use crate::contact::grounded::DofElements;
-use crate::eigen::self_adjoint_eigen_qr;
 use crate::error::{Error, Result};
 use crate::hbm::LinearModel;
 use crate::march::element::{Direction, Element};
@@ -23,7 +24,7 @@ use crate::march::law::FrictionParams;
 use crate::march::signal::Harmonic;
 use crate::march::{InitialCondition, MarchSystem};
 use crate::matrix_io::read_real_matrix;
-use crate::model::StructuralModel;
+use crate::model::{damping, StructuralModel};
 
 /// Largest number of free DOF a matrix-defined case may have (the harmonic balance condenses
 /// densely per frequency).
@@ -168,8 +169,8 @@ fn excitation(case: &Case, model: &StructuralModel, free_of: &[Option<usize>]) -
 }
 
 /// The dense damping matrix C over the free rows of `model` (K and M dense over the same rows),
-/// `None` when undamped: Rayleigh αM + βK, an external matrix restricted to the free rows, or
-/// modal damping ζ on every mode of (K, M) ([`modal_damping`]).
+/// `None` when undamped ([`crate::model::damping`]): Rayleigh αM + βK, modal damping ζ on every
+/// mode of (K, M), or an external matrix restricted to the free rows.
 pub fn damping_matrix(
     case: &Case,
     model: &StructuralModel,
@@ -177,58 +178,30 @@ pub fn damping_matrix(
     m: MatRef<'_, f64>,
 ) -> Result<Option<Mat<f64>>> {
     let n = k.nrows();
-    match &case.model.damping {
-        None => Ok(None),
-        Some(Damping::Rayleigh { alpha, beta }) => Ok(Some(Mat::from_fn(n, n, |i, j| {
-            alpha * m[(i, j)] + beta * k[(i, j)]
-        }))),
-        Some(Damping::Matrix(path)) => {
-            let c = read_real_matrix(path)?;
-            if c.nrows() != model.n_dofs || c.ncols() != model.n_dofs {
-                return Err(Error::input(format!(
-                    "{}: a {}×{} damping matrix for K of {} rows (key 'model.damping.matrix' of {})",
-                    path.display(),
-                    c.nrows(),
-                    c.ncols(),
-                    model.n_dofs,
-                    case.path.display()
-                )));
-            }
-            let full = c.to_dense();
-            let rows = &model.free.free_dofs;
-            Ok(Some(Mat::from_fn(n, n, |i, j| full[(rows[i], rows[j])])))
-        }
-        Some(Damping::Modal(zeta)) => modal_damping(k, m, *zeta).map(Some).map_err(|e| {
-            Error::input(format!(
-                "{}: key 'model.damping.modal': {e}",
+    let external = |path: &Path| -> Result<Mat<f64>> {
+        let c = read_real_matrix(path)?;
+        if c.nrows() != model.n_dofs || c.ncols() != model.n_dofs {
+            return Err(Error::input(format!(
+                "{}: a {}×{} damping matrix for K of {} rows (key 'model.damping.matrix' of {})",
+                path.display(),
+                c.nrows(),
+                c.ncols(),
+                model.n_dofs,
                 case.path.display()
-            ))
-        }),
-    }
-}
-
-/// C = M Φ diag(2ζω_j) Φᵀ M with Φ the mass-normalised modes of (K, M): with M = L Lᵀ and
-/// L⁻¹ K L⁻ᵀ = U Λ Uᵀ, C = (L U) diag(2ζ√λ_j) (L U)ᵀ. The dense eigenproblem is solved by the
-/// implicit QR algorithm ([`crate::eigen::self_adjoint_eigen_qr`]): faer's default divide and
-/// conquer loses orthogonality on clustered eigenvalues above 128 × 128.
-pub fn modal_damping(k: MatRef<'_, f64>, m: MatRef<'_, f64>, zeta: f64) -> Result<Mat<f64>> {
-    let n = k.nrows();
-    let llt = m
-        .llt(Side::Lower)
-        .map_err(|_| Error::input("modal damping needs a positive definite mass matrix M"))?;
-    let l = llt.L().to_owned();
-    let mut x = k.to_owned();
-    solve_lower_triangular_in_place(l.as_ref(), x.as_mut(), Par::Seq);
-    let mut a = x.transpose().to_owned();
-    solve_lower_triangular_in_place(l.as_ref(), a.as_mut(), Par::Seq);
-    let sym = Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
-    let (lambda, u) = self_adjoint_eigen_qr(sym.as_ref())
-        .map_err(|e| Error::Compute(format!("modal damping: {e}")))?;
-    let lu = &l * &u;
-    let scaled = Mat::from_fn(n, n, |i, r| {
-        lu[(i, r)] * 2.0 * zeta * lambda[r].max(0.0).sqrt()
-    });
-    Ok(&scaled * lu.transpose())
+            )));
+        }
+        let full = c.to_dense();
+        let rows = &model.free.free_dofs;
+        Ok(Mat::from_fn(n, n, |i, j| full[(rows[i], rows[j])]))
+    };
+    let spec = case.model.damping.as_ref();
+    damping::damping_matrix(spec, k, m, external).map_err(|e| match spec {
+        Some(Damping::Modal(_)) => Error::input(format!(
+            "{}: key 'model.damping.modal': {e}",
+            case.path.display()
+        )),
+        _ => e,
+    })
 }
 
 /// The `[[element]]` friction elements of a matrix case on the condensed (nonlinear) rows of

@@ -6,7 +6,7 @@
 //! ([`crate::rom::Rom`]), the contact pairs of every `[[contact]]` ([`crate::interface`]) and the
 //! engine-order excitation into the [`crate::hbm::LinearModel`] + [`PairSet`] that
 //! [`crate::hbm::HbmSystem`] and [`crate::continuation`] solve. The time march of the same sector
-//! ([`super::sector_march`]) shares its excitation, output-DOF and ROM-row helpers.
+//! ([`super::sector_march`]) reads the same excitation and output DOFs ([`SectorDofs`]).
 //!
 //! Temporal harmonic n = 0..H of the response of the reference sector lives on the harmonic index
 //! k_n = n·m mod N (m the engine order); its linear part is the ROM of k_n,
@@ -22,7 +22,7 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use faer::c64;
 
-use crate::case::{Case, ContactElement, Excitation, ExcitationLoad};
+use crate::case::{Case, ContactElement, ExcitationLoad};
 use crate::contact::law::Variant;
 use crate::contact::mapped::LinearMap;
 use crate::contact::pairs::{PairSet, SectorCoupling};
@@ -82,12 +82,12 @@ impl SectorProblem {
         mesh: &Mesh,
         interfaces: &[ContactInterface],
     ) -> Result<SectorProblem> {
-        let (excitation, group, force) = group_excitation(case)?;
+        let dofs = SectorDofs::new(case, mesh)?;
         let harmonics = case.harmonic_balance.harmonics;
         let layout = HarmonicLayout::new(harmonics, case.harmonic_balance.samples())?;
         let (engine_order, k_n) = match &rom.cyclic {
             Some(g) => {
-                let m = excitation.engine_order.ok_or_else(|| {
+                let m = dofs.engine_order.ok_or_else(|| {
                     Error::input(format!(
                         "{}: [excitation] needs `engine_order` for a cyclic model",
                         case.path.display()
@@ -101,8 +101,6 @@ impl SectorProblem {
         let node_rows = node_row_map(&nonlinear);
         let pairs = pair_set(rom, interfaces, &node_rows, nonlinear.len(), &k_n)?;
         let contact = FromStaticEquilibrium::new(pairs, &layout)?;
-        let excitation_nodes = tags_of(mesh, &group)?;
-        let outputs = output_dofs(case, mesh, &excitation_nodes)?;
         let distinct: Vec<usize> = k_n
             .iter()
             .copied()
@@ -117,7 +115,7 @@ impl SectorProblem {
                     case.path.display()
                 ))
             })?;
-            blocks.push(block(h, &nonlinear, &outputs)?);
+            blocks.push(block(h, &nonlinear, &dofs.outputs)?);
         }
         let harmonic_block: Vec<usize> = k_n
             .iter()
@@ -128,7 +126,7 @@ impl SectorProblem {
             let h = rom.harmonic(k_n[1]).ok_or_else(|| {
                 Error::input(format!("the ROM has no harmonic index k = {}", k_n[1]))
             })?;
-            forcing[1] = excitation_vector(h, &excitation_nodes, force, &group)?;
+            forcing[1] = dofs.excitation_vector(h)?;
         }
         let linear = LinearModel::new(blocks, harmonic_block, forcing)?;
         Ok(SectorProblem {
@@ -138,7 +136,7 @@ impl SectorProblem {
             harmonic_indices: k_n,
             engine_order,
             nonlinear,
-            outputs,
+            outputs: dofs.outputs,
         })
     }
 
@@ -148,25 +146,81 @@ impl SectorProblem {
     }
 }
 
-/// The `[excitation]` of a mesh case: the table, its group and the force per node (N, x y z,
-/// already multiplied by `force_scale`).
-pub(crate) fn group_excitation(case: &Case) -> Result<(&Excitation, String, [f64; 3])> {
-    let excitation = case.excitation.as_ref().ok_or_else(|| {
-        Error::input(format!(
-            "{}: the case has no [excitation]; add `[excitation] engine_order = .., group = .., force = [..]`",
-            case.path.display()
-        ))
-    })?;
-    match &excitation.load {
-        ExcitationLoad::Group { group, force } => Ok((
-            excitation,
-            group.clone(),
-            force.map(|f| f * excitation.force_scale),
-        )),
-        ExcitationLoad::Dofs { .. } => Err(Error::input(format!(
-            "{}: [excitation] gives matrix rows (`dofs`), but a mesh case needs `group` and `force` (N per node, x y z)",
-            case.path.display()
-        ))),
+/// The reference-sector DOFs a sector problem reads on its ROM, for the harmonic balance
+/// ([`SectorProblem`]) and the march ([`super::sector_march`]) alike: the nodes of the
+/// `[excitation]` group with the force on each, and the output nodes.
+#[derive(Clone, Debug)]
+pub struct SectorDofs {
+    /// The excitation group (`[excitation] group`).
+    pub group: String,
+    /// The force on every excitation node (N, x y z), `force_scale` applied.
+    pub force: [f64; 3],
+    /// The engine order m of the excitation, when the case gives one.
+    pub engine_order: Option<usize>,
+    /// Gmsh tags of the excitation nodes.
+    pub excitation_nodes: Vec<u64>,
+    /// The output DOFs: the nodes of the `[response]` groups (else the excitation nodes) × x, y,
+    /// z, in group order, each node once.
+    pub outputs: Vec<DofLabel>,
+}
+
+impl SectorDofs {
+    /// The excitation and output DOFs of the mesh case `case` on its sector `mesh`.
+    ///
+    /// Errors ([`Error::Input`]): no `[excitation]`, an excitation on matrix rows (`dofs`), a
+    /// group missing from the mesh.
+    pub fn new(case: &Case, mesh: &Mesh) -> Result<SectorDofs> {
+        let excitation = case.excitation.as_ref().ok_or_else(|| {
+            Error::input(format!(
+                "{}: the case has no [excitation]; add `[excitation] engine_order = .., group = .., force = [..]`",
+                case.path.display()
+            ))
+        })?;
+        let (group, force) = match &excitation.load {
+            ExcitationLoad::Group { group, force } => {
+                (group.clone(), force.map(|f| f * excitation.force_scale))
+            }
+            ExcitationLoad::Dofs { .. } => {
+                return Err(Error::input(format!(
+                    "{}: [excitation] gives matrix rows (`dofs`), but a mesh case needs `group` and `force` (N per node, x y z)",
+                    case.path.display()
+                )))
+            }
+        };
+        let excitation_nodes = tags_of(mesh, &group)?;
+        let outputs = output_dofs(case, mesh, &excitation_nodes)?;
+        Ok(SectorDofs {
+            group,
+            force,
+            engine_order: excitation.engine_order,
+            excitation_nodes,
+            outputs,
+        })
+    }
+
+    /// F_e⁽¹⁾ in the ROM coordinates of `h`: the force (N, x y z) at the physical rows of every
+    /// excitation node of the reference sector (f_k = T_kᴴ f = f there, `docs/conventions.md`
+    /// §2).
+    ///
+    /// Errors ([`Error::Input`]): an excitation node without a physical ROM coordinate.
+    pub fn excitation_vector(&self, h: &HarmonicRom) -> Result<Vec<c64>> {
+        let mut f = vec![c64::new(0.0, 0.0); h.len()];
+        for &tag in &self.excitation_nodes {
+            for (c, &value) in self.force.iter().enumerate() {
+                let row = h.row_of(tag, c as u8).ok_or_else(|| {
+                    missing_node(h, tag, &format!("excitation ('{}')", self.group))
+                })?;
+                f[row] += c64::new(value, 0.0);
+            }
+        }
+        Ok(f)
+    }
+
+    /// The ROM rows of the output DOFs in `h`.
+    ///
+    /// Errors ([`Error::Input`]): an output node without a physical ROM coordinate.
+    pub fn output_rows(&self, h: &HarmonicRom) -> Result<Vec<usize>> {
+        rows_of(h, &self.outputs, "response")
     }
 }
 
@@ -183,7 +237,7 @@ fn contact_dofs(interfaces: &[ContactInterface]) -> Vec<DofLabel> {
 }
 
 /// The x, y, z DOFs of a node.
-pub(crate) fn node_dofs(tag: u64) -> [DofLabel; 3] {
+fn node_dofs(tag: u64) -> [DofLabel; 3] {
     [0u8, 1, 2].map(|component| DofLabel {
         node_tag: tag,
         component,
@@ -228,7 +282,7 @@ fn pair_set(
 }
 
 /// The one friction element variant of all interfaces (the PairSet has one).
-pub(crate) fn friction_variant(interfaces: &[ContactInterface]) -> Result<Variant> {
+fn friction_variant(interfaces: &[ContactInterface]) -> Result<Variant> {
     let variant_of = |e: ContactElement| match e {
         ContactElement::OneD => Variant::OneD,
         ContactElement::TwoD => Variant::TwoD,
@@ -247,7 +301,7 @@ pub(crate) fn friction_variant(interfaces: &[ContactInterface]) -> Result<Varian
 }
 
 /// Gmsh tags of the nodes of a group.
-pub(crate) fn tags_of(mesh: &Mesh, group: &str) -> Result<Vec<u64>> {
+fn tags_of(mesh: &Mesh, group: &str) -> Result<Vec<u64>> {
     Ok(mesh
         .nodes_of(group)?
         .into_iter()
@@ -257,11 +311,7 @@ pub(crate) fn tags_of(mesh: &Mesh, group: &str) -> Result<Vec<u64>> {
 
 /// Output DOFs: the nodes of the `[response]` groups (else the excitation nodes) × x, y, z, in
 /// group order, each node once.
-pub(crate) fn output_dofs(
-    case: &Case,
-    mesh: &Mesh,
-    excitation_nodes: &[u64],
-) -> Result<Vec<DofLabel>> {
+fn output_dofs(case: &Case, mesh: &Mesh, excitation_nodes: &[u64]) -> Result<Vec<DofLabel>> {
     let groups: &[String] = case
         .response
         .as_ref()
@@ -280,7 +330,7 @@ pub(crate) fn output_dofs(
 }
 
 /// The ROM row of every DOF, or an error naming the first one that is not a physical master.
-pub(crate) fn rows_of(h: &HarmonicRom, dofs: &[DofLabel], what: &str) -> Result<Vec<usize>> {
+fn rows_of(h: &HarmonicRom, dofs: &[DofLabel], what: &str) -> Result<Vec<usize>> {
     dofs.iter()
         .map(|d| {
             h.row_of(d.node_tag, d.component)
@@ -308,24 +358,4 @@ fn block(h: &HarmonicRom, nonlinear: &[DofLabel], outputs: &[DofLabel]) -> Resul
         nonlinear: rows_of(h, nonlinear, "contact/target")?,
         outputs: rows_of(h, outputs, "response")?,
     })
-}
-
-/// F_e⁽¹⁾ in the ROM coordinates of k_1: `force` (N, x y z) at the physical rows of every
-/// excitation node of the reference sector (f_k = T_kᴴ f = f there, `docs/conventions.md` §2).
-pub(crate) fn excitation_vector(
-    h: &HarmonicRom,
-    nodes: &[u64],
-    force: [f64; 3],
-    group: &str,
-) -> Result<Vec<c64>> {
-    let mut f = vec![c64::new(0.0, 0.0); h.len()];
-    for &tag in nodes {
-        for (c, &value) in force.iter().enumerate() {
-            let row = h
-                .row_of(tag, c as u8)
-                .ok_or_else(|| missing_node(h, tag, &format!("excitation ('{group}')")))?;
-            f[row] += c64::new(value, 0.0);
-        }
-    }
-    Ok(f)
 }

@@ -26,7 +26,7 @@
 //! static equilibrium and the march starts there at rest.
 
 use super::rom_store::{sector_rom, RomPolicy};
-use super::sector::{excitation_vector, group_excitation, output_dofs, rows_of, tags_of, DofLabel};
+use super::sector::SectorDofs;
 use super::Log;
 use crate::case::{Case, ContactElement};
 use crate::contact::pairs::PairElement;
@@ -36,7 +36,6 @@ use crate::march::element::{Direction, Element};
 use crate::march::schemes::{add_contact_force, evaluate_law};
 use crate::march::signal::Harmonic;
 use crate::march::{InitialCondition, MarchSystem};
-use crate::mesh::Mesh;
 use crate::output::ResponseDof;
 use crate::rom::{HarmonicRom, ReducedDof, Rom};
 
@@ -70,8 +69,9 @@ pub fn sector_march(case: &Case, log: &mut dyn FnMut(&str)) -> Result<SectorMarc
     let phase = neighbour_phase(&rom, k);
     let interfaces = build_interfaces(case, &mesh, rom.cyclic.as_ref())?;
     let elements = contact_elements(h, &interfaces, phase)?;
-    let (force, outputs) = excitation(case, h, &mesh)?;
-    let response = rows_of(h, &outputs, "response")?;
+    let dofs = SectorDofs::new(case, &mesh)?;
+    let force = excitation(&dofs, h)?;
+    let response = dofs.output_rows(h)?;
     let system = rom_system(h, elements, force, &case.path.display().to_string())?;
     log(&format!(
         "sector ROM of harmonic index k = {k}: {} coordinates, {} friction elements on {} contact pairs{}",
@@ -87,7 +87,8 @@ pub fn sector_march(case: &Case, log: &mut dyn FnMut(&str)) -> Result<SectorMarc
     Ok(SectorMarch {
         system,
         response,
-        response_dofs: outputs
+        response_dofs: dofs
+            .outputs
             .iter()
             .map(|d| ResponseDof::Node {
                 tag: d.node_tag,
@@ -280,22 +281,18 @@ fn pair_elements(
     [element(0), element(1)]
 }
 
-/// The excitation of engine order m on the ROM coordinates (f = Re(F e^{iωt}) with F = T_kᴴ f,
-/// [`excitation_vector`]) and the output DOFs.
-fn excitation(case: &Case, h: &HarmonicRom, mesh: &Mesh) -> Result<(Vec<Harmonic>, Vec<DofLabel>)> {
-    let (_, group, force) = group_excitation(case)?;
-    let nodes = tags_of(mesh, &group)?;
-    let f = excitation_vector(h, &nodes, force, &group)?;
-    let outputs = output_dofs(case, mesh, &nodes)?;
-    let harmonics = f
+/// The excitation of engine order m on the ROM coordinates: f = Re(F e^{iωt}) with F = T_kᴴ f
+/// ([`SectorDofs::excitation_vector`]).
+fn excitation(dofs: &SectorDofs, h: &HarmonicRom) -> Result<Vec<Harmonic>> {
+    Ok(dofs
+        .excitation_vector(h)?
         .iter()
         .map(|z| Harmonic {
             mean: 0.0,
             cos: z.re,
             sin: -z.im,
         })
-        .collect();
-    Ok((harmonics, outputs))
+        .collect())
 }
 
 /// Adds −f_c(0) (the contact force at rest, sliders at zero) to the static part of the external

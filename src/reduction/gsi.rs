@@ -19,7 +19,7 @@
 
 use faer::{c64, Mat, MatRef};
 
-use super::dense::hermitian_modes;
+use crate::eigen::hermitian_modes;
 use crate::error::{Error, Result};
 use crate::rom::GsiReport;
 

@@ -5,7 +5,6 @@
 //! |---|---|
 //! | [`masters`] | master/interior partition of the free DOF |
 //! | [`craig_bampton`](mod@craig_bampton) | the CB model with streamed static modes |
-//! | [`dense`] | dense Hermitian generalized eigenproblems of the reduced models |
 //! | [`gsi`] | Gram–Schmidt interface reduction of the low frontier |
 //!
 //! Pipeline ([`Sector::build`], [`Sector::harmonic`], [`reduce`]): masters from the case
@@ -16,6 +15,7 @@
 //! damping and the eigenfrequencies of the result.
 //!
 //! # Damping (C_k, N·s/m)
+//! Built by [`crate::model::damping`] on the reduced K_k, M_k of each harmonic index:
 //! * `rayleigh = [α, β]`: C_k = α M_k + β K_k — the exact projection of αM + βK, since all
 //!   transformations are linear.
 //! * `modal = ζ`: C_k = M_k X_k diag(2ζω_j) X_kᴴ M_k with the ROM's own modes (K_k x_j = ω_j² M_k
@@ -34,7 +34,6 @@
 //! Clamped axis nodes have no DOF and need nothing.
 
 pub mod craig_bampton;
-pub mod dense;
 pub mod gsi;
 pub mod masters;
 
@@ -48,12 +47,12 @@ use crate::cyclic::{
     check_frontier_clamps, distinct_harmonic_indices, match_frontiers, CyclicGeometry,
     CyclicTransform, DofPair,
 };
+use crate::eigen::{frequencies_hz, hermitian_eigenvalues};
 use crate::error::{Error, Result};
-use crate::model::StructuralModel;
+use crate::model::{self, StructuralModel};
 use crate::rom::{HarmonicRom, MasterNode, MasterRole, ReducedDof, Rom};
 
 pub use craig_bampton::{craig_bampton, CbOptions, CbTimings, CraigBampton, CB_EIGEN_BLOCK};
-pub use dense::{frequencies_hz, hermitian_eigenvalues, hermitian_modes, DenseModes};
 pub use masters::{case_master_groups, partition, MasterDof, Partition};
 
 /// Number of eigenfrequencies stored per harmonic index in the ROM.
@@ -353,43 +352,26 @@ fn frontier_pairs(
     Ok((geom, dof_pairs))
 }
 
-/// The damping matrix C_k of a harmonic model (see the module documentation), or `None`.
+/// The damping matrix C_k of a harmonic model ([`crate::model::damping`]; see the module
+/// documentation), or `None`. The real models of k = 0 and N/2 are damped in real arithmetic.
 pub fn damping_matrix(h: &HarmonicModel, damping: Option<&Damping>) -> Result<Option<Mat<c64>>> {
-    match damping {
-        None => Ok(None),
-        Some(Damping::Rayleigh { alpha, beta }) => {
-            let (a, b) = (c64::new(*alpha, 0.0), c64::new(*beta, 0.0));
-            Ok(Some(Mat::from_fn(
-                h.mass.nrows(),
-                h.mass.ncols(),
-                |i, j| a * h.mass[(i, j)] + b * h.stiffness[(i, j)],
-            )))
-        }
-        Some(Damping::Modal(zeta)) => {
-            let modes = hermitian_modes(h.stiffness.as_ref(), h.mass.as_ref(), h.real)?;
-            let mx = &h.mass * &modes.vectors;
-            let d: Vec<f64> = modes
-                .eigenvalues
-                .iter()
-                .map(|&l| 2.0 * zeta * l.max(0.0).sqrt())
-                .collect();
-            let scaled = Mat::from_fn(mx.nrows(), mx.ncols(), |i, j| mx[(i, j)] * d[j]);
-            let mut c = &scaled * mx.adjoint();
-            if h.real {
-                for j in 0..c.ncols() {
-                    for i in 0..c.nrows() {
-                        c[(i, j)].im = 0.0;
-                    }
-                }
-            }
-            Ok(Some(c))
-        }
-        Some(Damping::Matrix(p)) => Err(Error::input(format!(
+    let refuse = |p: &std::path::Path| {
+        Error::input(format!(
             "[model] damping = {{ matrix = \"{}\" }} cannot be reduced with a mesh model yet; use \
              `modal = ζ` or `rayleigh = [α, β]`",
             p.display()
-        ))),
+        ))
+    };
+    if h.real {
+        let re = |a: &Mat<c64>| Mat::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)].re);
+        let (k, m) = (re(&h.stiffness), re(&h.mass));
+        let c =
+            model::damping::damping_matrix(damping, k.as_ref(), m.as_ref(), |p| Err(refuse(p)))?;
+        return Ok(c.map(|c| Mat::from_fn(c.nrows(), c.ncols(), |i, j| c64::new(c[(i, j)], 0.0))));
     }
+    model::damping::damping_matrix(damping, h.stiffness.as_ref(), h.mass.as_ref(), |p| {
+        Err(refuse(p))
+    })
 }
 
 /// The harmonic indices a case needs: k_n = n·m mod N for n = 0..H (m the excitation's engine

@@ -1,12 +1,12 @@
-//! Dense Hermitian generalized eigenproblems K x = λ M x of the reduced models (K and M Hermitian
-//! positive definite), solved in inverse form (see [`hermitian_modes`]); x is mass-normalised
+//! Dense Hermitian generalized eigenproblems K x = λ M x (reduced models, modal damping; K and M
+//! Hermitian positive definite), solved in inverse form (see [`hermitian_modes`]); x is mass-normalised
 //! (xᴴ M x = 1). Real matrices are solved in real arithmetic, so the modes of k = 0, N/2 are real
 //! (zero imaginary parts).
 
 use faer::linalg::solvers::Llt;
 use faer::{c64, Mat, MatRef, Side};
 
-use crate::eigen::{self_adjoint_eigen_qr, self_adjoint_eigenvalues_qr};
+use super::dense::{self_adjoint_eigen_qr, self_adjoint_eigenvalues_qr};
 use crate::error::{Error, Result};
 
 /// All modes of a dense Hermitian pencil, ascending.
@@ -69,8 +69,8 @@ pub fn symmetric_modes(k: MatRef<'_, f64>, m: MatRef<'_, f64>) -> Result<(Vec<f6
 }
 
 /// The eigenvalues λ (rad²/s², ascending) of (K, M), as [`hermitian_modes`] without the mode
-/// shapes: the dense eigensolver then skips the eigenvectors, most of its O(n³) work (on the
-/// 3 064-coordinate CB model of the issue-4 benchmark ~7× less time).
+/// shapes: the dense eigensolver then skips the eigenvectors, most of its O(n³) work (on a
+/// 3 064-coordinate CB sector model ~7× less time).
 ///
 /// Errors ([`Error::Compute`]): K is not positive definite, or the eigensolver fails.
 pub fn hermitian_eigenvalues(
@@ -108,18 +108,83 @@ fn ascending_lambda(mu: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// Every mode of (K, M), both n × n self-adjoint (lower triangles read), M positive definite,
+/// K positive semi-definite: eigenvalues λ = ω² ascending, modes X mass-normalised (Xᴴ M X = I).
+/// When K is positive definite, in the inverse form of [`hermitian_modes`] (the lowest modes
+/// accurate to ε relative); otherwise (a model with rigid-body modes) in the direct form
+/// M = L Lᴴ, L⁻¹ K L⁻ᴴ = U Λ Uᴴ, X = L⁻ᴴ U, whose eigenvalues are accurate to ε·λ_max absolute.
+///
+/// Errors ([`Error::Compute`]): M is not positive definite, or the eigensolver fails.
+pub fn pencil_modes<T>(k: MatRef<'_, T>, m: MatRef<'_, T>) -> Result<(Vec<f64>, Mat<T>)>
+where
+    T: faer::traits::ComplexField<Real = f64>,
+{
+    let not_definite = || Error::Compute("the mass matrix M is not positive definite".into());
+    let Ok(llt) = k.llt(Side::Lower) else {
+        return direct_form(k, m, not_definite);
+    };
+    let (values, vectors) = generalized_with(llt, m)?;
+    if values.iter().any(|l| !l.is_finite()) {
+        return Err(not_definite());
+    }
+    Ok((values, vectors))
+}
+
+/// The direct form of [`pencil_modes`]: M = L Lᴴ, A = L⁻¹ K L⁻ᴴ (symmetrised), A = U Λ Uᴴ by
+/// [`self_adjoint_eigen_qr`], X = L⁻ᴴ U.
+fn direct_form<T>(
+    k: MatRef<'_, T>,
+    m: MatRef<'_, T>,
+    not_definite: impl Fn() -> Error,
+) -> Result<(Vec<f64>, Mat<T>)>
+where
+    T: faer::traits::ComplexField<Real = f64>,
+{
+    use faer::traits::math_utils::{add, conj, mul_real};
+    let n = k.nrows();
+    let llt = m.llt(Side::Lower).map_err(|_| not_definite())?;
+    let l = llt.L();
+    let mut x = k.to_owned();
+    l.solve_lower_triangular_in_place(x.as_mut());
+    let mut a = x.adjoint().to_owned();
+    l.solve_lower_triangular_in_place(a.as_mut());
+    let sym = Mat::from_fn(n, n, |i, j| {
+        mul_real(&add(&a[(i, j)], &conj(&a[(j, i)])), &0.5)
+    });
+    let (lambda, mut u) = self_adjoint_eigen_qr(sym.as_ref())?;
+    l.adjoint().solve_upper_triangular_in_place(u.as_mut());
+    Ok((lambda, u))
+}
+
+/// The Cholesky factorisation K = L Lᴴ (see [`generalized`]).
+fn stiffness_factor<T>(k: MatRef<'_, T>) -> Result<Llt<T>>
+where
+    T: faer::traits::ComplexField<Real = f64>,
+{
+    let n = k.nrows();
+    k.llt(Side::Lower).map_err(|e| {
+        Error::Compute(format!(
+            "the reduced stiffness matrix ({n} × {n}) is not positive definite ({e:?}): the \
+             reduced model has rigid-body modes (is the model clamped?)"
+        ))
+    })
+}
+
 /// The Cholesky factorisation K = L Lᴴ and B = L⁻¹ M L⁻ᴴ (see [`generalized`]).
 fn inverse_form<T>(k: MatRef<'_, T>, m: MatRef<'_, T>) -> Result<(Llt<T>, Mat<T>)>
 where
     T: faer::traits::ComplexField<Real = f64>,
 {
-    let n = k.nrows();
-    let llt = k.llt(Side::Lower).map_err(|e| {
-        Error::Compute(format!(
-            "the reduced stiffness matrix ({n} × {n}) is not positive definite ({e:?}): the \
-             reduced model has rigid-body modes (is the model clamped?)"
-        ))
-    })?;
+    let llt = stiffness_factor(k)?;
+    let b = inverse_matrix(&llt, m);
+    Ok((llt, b))
+}
+
+/// B = L⁻¹ M L⁻ᴴ for the factor K = L Lᴴ.
+fn inverse_matrix<T>(llt: &Llt<T>, m: MatRef<'_, T>) -> Mat<T>
+where
+    T: faer::traits::ComplexField<Real = f64>,
+{
     let l = llt.L();
     // B = L⁻¹ M L⁻ᴴ = L⁻¹ (L⁻¹ M)ᴴ for Hermitian M.
     let mut x = m.to_owned();
@@ -127,7 +192,7 @@ where
     let mut b = x.adjoint().to_owned();
     drop(x);
     l.solve_lower_triangular_in_place(b.as_mut());
-    Ok((llt, b))
+    b
 }
 
 /// The generalized problem in inverse form: K = L Lᴴ, B = L⁻¹ M L⁻ᴴ, B y = μ y with μ = 1/λ,
@@ -144,8 +209,16 @@ fn generalized<T>(k: MatRef<'_, T>, m: MatRef<'_, T>) -> Result<(Vec<f64>, Mat<T
 where
     T: faer::traits::ComplexField<Real = f64>,
 {
-    let n = k.nrows();
-    let (llt, b) = inverse_form(k, m)?;
+    generalized_with(stiffness_factor(k)?, m)
+}
+
+/// [`generalized`] with the factor K = L Lᴴ given.
+fn generalized_with<T>(llt: Llt<T>, m: MatRef<'_, T>) -> Result<(Vec<f64>, Mat<T>)>
+where
+    T: faer::traits::ComplexField<Real = f64>,
+{
+    let n = m.nrows();
+    let b = inverse_matrix(&llt, m);
     let l = llt.L();
     let (mu, mut y) = self_adjoint_eigen_qr(b.as_ref())?;
     // Descending μ = ascending λ.
