@@ -263,14 +263,24 @@ pub fn trace_from<S: ParameterSystem>(
                     continue;
                 }
                 let before = path.points.len().checked_sub(2).map(|i| &path.points[i]);
-                let corner = corner_step(
+                let corner = kink_step(
                     system,
-                    (before, &current),
+                    &current,
                     (&tangent, orientation),
                     &scales,
                     min_step,
                     opts,
-                );
+                )
+                .or_else(|| {
+                    corner_step(
+                        system,
+                        (before, &current),
+                        (&tangent, orientation),
+                        &scales,
+                        min_step,
+                        opts,
+                    )
+                });
                 let Some(found) = corner else {
                     path.end = PathEnd::Failed(format!(
                         "continuation stopped after the point at parameter {:.9e}: {why} even with the minimum step {:.3e} (λ units), and no corner step converged; the {} points converged so far are kept",
@@ -538,6 +548,99 @@ fn correct_on<S: ParameterSystem>(
         linearization: lin,
     };
     Ok((sol, new_tangent))
+}
+
+/// The kink step: the next point when the pseudo-arc-length corrector fails even at the minimum
+/// step h_min because the path turns sharply at a kink just ahead.
+///
+/// The sampled friction force is piecewise linear in the harmonics, so the path is piecewise
+/// straight in u: on the far side of a kink (a sample changing stick, slip or contact) the path
+/// follows the null direction t_B of that facet's Jacobian, oriented by the path's orientation σ
+/// (Allgower & Georg 1990, §12.1: sign det [G; tᵀ] is the same on both sides of a facet). At a
+/// sharp fold t_B points back against the incoming tangent t, and no hyperplane ahead along t
+/// meets the outgoing segment — Newton then cycles between the two facets at any step size.
+///
+/// The facet beyond is found by linearising g (the scaled residual) at y_p = y_c + s_p t,
+/// s_p = 1, 2, 4 h_min. The kink on the incoming line is where that facet's linearisation
+/// vanishes best along t: s_c = s_p − (g_p · Gt)/(Gt · Gt), clamped to [0, s_p]; the next
+/// point is then sought on the hyperplane through c + h t_B orthogonal to t_B (h = 1, 4,
+/// 16 h_min), accepted within h of that prediction and ahead of the current point (its
+/// σ-oriented tangent points away from it). Returns as [`corner_step`].
+#[allow(clippy::type_complexity)]
+fn kink_step<S: ParameterSystem>(
+    system: &S,
+    current: &PathPoint<S::State>,
+    (tangent, orientation): (&[f64], f64),
+    s: &Scales,
+    min_step: f64,
+    opts: &ContinuationOptions,
+) -> Option<(NewtonSolution<S::State>, Tangent, f64)> {
+    let n = system.dim();
+    let y_c = scaled(current, s);
+    for factor in [1.0, 2.0, 4.0] {
+        let s_p = factor * min_step;
+        let y_p: Vec<f64> = y_c.iter().zip(tangent).map(|(y, t)| y + s_p * t).collect();
+        let x: Vec<f64> = y_p[..n].iter().map(|u| u * s.x).collect();
+        let mut lin = Linearization::zeros(n);
+        system
+            .evaluate(&x, y_p[n] * s.lambda, &current.state, &mut lin)
+            .ok()?;
+        let Some(beyond) = tangent_with(&lin, s, tangent) else {
+            continue;
+        };
+        let beyond = beyond.oriented(orientation);
+        if dot(&beyond.t, tangent) > 0.99 {
+            continue;
+        }
+        let along = scaled_jacobian_times(&lin, s, tangent);
+        let g_p: Vec<f64> = lin.residual.iter().map(|r| r / s.residual).collect();
+        let s_c = (s_p - dot(&g_p, &along) / dot(&along, &along)).clamp(0.0, s_p);
+        if !s_c.is_finite() {
+            continue;
+        }
+        let corner: Vec<f64> = y_c.iter().zip(tangent).map(|(y, t)| y + s_c * t).collect();
+        for h in [1.0, 4.0, 16.0].map(|f| f * min_step) {
+            let predicted: Vec<f64> = corner
+                .iter()
+                .zip(&beyond.t)
+                .map(|(c, t)| c + h * t)
+                .collect();
+            let Ok((sol, Some(t))) = correct_on(
+                system,
+                &current.state,
+                &predicted,
+                &beyond.t,
+                &beyond.t,
+                s,
+                opts,
+            ) else {
+                continue;
+            };
+            let mut y: Vec<f64> = sol.x.iter().map(|x| x / s.x).collect();
+            y.push(sol.parameter / s.lambda);
+            let off: Vec<f64> = y.iter().zip(&predicted).map(|(a, b)| a - b).collect();
+            let moved: Vec<f64> = y.iter().zip(&y_c).map(|(a, b)| a - b).collect();
+            let t = t.oriented(orientation);
+            if dot(&moved, &t.t) > 0.0 && norm(&off) <= h {
+                let length = norm(&moved);
+                return Some((sol, t, length));
+            }
+        }
+    }
+    None
+}
+
+/// G v for the scaled Jacobian G = [∂r/∂u ∂r/∂μ] / r_s (the first rows of [`bordered`]).
+fn scaled_jacobian_times(lin: &Linearization, s: &Scales, v: &[f64]) -> Vec<f64> {
+    let n = lin.residual.len();
+    let cx = s.x / s.residual;
+    let cl = s.lambda / s.residual;
+    (0..n)
+        .map(|i| {
+            let row: f64 = (0..n).map(|j| lin.jacobian[(i, j)] * v[j]).sum();
+            row * cx + lin.d_parameter[i] * cl * v[n]
+        })
+        .collect()
 }
 
 /// The corner step: the next point when the pseudo-arc-length corrector fails even at the minimum

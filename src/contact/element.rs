@@ -9,9 +9,17 @@
 //! vector. The forces `[F1; F2; Fn]` (N) come in the same order, with the internal-force sign of
 //! [`law`].
 //!
-//! Periods are marched from the given slider state until the end-of-period state repeats (at most
-//! [`MAX_PERIODS`]); the forces are those of the last period. The Jacobian is the exact
-//! derivative of this map F(Q; w_in), in which the caller's start state w_in is a parameter
+//! The evaluated map is F(Q): the last period of the marching from the slider state at rest
+//! ([`REST`]) until the end-of-period state repeats (at most [`MAX_PERIODS`]). It depends on Q
+//! alone, so the harmonic balance residual is a function of the unknowns and the continuation
+//! follows one curve: a slider that sticks all period (or slips one way only, a shakedown) has no
+//! periodic position of its own, and one carried from point to point would make the solutions
+//! depend on the path's history. The caller's slider state is a warm start, used as is where
+//! it gives the same periodic state (every direction slips both ways or separates in the last
+//! period: the slider is then set by the motion alone) and replaced by [`REST`] elsewhere.
+//! Periods are marched from the start state until the end-of-period state repeats; the forces
+//! are those of the last period. The Jacobian is the exact
+//! derivative of this map F(Q; w_in) for the start state w_in used
 //! (Newton needs ∂F/∂Q of exactly the map it evaluates): ∂w/∂Q is carried through the samples of
 //! the last period (`docs/theory.md`) with two extra columns for ∂w_start, closed per direction:
 //! * a direction that slips or separates in the last period: by periodicity w_start = w_end —
@@ -338,6 +346,50 @@ impl Workspace {
 /// (signals·m, overwritten) and, if `jacobian`, the local Jacobian to the workspace
 /// ([`Workspace::jacobian`]).
 pub fn evaluate(
+    element: &LocalElement,
+    aft: &Aft,
+    x: &[f64],
+    slider: &mut [f64; 2],
+    force: &mut [f64],
+    jacobian: bool,
+    ws: &mut Workspace,
+) -> Result<Marching> {
+    let warm = *slider;
+    let marching = march_from(element, aft, x, slider, force, jacobian, ws)?;
+    if warm != REST && !forgets_start(element, ws) {
+        // The warm start gives the periodic state reached from rest only where every direction
+        // forgets its start state in the last period; elsewhere march from rest.
+        *slider = REST;
+        return march_from(element, aft, x, slider, force, jacobian, ws);
+    }
+    Ok(marching)
+}
+
+/// The slider state at rest (the origin of the relative motion), from which the periodic state
+/// of [`evaluate`] is defined.
+pub const REST: [f64; 2] = [0.0; 2];
+
+/// Whether every tangential direction forgets its start state in the last marched period: it
+/// separates at some sample (the slider follows u), or it slips both ways (the slider is set
+/// by the last slip, whatever it was before). A direction that sticks all period, or slips one
+/// way only (a shakedown: the loop touches μ f_n at one instant), keeps a slider position that
+/// depends on where the marching started.
+fn forgets_start(element: &LocalElement, ws: &Workspace) -> bool {
+    (0..element.tangential).all(|d| {
+        let mut slips = [false; 2];
+        for (j, r) in ws.regime.iter().enumerate() {
+            match r[d] {
+                Regime::Separation => return true,
+                Regime::Slip => slips[usize::from(ws.ft[d][j] > 0.0)] = true,
+                Regime::Stick => {}
+            }
+        }
+        slips[0] && slips[1]
+    })
+}
+
+/// [`evaluate`] from the caller's start state `slider` (no restart from [`REST`]).
+fn march_from(
     element: &LocalElement,
     aft: &Aft,
     x: &[f64],
