@@ -8,8 +8,8 @@ use nlrom::contact::element::{evaluate, LocalElement, Workspace};
 use nlrom::contact::law::{ContactParams, Variant};
 use nlrom::harmonics::HarmonicLayout;
 
-mod contact_common;
-use contact_common::Rng;
+mod support;
+use support::contact::Rng;
 
 fn params(kt: f64, kn: f64, mu: f64, n0: f64) -> ContactParams {
     ContactParams::new(kt, kn, mu, n0, "test").unwrap()

@@ -12,8 +12,8 @@ use nlrom::contact::aft::global_index;
 use nlrom::contact::grounded::DofElements;
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 
-mod contact_common;
-use contact_common::{check_derivative, check_jacobian, forces, Rng};
+mod support;
+use support::contact::{check_derivative, check_jacobian, forces, Rng};
 
 fn case_elements(elements: &str) -> Vec<FrictionElement> {
     let text = format!(

@@ -12,8 +12,8 @@ use nlrom::cyclic::{harmonic_indices, CyclicGeometry};
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 use nlrom::vec3::{mat_mul, Mat3};
 
-mod contact_common;
-use contact_common::{check_derivative, check_jacobian, forces, Rng};
+mod support;
+use support::contact::{check_derivative, check_jacobian, forces, Rng};
 
 /// A rotation matrix from a random axis and angle (Rodrigues).
 fn random_rotation(rng: &mut Rng) -> Mat3 {

@@ -15,8 +15,8 @@ use nlrom::commands::{solve_case, Reporter, RomPolicy, SolveOptions};
 use nlrom::contact::grounded::DofElements;
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 
-mod contact_common;
-use contact_common::Rng;
+mod support;
+use support::contact::Rng;
 
 fn case_text(elements: &str) -> String {
     format!(

@@ -9,14 +9,14 @@
 //!   independent quantity, within 3 % (the difference is O(Δf²/k_t) per sample step, 32 samples);
 //! - `tools/post/plot_contact.py` reads the file with h5py and writes both PNGs.
 
-mod common;
+mod support;
 
 use std::path::Path;
 
-use common::cli::{json_report, root};
-use common::python::run_python;
 use nlrom::output::read_results;
 use serde_json::Value;
+use support::cli::{json_report, root};
+use support::python::run_python;
 
 fn slipping_demo(dir: &Path) -> std::path::PathBuf {
     let text = std::fs::read_to_string(root().join("cases/demo.toml"))
