@@ -203,22 +203,10 @@ fn damped_step<E>(
     })
 }
 
-/// Solves A x = b by dense LU with partial pivoting; `None` when A is (numerically) singular.
+/// Solves A x = b by dense LU with partial pivoting; `None` when A is (numerically) singular
+/// (smallest pivot ≤ 1e-15 × the largest) or the solution is not finite.
 pub fn solve_dense(a: &Mat<f64>, b: &[f64]) -> Option<Vec<f64>> {
-    let lu = a.partial_piv_lu();
-    let u = lu.U();
-    let diag = (0..u.nrows()).map(|i| u[(i, i)].abs());
-    let (min, max) = diag.fold((f64::INFINITY, 0.0_f64), |(lo, hi), d| {
-        (lo.min(d), hi.max(d))
-    });
-    let regular = min > 1e-15 * max;
-    if !regular {
-        return None;
-    }
-    let mut x = Col::from_fn(b.len(), |i| b[i]);
-    lu.solve_in_place(x.as_mut());
-    let x: Vec<f64> = (0..b.len()).map(|i| x[i]).collect();
-    x.iter().all(|v| v.is_finite()).then_some(x)
+    solve_dense_signed(a, b).map(|(x, _)| x)
 }
 
 /// Solves a x = b as [`solve_dense`] and returns the sign of det a as well (±1), from the

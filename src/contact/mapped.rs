@@ -78,6 +78,39 @@ impl LinearMap {
         }
     }
 
+    /// The element-local part of B for the inner DOFs `inner`: `outer` receives the outer DOFs
+    /// they read (ascending, each once) and `b` the |inner| × |outer| coefficients (row-major),
+    /// so that y_inner = B_e x_outer.
+    pub fn local(&self, inner: &[usize], outer: &mut Vec<usize>, b: &mut Vec<f64>) {
+        outer.clear();
+        for &r in inner {
+            outer.extend(self.rows[r].iter().map(|&(s, _)| s));
+        }
+        outer.sort_unstable();
+        outer.dedup();
+        b.clear();
+        b.resize(inner.len() * outer.len(), 0.0);
+        for (i, &r) in inner.iter().enumerate() {
+            for &(s, c) in &self.rows[r] {
+                let k = outer.binary_search(&s).expect("listed above");
+                b[i * outer.len() + k] += c;
+            }
+        }
+    }
+
+    /// Most outer DOFs read by any `group` of inner DOFs (the size of the element-local B_e of
+    /// [`LinearMap::local`]).
+    pub fn max_outer(&self, groups: impl Iterator<Item = Vec<usize>>) -> usize {
+        let (mut outer, mut b) = (Vec::new(), Vec::new());
+        groups
+            .map(|g| {
+                self.local(&g, &mut outer, &mut b);
+                outer.len()
+            })
+            .max()
+            .unwrap_or(0)
+    }
+
     /// J_x += Bᵀ J_y B (J_y square of `layout.len(inner)`, J_x of `layout.len(outer)`).
     pub fn add_jacobian(
         &self,
@@ -110,6 +143,66 @@ impl LinearMap {
                         jx[(so, j)] += c * t[(ri, j)];
                     }
                 }
+            }
+        }
+    }
+}
+
+/// One element's node-space results on its inner DOFs mapped to its outer DOFs with the
+/// element-local B_e of [`LinearMap::local`] (`b`, n_in × n_out row-major), the same for each of
+/// the m coefficients: node-space entry p = d·m + l is DOF d, coefficient l (signal order).
+/// `vectors` are (inner, outer) pairs mapped as v_x = B_eᵀ v_y; with `jacobian` = (J_y, J_x),
+/// both column-major, J_x = B_eᵀ J_y B_e. `work` is scratch.
+pub fn element_to_outer(
+    b: &[f64],
+    (n_in, n_out, m): (usize, usize, usize),
+    vectors: &mut [(&[f64], &mut [f64])],
+    jacobian: Option<(&[f64], &mut [f64])>,
+    work: &mut Vec<f64>,
+) {
+    let (pi, po) = (n_in * m, n_out * m);
+    for (vy, vx) in vectors.iter_mut() {
+        transpose_apply(b, (n_in, n_out, m), vy, &mut vx[..po]);
+    }
+    let Some((jy, jx)) = jacobian else {
+        return;
+    };
+    // T = J_y B (pi × po, column-major): column (k, l) = Σ_d B[d, k] · column (d, l) of J_y.
+    work.clear();
+    work.resize(pi * po, 0.0);
+    for k in 0..n_out {
+        for d in 0..n_in {
+            let c = b[d * n_out + k];
+            if c == 0.0 {
+                continue;
+            }
+            for l in 0..m {
+                let src = &jy[(d * m + l) * pi..(d * m + l + 1) * pi];
+                let dst = &mut work[(k * m + l) * pi..(k * m + l + 1) * pi];
+                for (o, s) in dst.iter_mut().zip(src) {
+                    *o += c * s;
+                }
+            }
+        }
+    }
+    // J_x = Bᵀ T, column by column.
+    for col in 0..po {
+        let t = &work[col * pi..(col + 1) * pi];
+        transpose_apply(b, (n_in, n_out, m), t, &mut jx[col * po..(col + 1) * po]);
+    }
+}
+
+/// out = B_eᵀ v on node-space vectors (entry d·m + l; `out` of length n_out·m).
+fn transpose_apply(b: &[f64], (n_in, n_out, m): (usize, usize, usize), v: &[f64], out: &mut [f64]) {
+    out.fill(0.0);
+    for d in 0..n_in {
+        for k in 0..n_out {
+            let c = b[d * n_out + k];
+            if c == 0.0 {
+                continue;
+            }
+            for l in 0..m {
+                out[k * m + l] += c * v[d * m + l];
             }
         }
     }

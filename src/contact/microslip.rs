@@ -514,7 +514,7 @@ fn projection(a: f64, b: f64) -> [[f64; 3]; 3] {
     let d = b - a;
     let (sa, ca) = a.sin_cos();
     let (sb, cb) = b.sin_cos();
-    let s2 = (2.0 * b).sin() - (2.0 * a).sin();
+    let s2 = 2.0 * (sb * cb - sa * ca);
     let i1 = d;
     let ic = sb - sa;
     let is = cb - ca; // ∫ −sin
@@ -581,11 +581,39 @@ fn build(mo: &Motion, slider: f64) -> Result<Cycle> {
             },
         });
     }
+    // A history-free start known in closed form: the re-contact (separation), or the end of
+    // positive slip at the maximum of g (stick–slip without separation, 2μ n0e < |G| + |H|,
+    // eq. 19); else (complete stick, or a degenerate sinusoid) the transient march below.
+    let known = match mo.window {
+        Some((t2, _)) => Some((t2, mo.recontact_state(t2))),
+        None if mo.g.0 > 0.0
+            && mo.h.0 > 0.0
+            && 2.0 * mo.p.mu * mo.n0e < (mo.g.0 + mo.h.0) * (1.0 - 1e-9) =>
+        {
+            let tp = (-mo.g.1).rem_euclid(TAU);
+            Some((
+                tp,
+                PhaseKind::Stick {
+                    slider: mo.u_at(tp) - mo.p.mu * mo.n_at(tp) / mo.p.kt,
+                    origin: SliderOrigin::AfterPositiveSlip(tp),
+                },
+            ))
+        }
+        None => None,
+    };
     // Transient: from τ = 0 until the first history-free event (at most two periods).
     let mut t = 0.0;
     let mut kind = mo.initial_state(slider);
     let mut start = None;
-    for _ in 0..MAX_EVENTS {
+    let transient_events = match known {
+        Some((t0, k0)) => {
+            start = Some(t0);
+            kind = k0;
+            0
+        }
+        None => MAX_EVENTS,
+    };
+    for _ in 0..transient_events {
         let (d, next) = mo.next_event(t, kind);
         if t + d > 2.0 * TAU {
             break;

@@ -26,7 +26,7 @@ use crate::contact::kinematics::{
     check_frame, node_jacobian, relative_local, relative_transpose, Phases,
 };
 use crate::contact::law::{ContactParams, Variant};
-use crate::contact::mapped::LinearMap;
+use crate::contact::mapped::{element_to_outer, LinearMap};
 use crate::error::{Error, Result};
 use crate::harmonics::{HarmonicForce, HarmonicLayout};
 use crate::vec3::{mat_mul, transpose, Mat3};
@@ -83,6 +83,9 @@ pub struct PairSet {
     coupling: Option<SectorCoupling>,
     /// Rows of the pairs are inner DOFs y = B x of this map (x: the DOFs the force acts on).
     map: Option<LinearMap>,
+    /// Most DOFs of one pair's node-space results: 6, or through the map the most outer DOFs a
+    /// pair reads.
+    slot_dofs: usize,
     aft: AftCache,
     slots: SlotStorage,
 }
@@ -115,6 +118,13 @@ struct Buffers {
     g: Vec<f64>,
     jl: Vec<f64>,
     col: Vec<f64>,
+    /// Through the map: the pair's inner rows, outer DOFs, local B_e, the inner Jacobian and
+    /// scratch.
+    inner: Vec<usize>,
+    outer: Vec<usize>,
+    b_e: Vec<f64>,
+    jy: Vec<f64>,
+    work: Vec<f64>,
 }
 
 impl PairSet {
@@ -168,6 +178,7 @@ impl PairSet {
             prepared,
             coupling,
             map: None,
+            slot_dofs: 6,
             aft: AftCache::default(),
             slots: SlotStorage::default(),
         })
@@ -184,6 +195,9 @@ impl PairSet {
                 self.n_dofs
             )));
         }
+        self.slot_dofs = map
+            .max_outer((0..self.pairs.len()).map(|i| self.inner_rows(i)))
+            .max(6);
         self.map = Some(map);
         Ok(self)
     }
@@ -328,7 +342,8 @@ impl PairSet {
     }
 
     /// Node-space results of pair `i` into `slot`: forces, ∂/∂n0 (times the preload rate) and
-    /// the Jacobian Lᵀ J L (column-major), as asked by `wanted`.
+    /// the Jacobian Lᵀ J L (column-major), as asked by `wanted`; through the DOF map, on the
+    /// outer DOFs the pair reads (B_eᵀ F, B_eᵀ J B_e with the pair's local part of B).
     fn pair_slot(
         &self,
         i: usize,
@@ -347,11 +362,37 @@ impl PairSet {
         let m = layout.coefficients();
         let sides = if pair.target.is_some() { 2 } else { 1 };
         let np = 3 * m * sides;
-        *slot.len = np;
-        for (p, g) in slot.index[..np].iter_mut().enumerate() {
-            *g = global_index(layout, p % m, self.node_row(i, p, m), self.n_dofs);
-        }
-        slot.force[..np].copy_from_slice(&b.q[..np]);
+        let mapped = self.map.as_ref().map(|map| {
+            b.inner = self.inner_rows(i);
+            map.local(&b.inner, &mut b.outer, &mut b.b_e);
+            (map.outer(), b.outer.len())
+        });
+        let n_out = match mapped {
+            None => {
+                for (p, g) in slot.index[..np].iter_mut().enumerate() {
+                    *g = global_index(layout, p % m, self.node_row(i, p, m), self.n_dofs);
+                }
+                *slot.len = np;
+                slot.force[..np].copy_from_slice(&b.q[..np]);
+                np
+            }
+            Some((outer, n_outer)) => {
+                let po = n_outer * m;
+                for (q, g) in slot.index[..po].iter_mut().enumerate() {
+                    *g = global_index(layout, q % m, b.outer[q / m], outer);
+                }
+                *slot.len = po;
+                let dims = (3 * sides, n_outer, m);
+                element_to_outer(
+                    &b.b_e,
+                    dims,
+                    &mut [(&b.q[..np], &mut slot.force[..po])],
+                    None,
+                    &mut b.work,
+                );
+                po
+            }
+        };
         if !local_jacobian {
             return Ok(());
         }
@@ -371,11 +412,37 @@ impl PairSet {
                 fc,
                 pair.target.map(|_| ft),
             );
-            slot.dn0[..np].copy_from_slice(&b.q[..np]);
+            if mapped.is_some() {
+                element_to_outer(
+                    &b.b_e,
+                    (3 * sides, b.outer.len(), m),
+                    &mut [(&b.q[..np], &mut slot.dn0[..n_out])],
+                    None,
+                    &mut b.work,
+                );
+            } else {
+                slot.dn0[..np].copy_from_slice(&b.q[..np]);
+            }
         }
         if !wanted.jacobian {
             return Ok(());
         }
+        let target = pair.target.is_some();
+        if mapped.is_none() {
+            node_jacobian(
+                &prep.frame,
+                &prep.target_frame,
+                ph,
+                jac,
+                cols,
+                m,
+                target,
+                &mut b.jl,
+                &mut slot.jacobian[..np * np],
+            );
+            return Ok(());
+        }
+        b.jy.resize(np * np, 0.0);
         node_jacobian(
             &prep.frame,
             &prep.target_frame,
@@ -383,11 +450,28 @@ impl PairSet {
             jac,
             cols,
             m,
-            pair.target.is_some(),
+            target,
             &mut b.jl,
-            &mut slot.jacobian[..np * np],
+            &mut b.jy[..np * np],
+        );
+        element_to_outer(
+            &b.b_e,
+            (3 * sides, b.outer.len(), m),
+            &mut [],
+            Some((&b.jy[..np * np], &mut slot.jacobian[..n_out * n_out])),
+            &mut b.work,
         );
         Ok(())
+    }
+
+    /// The rows (in the pairs' own DOF vector) of pair `i`: contact x y z, then target x y z.
+    fn inner_rows(&self, i: usize) -> Vec<usize> {
+        let pair = &self.pairs[i];
+        pair.contact
+            .iter()
+            .chain(pair.target.iter().flatten())
+            .copied()
+            .collect()
     }
 
     /// Row in the DOF vector of node-space index `p` (side, component, coefficient) of pair `i`.
@@ -421,30 +505,10 @@ impl PairSet {
                 layout.coefficients()
             )));
         }
+        // the pairs read y = B x; each pair's results go to the outer DOFs it reads
+        // (`pair_slot`), so the outputs are summed on x directly
         let y = map.forward(layout, q);
-        let n = layout.len(self.n_dofs);
-        let mut force = outputs.force.as_ref().map(|_| vec![0.0; n]);
-        let mut dn0 = outputs.dn0.as_ref().map(|_| vec![0.0; n]);
-        let mut jacobian = outputs
-            .jacobian
-            .as_ref()
-            .map(|_| faer::Mat::<f64>::zeros(n, n));
-        let inner = Outputs {
-            force: force.as_deref_mut(),
-            dn0: dn0.as_deref_mut(),
-            jacobian: jacobian.as_mut().map(|j| j.as_mut()),
-        };
-        self.run_inner(layout, &y, state, inner)?;
-        if let (Some(out), Some(f)) = (outputs.force, &force) {
-            map.add_transpose(layout, f, out);
-        }
-        if let (Some(out), Some(d)) = (outputs.dn0, &dn0) {
-            map.add_transpose(layout, d, out);
-        }
-        if let (Some(out), Some(j)) = (outputs.jacobian, &jacobian) {
-            map.add_jacobian(layout, j.as_ref(), out);
-        }
-        Ok(())
+        self.run_inner(layout, &y, state, outputs)
     }
 
     /// Evaluates every pair in parallel on the pairs' own DOF vector and sums into the outputs.
@@ -465,7 +529,7 @@ impl PairSet {
         };
         assemble(
             state,
-            6 * m,
+            self.slot_dofs * m,
             outputs,
             &self.slots,
             || buffers(&aft, m),
@@ -482,6 +546,11 @@ fn buffers(aft: &Aft, m: usize) -> Buffers {
         g: vec![0.0; 3 * m],
         jl: Vec::new(),
         col: vec![0.0; 3 * m],
+        inner: Vec::new(),
+        outer: Vec::new(),
+        b_e: Vec::new(),
+        jy: Vec::new(),
+        work: Vec::new(),
     }
 }
 

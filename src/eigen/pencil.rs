@@ -140,20 +140,43 @@ fn direct_form<T>(
 where
     T: faer::traits::ComplexField<Real = f64>,
 {
+    let llt = m.llt(Side::Lower).map_err(|_| not_definite())?;
+    let (lambda, mut u) = self_adjoint_eigen_qr(direct_matrix(&llt, k).as_ref())?;
+    llt.L()
+        .adjoint()
+        .solve_upper_triangular_in_place(u.as_mut());
+    Ok((lambda, u))
+}
+
+/// The eigenvalues (ascending) of the symmetric pencil (K, M) in the direct form of
+/// [`pencil_modes`], without the vectors: M positive definite, K symmetric of any sign;
+/// accurate to ε·max|λ| absolute (suited to the largest eigenvalue, e.g. a stability limit).
+///
+/// Errors ([`Error::Compute`]): M is not positive definite, or the eigensolver fails.
+pub fn direct_eigenvalues(k: MatRef<'_, f64>, m: MatRef<'_, f64>) -> Result<Vec<f64>> {
+    let llt = m.llt(Side::Lower).map_err(|_| {
+        Error::Compute(
+            "the mass (or capacity) matrix M of the pencil (K, M) is not positive definite".into(),
+        )
+    })?;
+    self_adjoint_eigenvalues_qr(direct_matrix(&llt, k).as_ref())
+}
+
+/// A = L⁻¹ K L⁻ᴴ for the factor M = L Lᴴ, symmetrised ((A + Aᴴ)/2).
+fn direct_matrix<T>(llt: &Llt<T>, k: MatRef<'_, T>) -> Mat<T>
+where
+    T: faer::traits::ComplexField<Real = f64>,
+{
     use faer::traits::math_utils::{add, conj, mul_real};
     let n = k.nrows();
-    let llt = m.llt(Side::Lower).map_err(|_| not_definite())?;
     let l = llt.L();
     let mut x = k.to_owned();
     l.solve_lower_triangular_in_place(x.as_mut());
     let mut a = x.adjoint().to_owned();
     l.solve_lower_triangular_in_place(a.as_mut());
-    let sym = Mat::from_fn(n, n, |i, j| {
+    Mat::from_fn(n, n, |i, j| {
         mul_real(&add(&a[(i, j)], &conj(&a[(j, i)])), &0.5)
-    });
-    let (lambda, mut u) = self_adjoint_eigen_qr(sym.as_ref())?;
-    l.adjoint().solve_upper_triangular_in_place(u.as_mut());
-    Ok((lambda, u))
+    })
 }
 
 /// The Cholesky factorisation K = L Lᴴ (see [`generalized`]).

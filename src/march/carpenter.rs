@@ -31,7 +31,7 @@ use super::lcp;
 use super::obstacle::{
     mul, DenseLu, HeatTerms, NonsmoothHistory, NonsmoothSettings, NonsmoothSystem,
 };
-use crate::eigen::self_adjoint_eigen_qr;
+use crate::eigen::pencil::direct_eigenvalues;
 use crate::error::{Error, Result};
 
 /// The stability limits of the explicit scheme (s).
@@ -51,7 +51,7 @@ impl StabilityLimits {
 }
 
 /// The largest generalised eigenvalue of the symmetric pencil (A, B) with B positive definite
-/// (rows/columns `range` of the row-major n × n matrices).
+/// (rows/columns `range` of the row-major n × n matrices), by [`direct_eigenvalues`].
 fn largest_eigenvalue(
     a: &[f64],
     b: &[f64],
@@ -60,25 +60,10 @@ fn largest_eigenvalue(
 ) -> Result<f64> {
     let k = range.len();
     let off = range.start;
+    let am = Mat::from_fn(k, k, |i, j| a[(off + i) * n + off + j]);
     let bm = Mat::from_fn(k, k, |i, j| b[(off + i) * n + off + j]);
-    let llt = bm.llt(faer::Side::Lower).map_err(|_| {
-        Error::Compute("carpenter: the mass (or capacity) matrix is not positive definite".into())
-    })?;
-    let l = llt.L().to_owned();
-    let mut x = Mat::from_fn(k, k, |i, j| a[(off + i) * n + off + j]);
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-        l.as_ref(),
-        x.as_mut(),
-        faer::Par::Seq,
-    );
-    let mut y = x.transpose().to_owned();
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-        l.as_ref(),
-        y.as_mut(),
-        faer::Par::Seq,
-    );
-    let sym = Mat::from_fn(k, k, |i, j| 0.5 * (y[(i, j)] + y[(j, i)]));
-    let (values, _) = self_adjoint_eigen_qr(sym.as_ref())?;
+    let values = direct_eigenvalues(am.as_ref(), bm.as_ref())
+        .map_err(|e| Error::Compute(format!("carpenter: the stability limit: {e}")))?;
     Ok(values.iter().fold(0.0_f64, |m, &v| m.max(v)))
 }
 
