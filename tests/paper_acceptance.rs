@@ -31,7 +31,7 @@ fn one_preload_case(dir: &Path, model: &str) -> PathBuf {
 
 /// (resonance frequency in Hz, peak amplitude in m) of `nlrom solve CASE --json`.
 fn resonance(case: &Path, out: &Path) -> (f64, f64) {
-    let json = json_report("solve", case, out);
+    let json = json_report("solve", case, out, &[]);
     let frf = &json["frf"][0];
     assert_eq!(frf["end"], "reached_end", "{frf}");
     (

@@ -41,7 +41,7 @@ fn per_element_state_and_loops_at_the_peak() {
     let dir = tempfile::tempdir().unwrap();
     let case = slipping_demo(dir.path());
     let out = dir.path().join("slip.h5");
-    let summary: Value = json_report("run", &case, &out);
+    let summary: Value = json_report("run", &case, &out, &[]);
     let resonance_hz = summary["frf"][0]["resonance_hz"].as_f64().unwrap();
 
     let r = read_results(&out).unwrap();

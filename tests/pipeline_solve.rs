@@ -22,7 +22,7 @@ use support::cli::{json_report, nlrom, root, stderr};
 
 /// `nlrom solve CASE -o OUT --json -q`: asserts exit status 0, returns the JSON report.
 fn solve_json(case: &Path, out: &Path) -> serde_json::Value {
-    json_report("solve", case, out)
+    json_report("solve", case, out, &[])
 }
 
 /// The chain of `cases/chain3_jenkins.toml` (matrices of `cases/chain3/`) with the given force,

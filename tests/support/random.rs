@@ -1,5 +1,5 @@
 //! Deterministic pseudo-random numbers for the tests' random inputs (the same sequence on every
-//! run and platform). `tests/corpus` includes this file by path.
+//! run and platform): an LCG, SplitMix64 and xorshift64. `tests/corpus` includes this file by path.
 #![allow(dead_code)]
 
 /// A 64-bit linear congruential generator (Knuth's MMIX constants), uniform in [0, 1).
@@ -37,5 +37,24 @@ impl SplitMix {
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
         ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Marsaglia's xorshift64 (Marsaglia 2003; shifts 13, 7, 17), uniform in [−1, 1): the random
+/// harmonic inputs of the contact-law tests.
+pub struct XorShift(pub u64);
+
+impl XorShift {
+    /// Uniform in [−1, 1).
+    pub fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+
+    /// `n` values uniform in [−scale, scale).
+    pub fn vec(&mut self, n: usize, scale: f64) -> Vec<f64> {
+        (0..n).map(|_| scale * self.uniform()).collect()
     }
 }
