@@ -353,8 +353,8 @@ fn thermal_rows(
                    nrows: usize,
                    keep_row: &dyn Fn(usize) -> Option<usize>| {
         let mut rows = vec![Vec::new(); nrows];
-        for j in 0..mat.ncols() {
-            let Some(b) = col_of[j] else { continue };
+        for (j, b) in col_of.iter().enumerate().take(mat.ncols()) {
+            let Some(b) = *b else { continue };
             for (i, &v) in mat.row_idx_of_col(j).zip(mat.val_of_col(j)) {
                 if let Some(r) = keep_row(i) {
                     rows[r].push((b, v));
