@@ -57,6 +57,14 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         self.force
     }
 
+    /// Sizes of the diagonal blocks of ∂r/∂Q over the harmonics
+    /// ([`HarmonicLayout::blocks`]): D̄ is block-diagonal over them, and the contact Jacobian
+    /// couples them only on the DOFs of elements whose state changes within the period (the
+    /// structured solve of [`crate::nonlinear::linsolve`]).
+    pub fn jacobian_blocks(&self) -> Vec<usize> {
+        self.layout.blocks(self.linear.n_condensed())
+    }
+
     /// Number of real unknowns n_N (2H + 1).
     pub fn dim(&self) -> usize {
         self.layout.len(self.linear.n_condensed())
@@ -182,6 +190,10 @@ pub struct FrequencyPath<'s, 'a, F: HarmonicForce> {
 impl<F: HarmonicForce> ParameterSystem for FrequencyPath<'_, '_, F> {
     type State = F::State;
 
+    fn jacobian_blocks(&self) -> Vec<usize> {
+        self.system.jacobian_blocks()
+    }
+
     fn dim(&self) -> usize {
         self.system.dim()
     }
@@ -215,6 +227,10 @@ pub struct LevelPath<'s, 'a, F: HarmonicForce> {
 
 impl<F: HarmonicForce> ParameterSystem for LevelPath<'_, '_, F> {
     type State = F::State;
+
+    fn jacobian_blocks(&self) -> Vec<usize> {
+        self.system.jacobian_blocks()
+    }
 
     fn dim(&self) -> usize {
         self.system.dim()
@@ -279,6 +295,10 @@ pub struct PreloadPath<'a, F: HarmonicForce, B: Fn(f64) -> Result<F> + Sync> {
 
 impl<F: HarmonicForce, B: Fn(f64) -> Result<F> + Sync> ParameterSystem for PreloadPath<'_, F, B> {
     type State = F::State;
+
+    fn jacobian_blocks(&self) -> Vec<usize> {
+        self.layout.blocks(self.linear.n_condensed())
+    }
 
     fn dim(&self) -> usize {
         self.layout.len(self.linear.n_condensed())

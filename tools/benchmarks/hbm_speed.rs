@@ -2,15 +2,18 @@
 //! numbers of docs/performance.md, "Harmonic balance").
 //!
 //! ```text
-//! cargo run --release --example hbm_speed -- sector CASE.toml [H] [POINTS]
+//! cargo run --release --example hbm_speed -- sector CASE.toml [H] [POINTS] [KEY=VALUE ...]
 //! cargo run --release --example hbm_speed -- synthetic [CONTACT_DOFS] [H] [SAMPLES]
 //! ```
 //!
 //! `sector`: the case's sector problem (reduction, SAMA interfaces, preload balance) with H
 //! harmonics (default 3; the case's AFT samples), a continuation of POINTS points (default 8) from
 //! the case's start frequency: wall time per point and per Newton iteration (corrector
-//! iterations; the predictor's tangent solves are included in the per-point time), then the
-//! split of one Newton iteration at the last point.
+//! iterations; the predictor's tangent solves are included in the per-point time), the linear
+//! solves by path (dense LU or structured, with the mean rank of the low-rank correction), then
+//! the split of one Newton iteration at the last point. KEY=VALUE overrides the case:
+//! `solver=dense|auto|structured` (`harmonic_balance.linear_solver`), `n0=N` (every contact's
+//! preload), `start=F` (`continuation.start`, in the case's unit).
 //!
 //! `synthetic`: CONTACT_DOFS / 6 node-to-node pairs (frames along x, y, z; k_t = k_n = 1 N/m,
 //! μ = 0.5, n0 = 1 N, 1-D friction) on a chain of CONTACT_DOFS unit masses and unit springs
@@ -22,21 +25,22 @@
 //! condensation of the linear part at ω; AFT = contact forces alone (inverse DFT, contact law
 //! march, DFT); contact Jacobian = forces with the analytic Jacobian minus forces alone;
 //! linear assembly = the whole residual + Jacobian evaluation minus the contact part; dense LU
-//! = faer's partial-pivoting LU and solve of the Jacobian (`nonlinear::solve_dense`).
+//! = faer's partial-pivoting LU and solve of the Jacobian (`nonlinear::solve_dense`); structured
+//! solve = the block LUs and low-rank correction of `nonlinear::linsolve` on the same Jacobian.
 
 use std::f64::consts::PI;
 use std::path::Path;
 use std::time::Instant;
 
 use faer::Mat;
-use nlrom::case::Case;
+use nlrom::case::{Case, LinearSolverKey};
 use nlrom::contact::law::{ContactParams, Variant};
 use nlrom::contact::pairs::{PairElement, PairSet};
 use nlrom::continuation::trace;
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel};
 use nlrom::interface::build_interfaces;
-use nlrom::nonlinear::{solve_dense, Linearization, ParameterSystem};
+use nlrom::nonlinear::{linsolve, solve_dense, LinearSolver, Linearization, ParameterSystem, SolverChoice};
 use nlrom::problem::sector::SectorProblem;
 use nlrom::problem::settings::case_continuation;
 use nlrom::reduction::reduce;
@@ -57,7 +61,12 @@ fn main() -> Result<()> {
         rayon::current_num_threads()
     );
     match args.first().map(String::as_str) {
-        Some("sector") => sector(Path::new(&args[1]), num(2, 3), num(3, 8)),
+        Some("sector") => sector(
+            Path::new(&args[1]),
+            num(2, 3),
+            num(3, 8),
+            args.get(4..).unwrap_or_default(),
+        ),
         Some("synthetic") => {
             let h = num(2, 3);
             let samples = num(3, (4 * (h + 1)).next_power_of_two());
@@ -85,6 +94,17 @@ fn cpu_seconds() -> f64 {
         .map_or(0.0, |(u, s)| (u + s) / 100.0)
 }
 
+/// Peak resident memory of this process so far (GB), from /proc/self/status (VmHWM); 0 where
+/// unavailable.
+fn peak_rss_gb() -> f64 {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))
+        .and_then(|v| v.split_whitespace().next()?.parse::<f64>().ok())
+        .map_or(0.0, |kb| kb / 1024.0 / 1024.0)
+}
+
 /// Best wall time (s) of `REPEAT` runs of `f`, and the CPU time of that run.
 fn best<T>(mut f: impl FnMut() -> T) -> (f64, f64) {
     (0..REPEAT)
@@ -96,9 +116,31 @@ fn best<T>(mut f: impl FnMut() -> T) -> (f64, f64) {
         .fold((f64::INFINITY, 0.0), |a, b| if b.0 < a.0 { b } else { a })
 }
 
-fn sector(path: &Path, h: usize, points: usize) -> Result<()> {
+fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<()> {
     let mut case = Case::load(path)?;
     case.harmonic_balance.harmonics = h;
+    for o in overrides {
+        let (key, value) = o.split_once('=').expect("KEY=VALUE");
+        match key {
+            "solver" => {
+                case.harmonic_balance.linear_solver = match value {
+                    "dense" => LinearSolverKey::Dense,
+                    "auto" => LinearSolverKey::Auto,
+                    "structured" => LinearSolverKey::Structured,
+                    other => panic!("solver={other}: dense, auto or structured"),
+                }
+            }
+            "n0" => {
+                let n0: f64 = value.parse().expect("n0=NUMBER");
+                case.contact.iter_mut().for_each(|c| c.n0 = n0);
+            }
+            "start" => {
+                let c = case.continuation.as_mut().expect("a [continuation] table");
+                c.start = value.parse().expect("start=NUMBER");
+            }
+            other => panic!("unknown override {other}: solver, n0, start"),
+        }
+    }
     let t = Instant::now();
     let sm = model::build(&case, &mut |_| {})?;
     let rom = reduce(&case, &sm, &mut |_| {})?;
@@ -120,8 +162,10 @@ fn sector(path: &Path, h: usize, points: usize) -> Result<()> {
     let mut opts = case_continuation(&case)?;
     opts.max_points = points;
     let (t, c) = (Instant::now(), cpu_seconds());
+    let before = linsolve::stats();
     let path = trace(&fp, &opts, &mut |_| {})?;
     let (wall, cpu) = (t.elapsed().as_secs_f64(), cpu_seconds() - c);
+    let after = linsolve::stats();
     let iterations: usize = path.points.iter().map(|p| p.iterations).sum();
     let n = path.points.len();
     println!(
@@ -133,6 +177,17 @@ fn sector(path: &Path, h: usize, points: usize) -> Result<()> {
         wall / iterations.max(1) as f64,
         cpu / n as f64,
         cpu / iterations.max(1) as f64
+    );
+    let structured = after.structured - before.structured;
+    println!(
+        "linear solves ({:?}): {} dense LU, {structured} structured (mean rank {:.0} = {:.1} % of the unknowns), {} fallbacks to the dense LU; peak RSS {:.2} GB",
+        opts.newton.linear_solver,
+        after.dense - before.dense,
+        (after.rank_sum - before.rank_sum) as f64 / structured.max(1) as f64,
+        100.0 * (after.rank_sum - before.rank_sum) as f64
+            / (after.size_sum - before.size_sum).max(1) as f64,
+        after.fallbacks - before.fallbacks,
+        peak_rss_gb()
     );
     let last = &path.points[n - 1];
     split(&fp, &system, &last.x, last.parameter, &last.state)
@@ -172,6 +227,13 @@ fn split<F: HarmonicForce>(
     faer::set_global_parallelism(faer::Par::Seq);
     let lu_seq = best(|| solve_dense(&lin.jacobian, &lin.residual).unwrap());
     faer::set_global_parallelism(par);
+    let solver = LinearSolver::new(fp.jacobian_blocks(), SolverChoice::Structured);
+    let mut rank = None;
+    let structured = best(|| {
+        let (x, path) = solver.solve_path(lin.jacobian.as_ref(), &lin.residual);
+        rank = Some(path);
+        x.unwrap()
+    });
     let total = whole.0 + lu.0;
     let row = |what: &str, t: (f64, f64)| {
         println!(
@@ -194,6 +256,8 @@ fn split<F: HarmonicForce>(
         minus(minus(whole, aft_jac), condense),
     );
     row("dense LU + solve", lu);
+    row("structured solve (in place of the dense LU)", structured);
+    println!("  structured path: {rank:?}");
     println!(
         "  dense LU + solve on 1 thread: {:.4} s (CPU {:.2} s; wall {:.2}× the parallel one); {:.1} GFLOP/s parallel",
         lu_seq.0,
