@@ -204,7 +204,7 @@ fn split<F: HarmonicForce>(
     let layout = system.layout();
     let force = system.force();
     let nf = x.len();
-    let condense = best(|| system.condense_all(omega).unwrap());
+    let condense = best(|| system.condense_all_applied(x, omega).unwrap());
     let aft = best(|| {
         let mut s = state.clone();
         let mut f = vec![0.0; nf];
