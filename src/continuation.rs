@@ -201,12 +201,13 @@ pub fn trace_from<S: ParameterSystem>(
         residual: system.residual_scale(),
     };
     let solver = LinearSolver::new(system.jacobian_blocks(), opts.newton.linear_solver);
-    let first = initial_tangent(&start.linearization, &scales, direction, &solver).ok_or_else(|| {
-        Error::Compute(format!(
+    let first =
+        initial_tangent(&start.linearization, &scales, direction, &solver).ok_or_else(|| {
+            Error::Compute(format!(
             "the Jacobian at the start point (parameter {}) is singular; try another start value",
             opts.start
         ))
-    })?;
+        })?;
     let mut orientation = first.orientation;
     let mut tangent = first.t;
     let mut step = opts.initial_step / range / tangent[tangent.len() - 1].abs().max(1e-3);
@@ -535,8 +536,8 @@ fn correct_on<S: ParameterSystem>(
         ..opts.newton
     };
     let solver = LinearSolver::new(system.jacobian_blocks(), opts.newton.linear_solver);
-    let (it, iterations) = newton_core(predicted.to_vec(), &mut eval, 1.0, &newton, &solver)
-        .map_err(|f| f.message)?;
+    let (it, iterations) =
+        newton_core(predicted.to_vec(), &mut eval, 1.0, &newton, &solver).map_err(|f| f.message)?;
     let residual = norm(&it.g[..n]);
     let z = it.z;
     let (lin, end) = it.extra;

@@ -390,7 +390,10 @@ fn condensation_of_a_complex_block() {
             .map(|j| cond.stiffness_derivative[(i, j)] * qv[j])
             .sum();
         let got = applied.stiffness_derivative_q[i];
-        assert!((got - expect).norm() <= 1e-12 * expect.norm(), "{got} vs {expect}");
+        assert!(
+            (got - expect).norm() <= 1e-12 * expect.norm(),
+            "{got} vs {expect}"
+        );
         let df = cond.force_derivative[i];
         assert!((applied.force_derivative[i] - df).norm() <= 1e-12 * df.norm());
         assert!((applied.force[i] - cond.force[i]).norm() <= 1e-14 * cond.force[i].norm());

@@ -399,7 +399,9 @@ impl Woodbury {
         let lus: Vec<Option<PartialPivLu<f64>>> = starts
             .windows(2)
             .map(|w| {
-                let lu = a.submatrix(w[0], w[0], w[1] - w[0], w[1] - w[0]).partial_piv_lu();
+                let lu = a
+                    .submatrix(w[0], w[0], w[1] - w[0], w[1] - w[0])
+                    .partial_piv_lu();
                 lu_sign(&lu).is_some().then_some(lu)
             })
             .collect();
@@ -602,7 +604,10 @@ mod tests {
                     .map(|(p, q)| (p - q).abs())
                     .fold(0.0, f64::max);
                 let scale = xd.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-                assert!(err <= 1e-12 * scale, "border {border} coupling {coupling}: {err:e}");
+                assert!(
+                    err <= 1e-12 * scale,
+                    "border {border} coupling {coupling}: {err:e}"
+                );
                 assert_eq!(ss, sd, "border {border} coupling {coupling}");
             }
         }
@@ -625,7 +630,8 @@ mod tests {
             signs.push(sd);
         }
         assert!(signs.contains(&1.0) && signs.contains(&-1.0), "{signs:?}");
-        let (solved, path) = LinearSolver::new(blocks, SolverChoice::Auto).solve_path(a.as_ref(), &b);
+        let (solved, path) =
+            LinearSolver::new(blocks, SolverChoice::Auto).solve_path(a.as_ref(), &b);
         assert!(solved.is_some());
         assert_eq!(path, SolvePath::Dense);
     }

@@ -40,7 +40,9 @@ use nlrom::continuation::trace;
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel};
 use nlrom::interface::build_interfaces;
-use nlrom::nonlinear::{linsolve, solve_dense, LinearSolver, Linearization, ParameterSystem, SolverChoice};
+use nlrom::nonlinear::{
+    linsolve, solve_dense, LinearSolver, Linearization, ParameterSystem, SolverChoice,
+};
 use nlrom::problem::sector::SectorProblem;
 use nlrom::problem::settings::case_continuation;
 use nlrom::reduction::reduce;
@@ -149,8 +151,9 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
     let problem = SectorProblem::build(&case, &rom, mesh, &interfaces)?;
     let system = problem.system()?;
     eprintln!(
-        "setup (model, reduction, interfaces) {:.1} s; H = {h}, N_t = {}, {} contact DOF, {} unknowns",
+        "setup (model, reduction, interfaces) {:.1} s, peak RSS {:.2} GB; H = {h}, N_t = {}, {} contact DOF, {} unknowns",
         t.elapsed().as_secs_f64(),
+        peak_rss_gb(),
         problem.layout.time_samples,
         problem.linear.n_condensed(),
         system.dim()
