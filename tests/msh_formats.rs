@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use nlrom::mesh::msh::read_msh;
 use nlrom::mesh::{ElementType, Mesh, MshVersion};
 
-const MODELS: [&str; 11] = [
+const MODELS: [&str; 13] = [
     "sector_conforming",
     "sector_nonconforming",
     "sector_coarse_target",
@@ -22,6 +22,8 @@ const MODELS: [&str; 11] = [
     "mixed_o1",
     "mixed_o2",
     "mixed_o2i",
+    "blade",
+    "blade_coarse",
 ];
 
 fn root() -> PathBuf {

@@ -46,6 +46,12 @@ impl Case {
         {
             add(format!("response.groups[{i}]"), g);
         }
+        for (i, c) in self.casing.iter().enumerate() {
+            add(format!("casing[{i}].group"), &c.group);
+        }
+        for (i, g) in self.thermal.iter().flat_map(|t| t.fixed.iter()).enumerate() {
+            add(format!("thermal.fixed[{i}]"), g);
+        }
         refs
     }
 

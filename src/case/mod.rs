@@ -22,8 +22,10 @@ use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::vec3::norm;
 
+pub use casing::{CasingTable, ThermalTable};
 pub use obstacle::ObstacleTable;
 
+mod casing;
 mod groups;
 mod obstacle;
 mod parse;
@@ -67,6 +69,13 @@ pub struct Case {
     /// model (the nonsmooth schemes of `nlrom march`), in file order.
     #[serde(default)]
     pub obstacle: Vec<ObstacleTable>,
+    /// `[[casing]]`: rigid casings with unilateral contact, friction and frictional heating on
+    /// mesh node groups (the nonsmooth schemes of `nlrom march`), in file order.
+    #[serde(default)]
+    pub casing: Vec<CasingTable>,
+    /// `[thermal]`: thermal data of a mesh model, adding a temperature DOF per node.
+    #[serde(default)]
+    pub thermal: Option<ThermalTable>,
     /// `[harmonic_balance]`: number of harmonics and time samples (default: 1 harmonic).
     #[serde(default)]
     pub harmonic_balance: HarmonicBalance,

@@ -16,6 +16,7 @@ impl Case {
         self.validate_response()?;
         self.validate_elements()?;
         self.validate_obstacles()?;
+        self.validate_casings()?;
         self.validate_harmonic_balance()?;
         self.validate_continuation()?;
         self.validate_march()?;

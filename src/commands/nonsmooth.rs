@@ -1,5 +1,6 @@
 //! `nlrom march --scheme moreau-jean | carpenter`: the nonsmooth march of a matrix case with
-//! `[[obstacle]]` contacts, written to `/march/` in the layout of `docs/results-file.md`, with
+//! `[[obstacle]]` contacts or of a mesh case with `[[casing]]` contacts (one obstacle per contact
+//! node), written to `/march/` in the layout of `docs/results-file.md`, with
 //! one "element" per obstacle: `contact_force` = (μλ/h, λ/h) (N, the mean friction and normal
 //! force over the step), `contact_state` = 0 open, 2 in contact (impulse > 0). The march adds:
 //!
@@ -11,9 +12,13 @@
 //! | `active` | [T, E] | – | 1 when the obstacle was in the step's active set |
 //! | `lcp_residual` | \[T\] | – | complementarity residual of the step's LCP |
 //! | `energy_terms` | [T, 8] | J | cumulative (kinetic, strain, damping, numerical, external, thermal, contact, residual) (`moreau-jean`) |
+//! | `temperature` | [T, N] | K | temperature rise of the contact nodes (with `[thermal]`) |
+//! | `temperature_nodes` | \[N\] | – | their Gmsh node tags |
+//! | `heat_terms` | [T, 4] | J | cumulative (stored, exchanged, frictional, residual) heat (with `[thermal]`) |
 //!
 //! and the attributes `time_step`, `gamma`, `gamma_thermal` (`moreau-jean`),
-//! `stability_limit` (`carpenter`: 2/ω_max, s), `max_penetration` (m).
+//! `stability_limit` (`carpenter`: 2/ω_max, s), `thermal_stability_limit` (`carpenter` with heat
+//! rows: 2/μ_max, s), `reference_temperature` (°C, with `[thermal]`), `max_penetration` (m).
 
 use std::path::Path;
 use std::time::Instant;
@@ -23,13 +28,11 @@ use serde_json::json;
 use super::Reporter;
 use crate::case::{Case, MarchScheme};
 use crate::error::Result;
-use crate::march::carpenter::{carpenter, stability_limits};
+use crate::march::carpenter::{carpenter, stability_limits, StabilityLimits};
 use crate::march::moreau_jean::moreau_jean;
 use crate::march::obstacle::NonsmoothHistory;
 use crate::model;
-use crate::output::{
-    write_results, Attr, Data, Dataset, Group, MarchData, ResponseDof, ResultsFile,
-};
+use crate::output::{write_results, Attr, Data, Dataset, Group, MarchData, ResultsFile};
 use crate::problem::nonsmooth_case::{nonsmooth_case, NonsmoothCase};
 use crate::problem::rom_store::file_info;
 
@@ -47,10 +50,10 @@ pub fn nonsmooth_command(
     let limit = if scheme == MarchScheme::Carpenter {
         let lim = stability_limits(&nc.system)?;
         rep.info(&format!(
-            "carpenter: stability limit 2/ω_max = {:.4e} s, step {:.4e} s",
-            lim.mechanical, nc.settings.step
+            "carpenter: stability limit 2/ω_max = {:.4e} s (heat rows: {:.4e} s), step {:.4e} s",
+            lim.mechanical, lim.thermal, nc.settings.step
         ));
-        Some(lim.mechanical)
+        Some(lim)
     } else {
         None
     };
@@ -73,11 +76,22 @@ pub fn nonsmooth_command(
         .iter()
         .map(|e| e.residual.abs())
         .fold(0.0, f64::max);
+    let r = nc.response.len();
+    let max_temperature = hist
+        .x
+        .chunks(hist.dofs.len().max(1))
+        .flat_map(|row| row[r.min(row.len())..].iter().copied())
+        .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.max(t))));
+    let heat = hist.heat.last();
     let report = json!({
         "scheme": scheme.as_str(),
         "steps": nc.settings.steps,
         "time_step_s": nc.settings.step,
-        "stability_limit_s": limit,
+        "stability_limit_s": limit.map(|l| l.mechanical),
+        "thermal_stability_limit_s": limit.map(|l| l.thermal).filter(|t| t.is_finite()),
+        "max_temperature_rise_k": max_temperature,
+        "frictional_heat_j": heat.map(|q| q.frictional),
+        "heat_balance_residual_j": heat.map(|q| q.residual),
         "steps_with_impulse": impacts,
         "max_penetration_m": hist.max_penetration(),
         "max_energy_residual_j": energy_residual,
@@ -102,7 +116,7 @@ pub fn nonsmooth_command(
     Ok(())
 }
 
-/// |Q⁽¹⁾| of each recorded row over the last excitation period (rectangle rule on the steps).
+/// |Q⁽¹⁾| of each response DOF over the last excitation period (rectangle rule on the steps).
 fn first_harmonic(nc: &NonsmoothCase, h: &NonsmoothHistory) -> Vec<f64> {
     let r = h.dofs.len();
     let omega = nc.system.omega;
@@ -111,7 +125,7 @@ fn first_harmonic(nc: &NonsmoothCase, h: &NonsmoothHistory) -> Vec<f64> {
     let idx: Vec<usize> = (1..h.len())
         .filter(|&k| h.time[k] > t_end - period * (1.0 - 1e-9))
         .collect();
-    (0..r)
+    (0..nc.response.len())
         .map(|d| {
             let (mut re, mut im) = (0.0, 0.0);
             for &k in &idx {
@@ -125,9 +139,20 @@ fn first_harmonic(nc: &NonsmoothCase, h: &NonsmoothHistory) -> Vec<f64> {
 }
 
 /// The march as the results file's [`MarchData`] (module doc).
-fn march_data(nc: &NonsmoothCase, h: &NonsmoothHistory, limit: Option<f64>) -> MarchData {
+fn march_data(
+    nc: &NonsmoothCase,
+    h: &NonsmoothHistory,
+    limit: Option<StabilityLimits>,
+) -> MarchData {
     let sys = &nc.system;
     let (t, e, dt) = (h.len(), sys.obstacles.len(), nc.settings.step);
+    let (recorded, r) = (h.dofs.len(), nc.response.len());
+    let columns = |range: std::ops::Range<usize>| -> Vec<f64> {
+        h.x.chunks(recorded.max(1))
+            .take(t)
+            .flat_map(|row| row[range.clone()].iter().copied())
+            .collect()
+    };
     let mut force = Vec::with_capacity(t * e * 2);
     for k in 0..t {
         for (i, o) in sys.obstacles.iter().enumerate() {
@@ -139,8 +164,13 @@ fn march_data(nc: &NonsmoothCase, h: &NonsmoothHistory, limit: Option<f64>) -> M
     g.add(
         "response_names",
         Dataset::new(
-            &[h.dofs.len()],
-            Data::Strings(h.dofs.iter().map(|&d| sys.dof_names[d].clone()).collect()),
+            &[r],
+            Data::Strings(
+                h.dofs[..r]
+                    .iter()
+                    .map(|&d| sys.dof_names[d].clone())
+                    .collect(),
+            ),
             "1",
             "name of each reported row",
         ),
@@ -209,8 +239,51 @@ fn march_data(nc: &NonsmoothCase, h: &NonsmoothHistory, limit: Option<f64>) -> M
         g.set_attr("gamma", Attr::F64(nc.settings.gamma))
             .set_attr("gamma_thermal", Attr::F64(nc.settings.gamma_thermal));
     }
+    if !nc.temperature_nodes.is_empty() {
+        let nt = recorded - r;
+        g.add(
+            "temperature",
+            Dataset::new(
+                &[t, nt],
+                Data::F64(columns(r..recorded)),
+                "K",
+                "temperature rise of the contact nodes above the reference temperature",
+            ),
+        );
+        g.add(
+            "temperature_nodes",
+            Dataset::new(
+                &[nt],
+                Data::U64(nc.temperature_nodes.clone()),
+                "1",
+                "Gmsh tags of the nodes of `temperature`",
+            ),
+        );
+    }
+    if let Some(t0) = nc.reference_temperature {
+        g.set_attr("reference_temperature", Attr::F64(t0));
+    }
+    if !h.heat.is_empty() {
+        let terms: Vec<f64> = h
+            .heat
+            .iter()
+            .flat_map(|q| [q.stored, q.exchanged, q.frictional, q.residual])
+            .collect();
+        g.add(
+            "heat_terms",
+            Dataset::new(
+                &[h.heat.len(), 4],
+                Data::F64(terms),
+                "J",
+                "cumulative stored, exchanged, frictional heat and the balance residual",
+            ),
+        );
+    }
     if let Some(l) = limit {
-        g.set_attr("stability_limit", Attr::F64(l));
+        g.set_attr("stability_limit", Attr::F64(l.mechanical));
+        if l.thermal.is_finite() {
+            g.set_attr("thermal_stability_limit", Attr::F64(l.thermal));
+        }
     }
     g.set_attr("time_step", Attr::F64(dt))
         .set_attr("max_penetration", Attr::F64(h.max_penetration()));
@@ -219,13 +292,9 @@ fn march_data(nc: &NonsmoothCase, h: &NonsmoothHistory, limit: Option<f64>) -> M
         wall_seconds: h.wall_seconds,
         omega: sys.omega,
         steps: nc.settings.steps as u64,
-        response_dofs: nc
-            .response_rows
-            .iter()
-            .map(|&r| ResponseDof::Row(r as u64))
-            .collect(),
+        response_dofs: nc.response.clone(),
         time: h.time.clone(),
-        response: h.x.clone(),
+        response: columns(0..r),
         element_names: sys.obstacles.iter().map(|o| o.name.clone()).collect(),
         contact_force: force,
         contact_state: h

@@ -10,12 +10,14 @@
 //! | [`sector_march`] | the real ROM of a sector (no cyclic symmetry, k = 0, k = N/2) as a time-marching model |
 //! | [`damper`] | the underplatform damper of a `[damper]` table as a time-marching model |
 //! | [`nonsmooth_case`] | a matrix case with `[[obstacle]]` contacts as the model of the nonsmooth schemes |
+//! | [`casing_case`] | a mesh case with `[[casing]]` (and `[thermal]`) as the thermoelastic model of the nonsmooth schemes |
 //! | [`march_case`] | any case as a time-marching model, by [`crate::case::Case::kind`] |
 //! | [`settings`] | the solver settings of a case's `[continuation]` table |
 //!
 //! Every command dispatches on [`crate::case::Case::kind`]: a `[damper]`, a model on matrix rows
 //! (no mesh, or `[[element]]`), or a reduced sector.
 
+pub mod casing_case;
 pub mod damper;
 pub mod march_case;
 pub mod matrix_case;

@@ -521,6 +521,54 @@ def make_bar(name: str, kind: str, out_dir: Path, length: float = 1.0, side: flo
     return stats
 
 
+def make_blade(name: str, cells: tuple[int, int, int], out_dir: Path, chord: float = 0.03,
+               thickness: float = 0.004, span: float = 0.05, r_root: float = 0.2) -> dict:
+    """Straight cantilever blade surrogate of Thorin et al. (2018)'s simple sector: the box
+    [0, chord] x [-thickness/2, thickness/2] x [r_root, r_root + span] (x axial along the rotation
+    axis, y circumferential, z radial), transfinite serendipity 20-node hexahedra with
+    cells = (n_chord, n_thickness, n_span) (n_thickness even). The two halves y < 0 and y > 0 are
+    fragmented so that the tip has an edge on the mid-thickness line y = 0.
+    Groups: volume (3), root (2, z = r_root), tip_contact (1, the tip line y = 0, z = r_root + span).
+    """
+    nx, ny, nz = cells
+    assert ny % 2 == 0, "the thickness cell count must be even (a node line at y = 0)"
+    start(name)
+    occ = gmsh.model.occ
+    lo = occ.addBox(0, -thickness / 2, r_root, chord, thickness / 2, span)
+    hi = occ.addBox(0, 0, r_root, chord, thickness / 2, span)
+    occ.fragment([(3, lo)], [(3, hi)])
+    occ.synchronize()
+    for _, c in gmsh.model.getEntities(1):
+        b = gmsh.model.getBoundingBox(1, c)
+        ext = [b[3] - b[0], b[4] - b[1], b[5] - b[2]]
+        axis = max(range(3), key=lambda k: ext[k])
+        n = [nx, ny // 2, nz][axis]
+        gmsh.model.mesh.setTransfiniteCurve(c, n + 1)
+    for _, s in gmsh.model.getEntities(2):
+        gmsh.model.mesh.setTransfiniteSurface(s)
+        gmsh.model.mesh.setRecombine(2, s)
+    for _, v in gmsh.model.getEntities(3):
+        gmsh.model.mesh.setTransfiniteVolume(v)
+    gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 1)
+    gmsh.option.setNumber("Mesh.ElementOrder", 2)
+    z_tip = r_root + span
+    tip_line = []
+    for _, c in gmsh.model.getEntities(1):
+        b = gmsh.model.getBoundingBox(1, c)
+        if abs(b[1]) < 1e-6 and abs(b[4]) < 1e-6 and abs(b[2] - z_tip) < 1e-6 and abs(b[5] - z_tip) < 1e-6:
+            tip_line.append(c)
+    assert len(tip_line) == 1, f"tip line curves: {tip_line}"
+    add_group(3, [v for _, v in gmsh.model.getEntities(3)], "volume", 1)
+    add_group(2, _faces_at(2, r_root), "root", 2)
+    add_group(1, tip_line, "tip_contact", 3)
+    check_groups_disjoint()
+    gmsh.model.mesh.generate(3)
+    stats = mesh_stats()
+    write_variants(name, out_dir)
+    gmsh.finalize()
+    return stats
+
+
 def make_mixed(name: str, order: int, incomplete: bool, out_dir: Path) -> dict:
     """A small mesh with as many element types as Gmsh makes, for parser coverage.
 
@@ -621,7 +669,7 @@ def sector_params(variant: str, **overrides) -> SectorParams:
 
 
 MODELS = ["sector_conforming", "sector_nonconforming", "sector_coarse_target", "cube_tet4", "cube_tet10",
-          "bar_hex20", "bar_tet10", "mixed_o1", "mixed_o2", "mixed_o2i", "sector8"]
+          "bar_hex20", "bar_tet10", "mixed_o1", "mixed_o2", "mixed_o2i", "sector8", "blade", "blade_coarse"]
 
 
 def build_all(out_dir: Path, only: list[str] | None) -> None:
@@ -653,6 +701,10 @@ def build_all(out_dir: Path, only: list[str] | None) -> None:
             info = make_bar(job, "hex20", out_dir)
         elif job == "bar_tet10":
             info = make_bar(job, "tet10", out_dir)
+        elif job == "blade":
+            info = make_blade(job, (3, 2, 12), out_dir)
+        elif job == "blade_coarse":
+            info = make_blade(job, (2, 2, 4), out_dir)
         elif job == "mixed_o1":
             info = make_mixed(job, 1, False, out_dir)
         elif job == "mixed_o2":

@@ -1,0 +1,376 @@
+//! A mesh case with `[[casing]]` (and optionally `[thermal]`) tables as the model of the
+//! nonsmooth schemes: the blade–casing contact of Thorin, Guérin, Legrand, Thouverez & Almeida
+//! (ASME GT2018-75959, 2018, eqs 1–7).
+//!
+//! The generalised coordinates are x = [u; θ]: the free displacement DOF of the structural model
+//! (m), then, with `[thermal]`, the temperature rise of every node not in `thermal.fixed` (K).
+//! K^uu, M^uu and C^uu are the clamped model's (C from `model.damping`); C^θθ, K^θθ and K^uθ are
+//! assembled by [`crate::fe::thermal`] (the same shape functions for u and θ).
+//!
+//! Each node i of a casing group becomes one obstacle ([`Obstacle`]): with the axis a (unit),
+//! the node's initial position p_i, its radial vector r_i = (p_i − o) − ((p_i − o)·a) a, radius
+//! r_i = |r_i| and e_r = r_i/r_i (taken at the initial position, so the gap holds for any tip shape
+//! under small displacements):
+//!
+//! - gap g_i = g0_i − e_r·u_i (m), g0_i = R − r_i or the given `gap`; G_i = −e_rᵀ on the node's
+//!   free displacement DOF;
+//! - friction along t_i = −sgn(Ω) e_φ, e_φ = a × e_r: the casing slides past the blade at −RΩ e_φ
+//!   and the sliding never reverses (the paper's eq. 3 prints the entry −μRΩ, which is not a
+//!   force; the Coulomb force μλ is used);
+//! - heat α λ_i into the node's temperature row (W for a force, J for an impulse).
+//!
+//! The load is `[excitation]`'s force per node of its group times cos ωt. The model is dense
+//! (n ≤ [`MAX_DENSE_DOF`]).
+
+use std::collections::HashMap;
+
+use super::matrix_case::damping_matrix;
+use super::nonsmooth_case::{march_settings, NonsmoothCase};
+use crate::case::{Case, ExcitationLoad};
+use crate::error::{Error, Result};
+use crate::fe::thermal::{assemble_thermal, ThermalMaterial};
+use crate::fe::{Materials, Quadrature};
+use crate::march::obstacle::{NonsmoothSystem, Obstacle};
+use crate::march::signal::Harmonic;
+use crate::mesh::Mesh;
+use crate::model::StructuralModel;
+use crate::output::ResponseDof;
+
+/// The largest number of DOF (displacements and temperatures) of the dense nonsmooth model.
+pub const MAX_DENSE_DOF: usize = 6000;
+
+/// The unit radial vector e_r and the radius r of point `p` about the axis through `o` along the
+/// unit vector `a`; `None` on the axis.
+pub fn radial(p: [f64; 3], o: [f64; 3], a: [f64; 3]) -> Option<([f64; 3], f64)> {
+    let d = [p[0] - o[0], p[1] - o[1], p[2] - o[2]];
+    let s = d[0] * a[0] + d[1] * a[1] + d[2] * a[2];
+    let r = [d[0] - s * a[0], d[1] - s * a[1], d[2] - s * a[2]];
+    let len = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+    (len > 0.0).then(|| ([r[0] / len, r[1] / len, r[2] / len], len))
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Builds the nonsmooth march of the mesh `case` with `[[casing]]` on its structural model `sm`
+/// (module doc).
+pub fn casing_case(case: &Case, sm: &StructuralModel) -> Result<NonsmoothCase> {
+    let file = case.path.display().to_string();
+    let mesh = sm.mesh.as_ref().ok_or_else(|| {
+        Error::input(format!(
+            "{file}: key 'casing': a casing acts on mesh node groups; give `[model] mesh`"
+        ))
+    })?;
+    if !case.element.is_empty() || !case.obstacle.is_empty() {
+        return Err(Error::input(format!(
+            "{file}: key 'casing': a mesh case with `[[casing]]` takes no `[[element]]` or `[[obstacle]]` on matrix rows"
+        )));
+    }
+    let omega = case.march.as_ref().map_or(0.0, |m| m.omega());
+    // Free displacement DOF of each (node index, component).
+    let map = sm.free_dof_map().ok_or_else(|| {
+        Error::input(format!(
+            "{file}: the model has no DOF map relating its rows to the mesh nodes"
+        ))
+    })?;
+    let index_of_tag: HashMap<u64, usize> = mesh
+        .node_tags
+        .iter()
+        .enumerate()
+        .map(|(i, &t)| (t, i))
+        .collect();
+    let mut mech_of: HashMap<(usize, usize), usize> = HashMap::new();
+    for e in &map.entries {
+        if let Some(&i) = index_of_tag.get(&e.node_tag) {
+            mech_of.insert((i, e.component as usize), e.row);
+        }
+    }
+    let nm = sm.free.n_free();
+    // Thermal DOF.
+    let thermal = match &case.thermal {
+        Some(t) => Some(thermal_rows(case, sm, mesh, t)?),
+        None => None,
+    };
+    let nt = thermal.as_ref().map_or(0, |t| t.nodes.len());
+    let n = nm + nt;
+    if n > MAX_DENSE_DOF {
+        return Err(Error::input(format!(
+            "{file}: the nonsmooth model has {n} DOF ({nm} displacements, {nt} temperatures); the dense schemes take at most {MAX_DENSE_DOF}: use a coarser mesh"
+        )));
+    }
+    let k = sm.free.k.to_dense();
+    let m = sm.free.m.to_dense();
+    let c = damping_matrix(case, sm, k.as_ref(), m.as_ref())?;
+    let mut stiffness = vec![0.0; n * n];
+    let mut mass = vec![0.0; n * n];
+    let mut damping = vec![0.0; n * n];
+    for i in 0..nm {
+        for j in 0..nm {
+            stiffness[i * n + j] = k[(i, j)];
+            mass[i * n + j] = m[(i, j)];
+            if let Some(c) = &c {
+                damping[i * n + j] = c[(i, j)];
+            }
+        }
+    }
+    let mut theta_of: HashMap<usize, usize> = HashMap::new();
+    if let Some(t) = &thermal {
+        for (a, &node) in t.nodes.iter().enumerate() {
+            theta_of.insert(node, nm + a);
+        }
+        for (a, row) in t.conductance.iter().enumerate() {
+            for &(b, v) in row {
+                stiffness[(nm + a) * n + nm + b] += v;
+            }
+        }
+        for (a, row) in t.capacity.iter().enumerate() {
+            for &(b, v) in row {
+                damping[(nm + a) * n + nm + b] += v;
+            }
+        }
+        for (i, &p) in sm.free.free_dofs.iter().enumerate() {
+            for &(b, v) in &t.coupling[p] {
+                stiffness[i * n + nm + b] += v;
+            }
+        }
+    }
+    let mut dof_names: Vec<String> = sm
+        .free
+        .free_dofs
+        .iter()
+        .map(|p| format!("row {p}"))
+        .collect();
+    for e in &map.entries {
+        dof_names[e.row] = format!(
+            "node {} {}",
+            e.node_tag,
+            ["x", "y", "z"][e.component as usize % 3]
+        );
+    }
+    if let Some(t) = &thermal {
+        dof_names.extend(
+            t.nodes
+                .iter()
+                .map(|&i| format!("node {} theta", mesh.node_tags[i])),
+        );
+    }
+    let mut sys = NonsmoothSystem {
+        n,
+        n_mech: nm,
+        mass,
+        damping,
+        stiffness,
+        force: vec![Harmonic::default(); n],
+        omega,
+        obstacles: Vec::new(),
+        dof_names,
+        x0: vec![0.0; n],
+        v0: vec![0.0; n],
+    };
+    if let Some(e) = &case.excitation {
+        match &e.load {
+            ExcitationLoad::Group { group, force } => {
+                for node in mesh.nodes_of(group)? {
+                    for (comp, &f) in force.iter().enumerate() {
+                        if let Some(&row) = mech_of.get(&(node as usize, comp)) {
+                            sys.force[row].cos += f * e.force_scale;
+                        }
+                    }
+                }
+            }
+            ExcitationLoad::Dofs { .. } => {
+                return Err(Error::input(format!(
+                    "{file}: key 'excitation.dofs': a mesh case with `[[casing]]` is loaded by `group` and `force = [fx, fy, fz]` per node"
+                )))
+            }
+        }
+    }
+    // Casings: one obstacle per contact node.
+    let mut contact_nodes = Vec::new();
+    for (ci, cs) in case.casing.iter().enumerate() {
+        let key = format!("casing[{ci}]");
+        let d = cs.axis.direction;
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let a = [d[0] / len, d[1] / len, d[2] / len];
+        let sense = cs.speed_rpm.map_or(1.0, f64::signum);
+        for node in mesh.nodes_of(&cs.group)? {
+            let i = node as usize;
+            let tag = mesh.node_tags[i];
+            let (er, r) = radial(mesh.coords[i], cs.axis.origin, a).ok_or_else(|| {
+                Error::input(format!(
+                    "{file}: key '{key}.group': node {tag} lies on the rotation axis, so it has no radial direction"
+                ))
+            })?;
+            let ephi = cross(a, er);
+            let combination = |v: [f64; 3], scale: f64| -> Vec<(usize, f64)> {
+                (0..3)
+                    .filter_map(|comp| {
+                        let w = scale * v[comp];
+                        let row = mech_of.get(&(i, comp))?;
+                        (w != 0.0).then_some((*row, w))
+                    })
+                    .collect()
+            };
+            let normal = combination(er, -1.0);
+            if normal.is_empty() {
+                return Err(Error::input(format!(
+                    "{file}: key '{key}.group': node {tag} cannot move radially (clamped), so it cannot touch the casing"
+                )));
+            }
+            let g0 = cs.gap.unwrap_or_else(|| cs.radius.unwrap_or(0.0) - r);
+            let mut o = Obstacle::new(
+                &format!("{}:{tag}", cs.label(ci)),
+                normal,
+                g0,
+                cs.restitution,
+            );
+            if cs.mu > 0.0 {
+                o.mu = cs.mu;
+                o.tangential = combination(ephi, -sense);
+            }
+            if cs.heating > 0.0 {
+                if let Some(&row) = theta_of.get(&i) {
+                    o.heating = cs.heating;
+                    o.heated = vec![(row, 1.0)];
+                }
+            }
+            sys.obstacles.push(o);
+            if !contact_nodes.contains(&i) {
+                contact_nodes.push(i);
+            }
+        }
+    }
+    sys.validate(&file)?;
+    // Recorded DOF: the response groups (else the contact nodes), then the contact nodes'
+    // temperatures.
+    let response_nodes: Vec<usize> = match case.response.as_ref().filter(|r| !r.groups.is_empty()) {
+        Some(r) => {
+            let mut nodes = Vec::new();
+            for g in &r.groups {
+                for node in mesh.nodes_of(g)? {
+                    if !nodes.contains(&(node as usize)) {
+                        nodes.push(node as usize);
+                    }
+                }
+            }
+            nodes
+        }
+        None => contact_nodes.clone(),
+    };
+    let mut record = Vec::new();
+    let mut response = Vec::new();
+    for &i in &response_nodes {
+        for comp in 0..3 {
+            if let Some(&row) = mech_of.get(&(i, comp)) {
+                record.push(row);
+                response.push(ResponseDof::Node {
+                    tag: mesh.node_tags[i],
+                    component: comp as u8,
+                });
+            }
+        }
+    }
+    let mut temperature_nodes = Vec::new();
+    for &i in &contact_nodes {
+        if let Some(&row) = theta_of.get(&i) {
+            record.push(row);
+            temperature_nodes.push(mesh.node_tags[i]);
+        }
+    }
+    Ok(NonsmoothCase {
+        system: sys,
+        settings: march_settings(case, record)?,
+        response,
+        temperature_nodes,
+        reference_temperature: case.thermal.as_ref().map(|t| t.reference_temperature),
+    })
+}
+
+/// The thermal matrices restricted to the free temperature rows, as sparse rows.
+struct ThermalRows {
+    /// Mesh node index of each temperature row.
+    nodes: Vec<usize>,
+    /// K^θθ rows: (column among `nodes`, value) (W/K).
+    conductance: Vec<Vec<(usize, f64)>>,
+    /// C^θθ rows (J/K).
+    capacity: Vec<Vec<(usize, f64)>>,
+    /// K^uθ rows per global displacement DOF 3i + c: (column among `nodes`, value) (N/K).
+    coupling: Vec<Vec<(usize, f64)>>,
+}
+
+/// Assembles the thermal matrices of `mesh` and drops the rows of `thermal.fixed` (θ = 0) and
+/// of nodes outside every volume element.
+fn thermal_rows(
+    case: &Case,
+    sm: &StructuralModel,
+    mesh: &Mesh,
+    t: &crate::case::ThermalTable,
+) -> Result<ThermalRows> {
+    let file = case.path.display().to_string();
+    if case.model.stiffness.is_some() {
+        return Err(Error::input(format!(
+            "{file}: key 'thermal': the heat matrices are assembled from the mesh, which needs the displacement matrices assembled from it too (no `stiffness`/`mass` files)"
+        )));
+    }
+    let th = ThermalMaterial {
+        conductivity: t.conductivity,
+        specific_heat: t.specific_heat,
+        expansion: t.expansion,
+    };
+    let quad = Quadrature {
+        stiffness_degree: case.model.quadrature.stiffness,
+        mass_degree: case.model.quadrature.mass,
+    };
+    let asm = assemble_thermal(mesh, &Materials::from_case(&case.model), &th, &quad)
+        .map_err(|e| Error::input(format!("{file}: key 'thermal': {e}")))?;
+    let nn = mesh.num_nodes();
+    let mut fixed = vec![false; nn];
+    for g in &t.fixed {
+        for node in mesh.nodes_of(g)? {
+            fixed[node as usize] = true;
+        }
+    }
+    let cap = &asm.capacity;
+    let mut has_capacity = vec![false; nn];
+    for j in 0..cap.ncols() {
+        for (i, &v) in cap.row_idx_of_col(j).zip(cap.val_of_col(j)) {
+            if i == j && v > 0.0 {
+                has_capacity[i] = true;
+            }
+        }
+    }
+    let nodes: Vec<usize> = (0..nn).filter(|&i| !fixed[i] && has_capacity[i]).collect();
+    let mut col_of = vec![None; nn];
+    for (a, &i) in nodes.iter().enumerate() {
+        col_of[i] = Some(a);
+    }
+    let rows_of = |mat: &faer::sparse::SparseColMat<usize, f64>,
+                   nrows: usize,
+                   keep_row: &dyn Fn(usize) -> Option<usize>| {
+        let mut rows = vec![Vec::new(); nrows];
+        for (j, b) in col_of.iter().enumerate().take(mat.ncols()) {
+            let Some(b) = *b else { continue };
+            for (i, &v) in mat.row_idx_of_col(j).zip(mat.val_of_col(j)) {
+                if let Some(r) = keep_row(i) {
+                    rows[r].push((b, v));
+                }
+            }
+        }
+        rows
+    };
+    let by_node = |i: usize| col_of[i];
+    let conductance = rows_of(&asm.conductance, nodes.len(), &by_node);
+    let capacity = rows_of(&asm.capacity, nodes.len(), &by_node);
+    let coupling = rows_of(&asm.coupling, sm.n_dofs.max(3 * nn), &|p| Some(p));
+    Ok(ThermalRows {
+        nodes,
+        conductance,
+        capacity,
+        coupling,
+    })
+}

@@ -1,0 +1,471 @@
+//! `[[casing]]` and `[thermal]` on mesh cases (the blade–casing model of Thorin et al. 2018):
+//! the obstacles a case builds against a model built by hand from the FE matrices, the
+//! persistent contact of a pressed blade against the static contact solution, the heat balance
+//! of frictional heating against α Σλ and the insulated closed form, and bad input.
+
+use faer::linalg::solvers::Solve;
+use faer::Mat;
+use nlrom::case::Case;
+use nlrom::fe::{assemble, Materials, Quadrature};
+use nlrom::march::moreau_jean::moreau_jean;
+use nlrom::march::obstacle::{NonsmoothSettings, NonsmoothSystem, Obstacle};
+use nlrom::march::signal::Harmonic;
+use nlrom::mesh::msh::read_msh;
+use nlrom::problem::nonsmooth_case::nonsmooth_case;
+use std::path::PathBuf;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The coarse blade (hexa20, 2 × 2 × 4 cells, chord 30 mm along x, thickness 4 mm along y,
+/// span 50 mm along z from r = 0.2 m) clamped at its root, five contact nodes on the tip line.
+fn blade_case(extra: &str) -> String {
+    format!(
+        r#"
+[model]
+mesh = "../meshes/blade_coarse.msh"
+material = {{ young = 110e9, poisson = 0.3, density = 4430 }}
+clamp = ["root"]
+damping = {{ rayleigh = [0.0, 1e-5] }}
+
+[excitation]
+group = "tip_contact"
+force = [0, 0, 100]
+
+[march]
+frequency_hz = 33.333333333333336
+periods = 1
+steps_per_period = 3000
+time_step_s = 1e-5
+{extra}
+"#
+    )
+}
+
+fn load(text: &str) -> Case {
+    Case::from_str(text, &root().join("cases/casing_test.toml")).unwrap()
+}
+
+fn build(text: &str) -> nlrom::problem::nonsmooth_case::NonsmoothCase {
+    let case = load(text);
+    let sm = nlrom::model::build(&case, &mut |_| {}).unwrap();
+    nonsmooth_case(&case, &sm).unwrap()
+}
+
+fn with_steps(s: &NonsmoothSettings, steps: usize) -> NonsmoothSettings {
+    NonsmoothSettings {
+        steps,
+        record: None,
+        ..s.clone()
+    }
+}
+
+/// K, M (dense, free rows), the free global DOF 3i + c and the mesh of the coarse blade,
+/// assembled here from the FE layer.
+fn hand_built() -> (Mat<f64>, Mat<f64>, Vec<usize>, nlrom::mesh::Mesh) {
+    let mesh = read_msh(&root().join("meshes/blade_coarse.msh")).unwrap();
+    let mat = nlrom::fe::Material {
+        young: 110e9,
+        poisson: 0.3,
+        density: 4430.0,
+    };
+    let asm = assemble(&mesh, &Materials::uniform(mat), &Quadrature::default()).unwrap();
+    let clamped: Vec<u32> = mesh.nodes_of("root").unwrap();
+    let free: Vec<usize> = (0..3 * mesh.num_nodes())
+        .filter(|p| !clamped.contains(&((p / 3) as u32)))
+        .collect();
+    let (k, m) = (asm.k.to_dense(), asm.m.to_dense());
+    let n = free.len();
+    (
+        Mat::from_fn(n, n, |i, j| k[(free[i], free[j])]),
+        Mat::from_fn(n, n, |i, j| m[(free[i], free[j])]),
+        free,
+        mesh,
+    )
+}
+
+fn row_major(a: &Mat<f64>) -> Vec<f64> {
+    let n = a.nrows();
+    (0..n * n).map(|ij| a[(ij / n, ij % n)]).collect()
+}
+
+// ---------------------------------------------------------------------------------------------
+// Geometry of the casing and the model it builds
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn casing_builds_the_hand_built_blade_model_and_marches_it_identically() {
+    let text = blade_case(
+        r#"
+[[casing]]
+name = "stator"
+group = "tip_contact"
+axis = { origin = [0, 0, 0], direction = [2, 0, 0] }
+radius = 0.2500001
+mu = 0.15
+speed_rpm = 2000
+"#,
+    );
+    let nc = build(&text);
+    let (k, m, free, mesh) = hand_built();
+    let n = free.len();
+    assert_eq!(nc.system.n, n);
+    assert_eq!(nc.system.n_mech, n);
+    // The same model built from the FE layer: C = 1e-5 K, 100 N along z on the tip line nodes,
+    // one obstacle per tip node with e_r = e_z (the nodes lie at y = 0 on the plane through the
+    // x axis), g0 = R − 0.25 m, friction along −sgn(Ω) e_φ = −(e_x × e_z) = +e_y.
+    let mut sys = NonsmoothSystem::mechanical(
+        row_major(&m),
+        row_major(&k).iter().map(|v| 1e-5 * v).collect(),
+        row_major(&k),
+    );
+    sys.omega = 2.0 * std::f64::consts::PI * 100.0 / 3.0;
+    let row = |node: u32, c: usize| free.iter().position(|&p| p == 3 * node as usize + c);
+    let tip = mesh.nodes_of("tip_contact").unwrap();
+    assert_eq!(tip.len(), 5);
+    for &node in &tip {
+        let x = mesh.coords[node as usize];
+        assert!(x[1].abs() < 1e-15 && (x[2] - 0.25).abs() < 1e-12);
+        let (ry, rz) = (row(node, 1).unwrap(), row(node, 2).unwrap());
+        sys.force[rz].cos = 100.0;
+        let mut o = Obstacle::new("tip", vec![(rz, -1.0)], 0.2500001 - x[2], 0.0);
+        o.mu = 0.15;
+        o.tangential = vec![(ry, 1.0)];
+        sys.obstacles.push(o);
+    }
+    for (a, b) in nc.system.obstacles.iter().zip(&sys.obstacles) {
+        assert_eq!(a.normal.len(), 1, "{a:?}");
+        assert_eq!(a.normal[0].0, b.normal[0].0);
+        assert!((a.normal[0].1 + 1.0).abs() < 1e-15);
+        assert!((a.gap - b.gap).abs() < 1e-15, "{} vs {}", a.gap, b.gap);
+        assert_eq!(a.tangential.len(), 1, "{a:?}");
+        assert_eq!(a.tangential[0].0, b.tangential[0].0);
+        assert!((a.tangential[0].1 - 1.0).abs() < 1e-15);
+        assert!(a.name.starts_with("stator:"));
+    }
+    for (r, (a, b)) in nc.system.force.iter().zip(&sys.force).enumerate() {
+        assert!((a.cos - b.cos).abs() < 1e-12, "force row {r}");
+    }
+    let s = with_steps(&nc.settings, 600);
+    let from_case = moreau_jean(&nc.system, &s).unwrap();
+    let by_hand = moreau_jean(&sys, &s).unwrap();
+    let total: f64 = by_hand.impulse.iter().sum();
+    assert!(total > 0.0, "the blade must hit the casing");
+    let worst = from_case
+        .impulse
+        .iter()
+        .zip(&by_hand.impulse)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 1e-9 * total,
+        "impulses differ by {worst} (total {total})"
+    );
+    let scale = by_hand.x_final.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+    let dx = from_case
+        .x_final
+        .iter()
+        .zip(&by_hand.x_final)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(dx < 1e-9 * scale, "states differ by {dx} of {scale}");
+}
+
+#[test]
+fn an_off_centre_axis_gives_the_radial_gap_and_directions_of_each_node() {
+    // The axis through (0, 0.1, 0) along x: node (x, 0, z) has r = √(0.1² + z²),
+    // e_r = (0, −0.1, z)/r, e_φ = e_x × e_r = (0, −z, −0.1)/r; Ω < 0 puts the friction along +e_φ.
+    let text = blade_case(
+        r#"
+[[casing]]
+group = "tip_contact"
+axis = { origin = [0, 0.1, 0], direction = [1, 0, 0] }
+radius = 0.3
+mu = 0.2
+speed_rpm = -2000
+"#,
+    );
+    let nc = build(&text);
+    let (_, _, free, mesh) = hand_built();
+    for (o, &node) in nc
+        .system
+        .obstacles
+        .iter()
+        .zip(&mesh.nodes_of("tip_contact").unwrap())
+    {
+        let z = mesh.coords[node as usize][2];
+        let r = (0.01 + z * z).sqrt();
+        assert!(
+            (o.gap - (0.3 - r)).abs() < 1e-15,
+            "{} vs {}",
+            o.gap,
+            0.3 - r
+        );
+        let weight = |list: &[(usize, f64)], c: usize| -> f64 {
+            let row = free
+                .iter()
+                .position(|&p| p == 3 * node as usize + c)
+                .unwrap();
+            list.iter().find(|e| e.0 == row).map_or(0.0, |e| e.1)
+        };
+        // G = −e_rᵀ, t = +e_φ.
+        assert!((weight(&o.normal, 0)).abs() < 1e-15);
+        assert!((weight(&o.normal, 1) - 0.1 / r).abs() < 1e-14);
+        assert!((weight(&o.normal, 2) + z / r).abs() < 1e-14);
+        assert!((weight(&o.tangential, 1) + z / r).abs() < 1e-14);
+        assert!((weight(&o.tangential, 2) + 0.1 / r).abs() < 1e-14);
+        assert_eq!(o.mu, 0.2);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Persistent contact against the static contact solution
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn a_blade_pressed_on_the_casing_settles_on_the_static_contact_forces() {
+    // Gap 0, a constant 100 N per tip node outward, friction μ = 0.15 along +y and heavy
+    // damping C = 2e-4 s·K: after the transient (the end nodes lift off and land again, keeping
+    // the residual penetration g_f of their landing step) the contact forces λ/h settle on the
+    // static solution of K u = F + Hλ, g0 + G u = g_f: λ = (G K⁻¹ H)⁻¹ (g_f − g0 − G K⁻¹ F).
+    let text = blade_case(
+        r#"
+[[casing]]
+group = "tip_contact"
+axis = { direction = [1, 0, 0] }
+gap = 0.0
+mu = 0.15
+speed_rpm = 2000
+"#,
+    );
+    let mut nc = build(&text);
+    let sys = &mut nc.system;
+    let n = sys.n;
+    for r in 0..n {
+        let c = sys.force[r].cos;
+        sys.force[r] = Harmonic::constant(c);
+    }
+    sys.damping = sys.stiffness.iter().map(|k| 2e-4 * k).collect();
+    let s = with_steps(&nc.settings, 2000);
+    let h = moreau_jean(sys, &s).unwrap();
+    let m = sys.obstacles.len();
+    let last: Vec<f64> = (0..m)
+        .map(|i| h.impulses(i).last().unwrap() / s.step)
+        .collect();
+    // Static solution.
+    let k = Mat::from_fn(n, n, |i, j| sys.stiffness[i * n + j]);
+    let lu = k.partial_piv_lu();
+    let solve = |b: &[f64]| -> Vec<f64> {
+        let mut x = faer::Col::from_fn(n, |i| b[i]);
+        lu.solve_in_place(x.as_mut());
+        (0..n).map(|i| x[i]).collect()
+    };
+    let f: Vec<f64> = sys.force.iter().map(|f| f.mean).collect();
+    let kf = solve(&f);
+    let kh: Vec<Vec<f64>> = sys.obstacles.iter().map(|o| solve(&o.column(n))).collect();
+    let a = Mat::from_fn(m, m, |i, j| sys.obstacles[i].rate(&kh[j]));
+    let g_final = &h.gap[h.gap.len() - m..];
+    let b = faer::Col::from_fn(m, |i| {
+        g_final[i] - sys.obstacles[i].gap - sys.obstacles[i].rate(&kf)
+    });
+    let lambda = a.partial_piv_lu().solve(&b);
+    let total: f64 = (0..m).map(|i| lambda[i]).sum();
+    for i in 0..m {
+        assert!(lambda[i] > 0.0, "static contact force {i}: {}", lambda[i]);
+        assert!(
+            (last[i] - lambda[i]).abs() < 1e-6 * total,
+            "node {i}: march {} N, static {} N",
+            last[i],
+            lambda[i]
+        );
+    }
+    // Σλ = 5 × 100 N minus what the friction moment takes off the tip (about a per cent).
+    assert!((total - 500.0).abs() < 0.05 * 500.0, "total {total}");
+    // The residual penetration is below h times the largest normal speed, and never grows
+    // while a node stays in contact (Thorin et al. 2018, Fig. 4).
+    let vmax = h.rate.iter().fold(0.0_f64, |a, y| a.max(y.abs()));
+    let pen = h.max_penetration();
+    assert!(
+        pen > 0.0 && pen <= s.step * vmax,
+        "penetration {pen} m, h·max|ẏ| = {}",
+        s.step * vmax
+    );
+    for i in 0..m {
+        for t in 1..h.len() - 1 {
+            let (g0, g1) = (h.gap[t * m + i], h.gap[(t + 1) * m + i]);
+            if h.active[(t + 1) * m + i] && h.impulse[(t + 1) * m + i] > 0.0 && g0 < 0.0 {
+                assert!(
+                    g1 >= g0 - 1e-18,
+                    "node {i} step {t}: penetration grew {g0} → {g1}"
+                );
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Frictional heating
+// ---------------------------------------------------------------------------------------------
+
+fn thermal_blade(fixed: &str, expansion: f64, heating: f64) -> String {
+    blade_case(&format!(
+        r#"
+[thermal]
+conductivity = 6.7
+specific_heat = 520
+expansion = {expansion}
+fixed = [{fixed}]
+
+[[casing]]
+group = "tip_contact"
+axis = {{ direction = [1, 0, 0] }}
+gap = 1e-6
+mu = 0.15
+speed_rpm = 2000
+heating = {heating}
+"#
+    ))
+}
+
+#[test]
+fn frictional_heat_enters_as_alpha_times_the_impulses_and_balances_every_step() {
+    // Root at θ = 0: the heat stored equals the frictional heat α Σλ minus the heat conducted
+    // out through the root, every step; the energy balance closes with the thermal load term.
+    let nc = build(&thermal_blade("\"root\"", 9e-6, 0.1));
+    let (nm, n) = (nc.system.n_mech, nc.system.n);
+    let root_nodes = 21;
+    assert_eq!(n - nm, 141 - root_nodes);
+    assert_eq!(nc.temperature_nodes.len(), 5);
+    let s = with_steps(&nc.settings, 1500);
+    let h = moreau_jean(&nc.system, &s).unwrap();
+    let total: f64 = h.impulse.iter().sum();
+    assert!(total > 0.0);
+    let q = h.heat.last().unwrap();
+    assert!(
+        (q.frictional - 0.1 * total).abs() < 1e-12 * q.frictional,
+        "{} vs α Σλ = {}",
+        q.frictional,
+        0.1 * total
+    );
+    let worst_heat = h.heat.iter().map(|q| q.residual.abs()).fold(0.0, f64::max);
+    assert!(
+        worst_heat < 1e-9 * q.frictional,
+        "heat residual {worst_heat}"
+    );
+    // Over 15 ms the heat diffuses about √(κt) ≈ 0.2 mm from the tip: next to nothing reaches
+    // the root 50 mm away.
+    assert!(q.exchanged.abs() < 1e-4 * q.frictional, "{q:?}");
+    let scale = h
+        .energy
+        .iter()
+        .map(|e| e.external.abs().max(e.kinetic + e.strain))
+        .fold(0.0, f64::max);
+    let worst = h
+        .energy
+        .iter()
+        .map(|e| e.residual.abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-9 * scale, "energy residual {worst} of {scale}");
+    // The contact nodes heat up (the recorded temperatures), θ ≥ 0 nowhere violated much.
+    let theta_tip = &h.x_final[nm..];
+    assert!(theta_tip.iter().cloned().fold(0.0, f64::max) > 0.0);
+}
+
+#[test]
+fn an_insulated_blade_stores_all_frictional_heat_as_its_mean_temperature() {
+    // No fixed temperature: K^θθ 1 = 0, so 1ᵀC^θθθ = α Σλ and the capacity-weighted mean rise is
+    // α Σλ / (ρ c_p V) with V = 30 × 4 × 50 mm³.
+    let nc = build(&thermal_blade("", 0.0, 0.1));
+    let s = with_steps(&nc.settings, 800);
+    let h = moreau_jean(&nc.system, &s).unwrap();
+    let total: f64 = h.impulse.iter().sum();
+    let (nm, n) = (nc.system.n_mech, nc.system.n);
+    assert_eq!(n - nm, 141);
+    let c = &nc.system.damping;
+    let c1: Vec<f64> = (nm..n)
+        .map(|a| (nm..n).map(|b| c[a * n + b]).sum())
+        .collect();
+    let volume = 0.03 * 0.004 * 0.05;
+    assert!(
+        ((c1.iter().sum::<f64>()) - 4430.0 * 520.0 * volume).abs() < 1e-9 * 4430.0 * 520.0 * volume
+    );
+    let mean = c1
+        .iter()
+        .zip(&h.x_final[nm..])
+        .map(|(c, t)| c * t)
+        .sum::<f64>()
+        / c1.iter().sum::<f64>();
+    let expected = 0.1 * total / (4430.0 * 520.0 * volume);
+    assert!(
+        (mean - expected).abs() < 1e-9 * expected,
+        "{mean} vs {expected}"
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad input
+// ---------------------------------------------------------------------------------------------
+
+fn load_err(text: &str) -> String {
+    let path = root().join("cases/casing_test.toml");
+    match Case::from_str(text, &path) {
+        Err(e) => e.to_string(),
+        Ok(case) => {
+            let sm = nlrom::model::build(&case, &mut |_| {});
+            match sm.and_then(|sm| nonsmooth_case(&case, &sm).map(|_| ())) {
+                Err(e) => e.to_string(),
+                Ok(()) => panic!("accepted:\n{text}"),
+            }
+        }
+    }
+}
+
+#[test]
+fn bad_casing_and_thermal_keys_are_reported_with_their_path() {
+    let casing = |body: &str| blade_case(&format!("[[casing]]\n{body}\n"));
+    for (text, key) in [
+        (casing("group = \"tip\"\ngap = 0"), "casing[0].group"),
+        (casing("group = \"tip_contact\""), "casing[0]"),
+        (
+            casing("group = \"tip_contact\"\ngap = 0\nradius = 0.3"),
+            "casing[0].gap",
+        ),
+        (casing("group = \"tip_contact\"\nradius = -1"), "casing[0].radius"),
+        (casing("group = \"tip_contact\"\ngap = 0\nmu = 0.1"), "casing[0].mu"),
+        (
+            casing("group = \"tip_contact\"\ngap = 0\nheating = 0.1"),
+            "casing[0].heating",
+        ),
+        (
+            casing("group = \"tip_contact\"\ngap = 0\nrestitution = 2"),
+            "casing[0].restitution",
+        ),
+        (
+            casing("group = \"tip_contact\"\ngap = 0\naxis = { direction = [0, 0, 0] }"),
+            "casing[0].axis.direction",
+        ),
+        (
+            blade_case("[thermal]\nspecific_heat = 520\nexpansion = 9e-6\n"),
+            "conductivity",
+        ),
+        (
+            blade_case("[thermal]\nconductivity = 6.7\nspecific_heat = 0\nexpansion = 9e-6\n"),
+            "thermal.specific_heat",
+        ),
+        (
+            blade_case(
+                "[thermal]\nconductivity = 6.7\nspecific_heat = 520\nexpansion = 9e-6\nfixed = [\"bore\"]\n",
+            ),
+            "thermal.fixed[0]",
+        ),
+    ] {
+        let err = load_err(&text);
+        assert!(err.contains(key), "expected '{key}' in: {err}");
+    }
+    // A casing on a node that lies on the axis has no radial direction.
+    let err = load_err(&casing(
+        "group = \"tip_contact\"\ngap = 0\naxis = { origin = [0, 0, 0.25], direction = [1, 0, 0] }",
+    ));
+    assert!(err.contains("on the rotation axis"), "{err}");
+}
