@@ -149,7 +149,7 @@ impl LinearSolver {
                 SolverChoice::Auto => n >= AUTO_MIN_UNKNOWNS,
             };
         if try_structured {
-            match Woodbury::new(a, &self.blocks, self.choice == SolverChoice::Auto) {
+            match Woodbury::factor(a, &self.blocks, self.choice == SolverChoice::Auto) {
                 Decision::Dense => {}
                 Decision::Failed => {
                     FALLBACKS.fetch_add(1, Ordering::Relaxed);
@@ -182,14 +182,14 @@ pub enum SolvePath {
     },
 }
 
-/// What [`Woodbury::new`] found.
+/// What [`Woodbury::factor`] found.
 enum Decision {
     /// The dense LU is cheaper (automatic choice).
     Dense,
     /// A block or the capacitance matrix is singular.
     Failed,
     /// The factors.
-    Structured(Woodbury),
+    Structured(Box<Woodbury>),
 }
 
 /// One component of E: rows, columns, and E_k = U_k V_kᵀ.
@@ -248,7 +248,7 @@ impl Woodbury {
     /// Splits `a` over `blocks` (and the border after them), compresses E and factorises; with
     /// `auto`, returns [`Decision::Dense`] as soon as the flop model says the dense LU is
     /// cheaper.
-    fn new(a: MatRef<'_, f64>, blocks: &[usize], auto: bool) -> Decision {
+    fn factor(a: MatRef<'_, f64>, blocks: &[usize], auto: bool) -> Decision {
         let n = a.nrows();
         let inner: usize = blocks.iter().sum();
         let mut starts: Vec<usize> = blocks
@@ -305,10 +305,7 @@ impl Woodbury {
                 touched[inner + j] = true;
             }
         }
-        for node in 0..2 * inner {
-            if !touched[node] {
-                continue;
-            }
+        for (node, _) in touched.iter().enumerate().filter(|(_, &t)| t) {
             let root = find(&mut parent, node);
             if index[root] == usize::MAX {
                 index[root] = groups.len();
@@ -439,7 +436,7 @@ impl Woodbury {
             Some(s) => sign *= s,
             None => return Decision::Failed,
         }
-        Decision::Structured(Woodbury {
+        Decision::Structured(Box::new(Woodbury {
             n,
             starts,
             blocks: lus,
@@ -448,7 +445,7 @@ impl Woodbury {
             x,
             capacitance,
             sign,
-        })
+        }))
     }
 
     /// r, the number of columns of U.
