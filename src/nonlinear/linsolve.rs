@@ -17,8 +17,8 @@
 //! E is split into the connected components of its graph (rows and columns linked by an entry:
 //! for a contact interface, groups of neighbouring elements in transition), and each component's
 //! dense block E_k (rows R_k, columns C_k) is compressed by a column-pivoted QR to E_k = Q_k (Q_kᵀ
-//! E_k) of rank r_k (the columns of R with |r_ii| > 1e-13 max |r_ii|). With U = [Q_k], Vᵀ = [Q_kᵀ
-//! E_k] (r = Σ r_k columns),
+//! E_k) of rank r_k (the columns of R with |r_ii| > 1e-13 max |r_ii|). With U = (Q_k)_k, Vᵀ = (Q_kᵀ
+//! E_k)_k, the components side by side (r = Σ r_k columns),
 //!
 //!   A⁻¹ b = P⁻¹ b − P⁻¹U (I_r + Vᵀ P⁻¹ U)⁻¹ Vᵀ P⁻¹ b,   det A = det P · det(I_r + Vᵀ P⁻¹ U)
 //!

@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cargo run --release --example hbm_speed -- sector CASE.toml [H] [POINTS] [KEY=VALUE ...]
-//! cargo run --release --example hbm_speed -- synthetic [CONTACT_DOFS] [H] [SAMPLES]
+//! cargo run --release --example hbm_speed -- synthetic [CONTACT_DOFS] [H] [SAMPLES] [EVERY]
 //! ```
 //!
 //! `sector`: the case's sector problem (reduction, SAMA interfaces, preload balance) with H
@@ -19,7 +19,8 @@
 //! μ = 0.5, n0 = 1 N, 1-D friction) on a chain of CONTACT_DOFS unit masses and unit springs
 //! (C = 0.01 K), every DOF nonlinear, forced on harmonic 1 so that the pairs stick, slip and
 //! separate; H (default 3) and SAMPLES (default 4(H+1) rounded up to a power of two): the split
-//! of one Newton iteration.
+//! of one Newton iteration. With EVERY > 1 only one pair in EVERY moves that much, the others 50
+//! times less and stick all period (microslip of the interface).
 //!
 //! The split (best of `REPEAT` runs, wall clock, `faer::get_global_parallelism` threads):
 //! condensation of the linear part at ω; AFT = contact forces alone (inverse DFT, contact law
@@ -72,10 +73,10 @@ fn main() -> Result<()> {
         Some("synthetic") => {
             let h = num(2, 3);
             let samples = num(3, (4 * (h + 1)).next_power_of_two());
-            synthetic(num(1, 1500), h, samples)
+            synthetic(num(1, 1500), h, samples, num(4, 1))
         }
         _ => {
-            eprintln!("usage: hbm_speed sector CASE.toml [H] [POINTS] | synthetic [CONTACT_DOFS] [H] [SAMPLES]");
+            eprintln!("usage: hbm_speed sector CASE.toml [H] [POINTS] | synthetic [CONTACT_DOFS] [H] [SAMPLES] [EVERY]");
             Ok(())
         }
     }
@@ -271,7 +272,7 @@ fn split<F: HarmonicForce>(
     Ok(())
 }
 
-fn synthetic(contact_dofs: usize, h: usize, samples: usize) -> Result<()> {
+fn synthetic(contact_dofs: usize, h: usize, samples: usize, every: usize) -> Result<()> {
     let pairs = contact_dofs / 6;
     let n = 6 * pairs;
     let k = Mat::from_fn(n, n, |i, j| match i.abs_diff(j) {
@@ -318,10 +319,16 @@ fn synthetic(contact_dofs: usize, h: usize, samples: usize) -> Result<()> {
     let mut x = vec![0.0; system.dim()];
     for d in 0..n {
         let c1 = layout.cos_index(1, d, n);
-        let (a, phi) = (0.5 + 1.5 * ((d * 37 % 101) as f64 / 100.0), d as f64 * 0.7);
+        let (mut a, phi) = (0.5 + 1.5 * ((d * 37 % 101) as f64 / 100.0), d as f64 * 0.7);
+        if (d / 6) % every.max(1) != 0 {
+            a *= 0.02;
+        }
         x[c1] = a * phi.cos();
         x[c1 + 1] = a * phi.sin();
     }
-    println!("synthetic: {pairs} pairs, {n} contact DOF, H = {h}, N_t = {samples}");
+    println!(
+        "synthetic: {pairs} pairs ({} moving), {n} contact DOF, H = {h}, N_t = {samples}",
+        pairs.div_ceil(every.max(1))
+    );
     split(&fp, &system, &x, 0.8, &set.initial_state())
 }
