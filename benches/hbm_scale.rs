@@ -1,7 +1,7 @@
 //! The linear solve of a harmonic balance Newton step at interface scale (criterion): the
 //! Jacobian of a synthetic contact interface — a chain of unit masses and springs whose every DOF
 //! belongs to a node-to-node friction pair (k_t = k_n = 1 N/m, μ = 0.5, n0 = 1 N; the
-//! `synthetic_interface` of `tests/hbm_support`) — at a harmonic-1 state where one pair in
+//! `synthetic_interface` of `tests/support/hbm.rs`) — at a harmonic-1 state where one pair in
 //! `EVERY` slips and separates and the others stick, solved by the dense LU and by the
 //! structured path of `nlrom::nonlinear::linsolve` (block LUs per harmonic and the exact
 //! Woodbury correction for the pairs that couple harmonics), and by the automatic choice. The
@@ -9,7 +9,7 @@
 //!
 //! Run: `cargo bench --bench hbm_scale` (about a minute).
 
-#[path = "../tests/hbm_support/mod.rs"]
+#[path = "../tests/support/hbm.rs"]
 mod hbm_support;
 
 use std::time::{Duration, Instant};

@@ -11,12 +11,11 @@
 //! The structured path is forced (`SolverChoice::Structured`); the automatic choice would take
 //! the dense LU at these sizes.
 
-mod hbm_support;
+mod support;
 
 use std::path::Path;
 use std::sync::Mutex;
 
-use hbm_support::{tangential_normal_element, two_oscillators};
 use nlrom::case::Case;
 use nlrom::continuation::{trace, ContinuationOptions, Path as CurvePath, PathEnd};
 use nlrom::harmonics::HarmonicLayout;
@@ -28,6 +27,7 @@ use nlrom::problem::sector::SectorProblem;
 use nlrom::problem::settings::case_continuation;
 use nlrom::reduction::reduce;
 use nlrom::{model, Result};
+use support::hbm::{tangential_normal_element, two_oscillators};
 
 /// The solve counts are per process: the tests of this file run one at a time.
 static SERIAL: Mutex<()> = Mutex::new(());
