@@ -235,23 +235,7 @@ pub fn solve_dense_signed(a: &Mat<f64>, b: &[f64]) -> Option<(Vec<f64>, f64)> {
 /// [`solve_dense_signed`] on a view.
 pub fn solve_dense_signed_ref(a: faer::MatRef<'_, f64>, b: &[f64]) -> Option<(Vec<f64>, f64)> {
     let lu = a.partial_piv_lu();
-    let u = lu.U();
-    let n = u.nrows();
-    let (min, max) = (0..n)
-        .map(|i| u[(i, i)].abs())
-        .fold((f64::INFINITY, 0.0_f64), |(lo, hi), d| {
-            (lo.min(d), hi.max(d))
-        });
-    if min <= 1e-15 * max {
-        return None;
-    }
-    let negative_pivots = (0..n).filter(|&i| u[(i, i)] < 0.0).count();
-    let sign = permutation_sign(lu.P().arrays().0)
-        * if negative_pivots.is_multiple_of(2) {
-            1.0
-        } else {
-            -1.0
-        };
+    let sign = linsolve::lu_sign(&lu)?;
     let mut x = Col::from_fn(b.len(), |i| b[i]);
     lu.solve_in_place(x.as_mut());
     let x: Vec<f64> = (0..b.len()).map(|i| x[i]).collect();

@@ -311,6 +311,20 @@ impl LinearModel {
         }
     }
 
+    /// The excitation of harmonic n on the nonlinear and on the linear rows of its block.
+    fn forcing_parts(&self, n: usize) -> (Vec<c64>, Vec<c64>) {
+        let part = &self.blocks[self.harmonic_block[n]];
+        let force = &self.forcing[n];
+        let f_at = |rows: &[usize]| -> Vec<c64> {
+            if force.is_empty() {
+                vec![c64::new(0.0, 0.0); rows.len()]
+            } else {
+                rows.iter().map(|&r| force[r]).collect()
+            }
+        };
+        (f_at(&part.nonlinear), f_at(&part.linear))
+    }
+
     /// Harmonic n condensed at ω (rad/s) for one evaluation of the residual at the harmonic
     /// `q_n` of the nonlinear DOFs: D̄⁽ⁿ⁾ and F̄⁽ⁿ⁾ as [`LinearModel::condense`], but of the
     /// ω-derivatives only the products ∂D̄⁽ⁿ⁾/∂ω q_n and ∂F̄⁽ⁿ⁾/∂ω, by matrix–vector products
@@ -320,15 +334,7 @@ impl LinearModel {
         let part = &self.blocks[self.harmonic_block[n]];
         let s = n as f64 * omega;
         let nf = n as f64;
-        let force = &self.forcing[n];
-        let f_at = |rows: &[usize]| -> Vec<c64> {
-            if force.is_empty() {
-                vec![c64::new(0.0, 0.0); rows.len()]
-            } else {
-                rows.iter().map(|&r| force[r]).collect()
-            }
-        };
-        let (f_n, f_l) = (f_at(&part.nonlinear), f_at(&part.linear));
+        let (f_n, f_l) = self.forcing_parts(n);
         let n_n = part.nonlinear.len();
         let n_l = part.linear.len();
         let d_nn = part.dynamic(Part::NN, s);
@@ -343,16 +349,7 @@ impl LinearModel {
                 force_derivative: vec![c64::new(0.0, 0.0); n_n],
             });
         }
-        let d_ll = part.dynamic(Part::LL, s);
-        let lu = factor(&d_ll, n, omega)?;
-        // [X | w] = D_LL⁻¹ [D_LN | F_L]
-        let d_ln = part.dynamic(Part::LN, s);
-        let mut xw = Mat::<c64>::zeros(n_l, n_n + 1);
-        xw.as_mut().subcols_mut(0, n_n).copy_from(&d_ln);
-        for (i, f) in f_l.iter().enumerate() {
-            xw[(i, n_n)] = *f;
-        }
-        lu.solve_in_place(xw.as_mut());
+        let (lu, xw) = solve_ll(part, n, omega, &f_l)?;
         let d_nl = part.dynamic(Part::NL, s);
         let nl_xw = &d_nl * &xw;
         let stiffness = Mat::from_fn(n_n, n_n, |i, j| d_nn[(i, j)] - nl_xw[(i, j)]);
@@ -398,15 +395,7 @@ impl LinearModel {
         let part = &self.blocks[self.harmonic_block[n]];
         let s = n as f64 * omega;
         let nf = n as f64;
-        let force = &self.forcing[n];
-        let f_at = |rows: &[usize]| -> Vec<c64> {
-            if force.is_empty() {
-                vec![c64::new(0.0, 0.0); rows.len()]
-            } else {
-                rows.iter().map(|&r| force[r]).collect()
-            }
-        };
-        let (f_n, f_l) = (f_at(&part.nonlinear), f_at(&part.linear));
+        let (f_n, f_l) = self.forcing_parts(n);
         let n_n = part.nonlinear.len();
         let n_l = part.linear.len();
         let d_nn = part.dynamic(Part::NN, s);
@@ -421,17 +410,7 @@ impl LinearModel {
                 recovery_offset: vec![c64::new(0.0, 0.0); part.outputs.len()],
             });
         }
-        let d_ll = part.dynamic(Part::LL, s);
-        let lu = factor(&d_ll, n, omega)?;
-        // [X | w] = D_LL⁻¹ [D_LN | F_L]
-        let d_ln = part.dynamic(Part::LN, s);
-        let mut rhs = Mat::<c64>::zeros(n_l, n_n + 1);
-        rhs.as_mut().subcols_mut(0, n_n).copy_from(&d_ln);
-        for (i, f) in f_l.iter().enumerate() {
-            rhs[(i, n_n)] = *f;
-        }
-        lu.solve_in_place(rhs.as_mut());
-        let xw = rhs;
+        let (lu, xw) = solve_ll(part, n, omega, &f_l)?;
         let d_nl = part.dynamic(Part::NL, s);
         let dd_nl = part.dynamic_derivative(Part::NL, nf, omega);
         let dd_ln = part.dynamic_derivative(Part::LN, nf, omega);
@@ -493,6 +472,26 @@ fn output_recovery(part: &Partitioned, xw: Option<MatRef<'_, c64>>) -> Mat<c64> 
         }
     }
     r
+}
+
+/// The LU of D_LL⁽ⁿ⁾ at ω and [X | w] = D_LL⁻¹ [D_LN | F_L] (eq. 16).
+fn solve_ll(
+    part: &Partitioned,
+    n: usize,
+    omega: f64,
+    f_l: &[c64],
+) -> Result<(PartialPivLu<c64>, Mat<c64>)> {
+    let s = n as f64 * omega;
+    let n_n = part.nonlinear.len();
+    let lu = factor(&part.dynamic(Part::LL, s), n, omega)?;
+    let d_ln = part.dynamic(Part::LN, s);
+    let mut xw = Mat::<c64>::zeros(part.linear.len(), n_n + 1);
+    xw.as_mut().subcols_mut(0, n_n).copy_from(&d_ln);
+    for (i, f) in f_l.iter().enumerate() {
+        xw[(i, n_n)] = *f;
+    }
+    lu.solve_in_place(xw.as_mut());
+    Ok((lu, xw))
 }
 
 /// LU of D_LL⁽ⁿ⁾ with a check on the pivots (relative 1e-13) for singularity.

@@ -227,8 +227,9 @@ fn lu_flops(m: usize) -> f64 {
     2.0 / 3.0 * (m as f64).powi(3)
 }
 
-/// sign det of a regular LU, `None` if the smallest |u_ii| ≤ 1e-15 max |u_ii|.
-fn lu_sign(lu: &PartialPivLu<f64>) -> Option<f64> {
+/// sign det of a regular LU (sign det P · Π sign u_ii), `None` if the smallest |u_ii| ≤ 1e-15
+/// max |u_ii|.
+pub(crate) fn lu_sign(lu: &PartialPivLu<f64>) -> Option<f64> {
     let u = lu.U();
     let m = u.nrows();
     let (min, max) = (0..m)
@@ -241,7 +242,11 @@ fn lu_sign(lu: &PartialPivLu<f64>) -> Option<f64> {
     }
     let negative = (0..m).filter(|&i| u[(i, i)] < 0.0).count();
     let sign = permutation_sign(lu.P().arrays().0);
-    Some(if negative % 2 == 0 { sign } else { -sign })
+    Some(if negative.is_multiple_of(2) {
+        sign
+    } else {
+        -sign
+    })
 }
 
 impl Woodbury {

@@ -29,17 +29,20 @@
 //! = faer's partial-pivoting LU and solve of the Jacobian (`nonlinear::solve_dense`); structured
 //! solve = the block LUs and low-rank correction of `nonlinear::linsolve` on the same Jacobian.
 
+#[path = "../../tests/support/hbm.rs"]
+mod hbm_support;
+
 use std::f64::consts::PI;
 use std::path::Path;
 use std::time::Instant;
 
+use hbm_support::synthetic_interface;
+
 use faer::Mat;
 use nlrom::case::{Case, LinearSolverKey};
-use nlrom::contact::law::{ContactParams, Variant};
-use nlrom::contact::pairs::{PairElement, PairSet};
 use nlrom::continuation::trace;
-use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
-use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel};
+use nlrom::harmonics::HarmonicForce;
+use nlrom::hbm::{FrequencyPath, HbmSystem};
 use nlrom::interface::build_interfaces;
 use nlrom::nonlinear::{
     linsolve, solve_dense, LinearSolver, Linearization, ParameterSystem, SolverChoice,
@@ -273,59 +276,15 @@ fn split<F: HarmonicForce>(
 }
 
 fn synthetic(contact_dofs: usize, h: usize, samples: usize, every: usize) -> Result<()> {
-    let pairs = contact_dofs / 6;
-    let n = 6 * pairs;
-    let k = Mat::from_fn(n, n, |i, j| match i.abs_diff(j) {
-        0 => 2.0,
-        1 => -1.0,
-        _ => 0.0,
-    });
-    let m = Mat::<f64>::identity(n, n);
-    let c = Mat::from_fn(n, n, |i, j| 0.01 * k[(i, j)]);
-    let force: Vec<f64> = (0..n).map(|i| 0.3 * ((i % 7) as f64 - 3.0)).collect();
-    let linear = LinearModel::from_real(
-        k.as_ref(),
-        m.as_ref(),
-        Some(c.as_ref()),
-        &force,
-        (0..n).collect(),
-        vec![0],
-        h,
-    )?;
-    let params = ContactParams::new(1.0, 1.0, 0.5, 1.0, "synthetic")?;
-    let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let set = PairSet::new(
-        n,
-        Variant::OneD,
-        (0..pairs)
-            .map(|p| PairElement {
-                contact: [6 * p, 6 * p + 1, 6 * p + 2],
-                target: Some([6 * p + 3, 6 * p + 4, 6 * p + 5]),
-                frame: identity,
-                sigma: 0,
-                params,
-                preload_rate: 1.0,
-            })
-            .collect(),
-        None,
-    )?;
-    let layout = HarmonicLayout::new(h, samples)?;
+    let slipping = (every > 1).then(|| 1.0 / every as f64);
+    let (linear, set, layout, x) = synthetic_interface(contact_dofs, h, samples, slipping)?;
+    let n = linear.n_condensed();
+    let pairs = n / 6;
     let system = HbmSystem::new(layout, &linear, &set)?;
     let fp = FrequencyPath {
         system: &system,
         level: 1.0,
     };
-    // harmonic-1 motion of 0.5–2 m per DOF with varied phases: stick, slip and separation mixed
-    let mut x = vec![0.0; system.dim()];
-    for d in 0..n {
-        let c1 = layout.cos_index(1, d, n);
-        let (mut a, phi) = (0.5 + 1.5 * ((d * 37 % 101) as f64 / 100.0), d as f64 * 0.7);
-        if (d / 6) % every.max(1) != 0 {
-            a *= 0.02;
-        }
-        x[c1] = a * phi.cos();
-        x[c1 + 1] = a * phi.sin();
-    }
     println!(
         "synthetic: {pairs} pairs ({} moving), {n} contact DOF, H = {h}, N_t = {samples}",
         pairs.div_ceil(every.max(1))
