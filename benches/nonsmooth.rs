@@ -89,7 +89,6 @@ fn table() {
     let gamma = s.gamma;
     let mhat: Vec<f64> = (0..n * n)
         .map(|ij| {
-            let (i, j) = (ij / n, ij % n);
             sys.mass[ij]
                 + mj_h * gamma * sys.damping[ij]
                 + mj_h * mj_h * gamma * gamma * sys.stiffness[ij]
