@@ -7,9 +7,9 @@
 //! solve of the 45 unknowns) and `frf` (the whole continuation 0.2 → 2.2 rad/s; the time per point
 //! is this divided by the number of points, printed once). Run: `cargo bench --bench hbm`.
 //! The friction elements come from `contact::element` through the test wrapper of
-//! `tests/hbm_support` (the same law and Jacobian as the `[[element]]` force).
+//! `tests/support/hbm.rs` (the same law and Jacobian as the `[[element]]` force).
 
-#[path = "../tests/hbm_support/mod.rs"]
+#[path = "../tests/support/hbm.rs"]
 mod hbm_support;
 
 use std::time::Duration;

@@ -1,15 +1,10 @@
 //! The `nlrom` binary: `mesh info` output and exit statuses (`docs/user-guide.md`).
 
-use std::path::Path;
-use std::process::Command;
+mod support;
 
-fn nlrom(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_nlrom"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("runs")
-}
+use support::cli::nlrom;
+
+use std::path::Path;
 
 #[test]
 fn mesh_info_json_has_the_contract_keys() {

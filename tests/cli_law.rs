@@ -4,10 +4,10 @@
 //! (`tools/post/plot_law.py`, whose loop area equals the printed energy); bad input exits 2
 //! with a message naming the key.
 
-mod common;
+mod support;
 
-use common::cli::{nlrom, stderr};
-use common::python::run_python;
+use support::cli::{nlrom, stderr};
+use support::python::run_python;
 
 fn json(args: &[&str]) -> serde_json::Value {
     let mut all = vec!["law"];

@@ -8,8 +8,8 @@ use nlrom::contact::element::{evaluate, LocalElement, Workspace};
 use nlrom::contact::law::{ContactParams, Variant};
 use nlrom::harmonics::HarmonicLayout;
 
-mod contact_common;
-use contact_common::Rng;
+mod support;
+use support::random::XorShift;
 
 fn params(kt: f64, kn: f64, mu: f64, n0: f64) -> ContactParams {
     ContactParams::new(kt, kn, mu, n0, "test").unwrap()
@@ -17,7 +17,7 @@ fn params(kt: f64, kn: f64, mu: f64, n0: f64) -> ContactParams {
 
 #[test]
 fn aft_round_trip_is_exact_for_band_limited_signals() {
-    let mut rng = Rng(7);
+    let mut rng = XorShift(7);
     for (h, n_t) in [(1, 4), (3, 16), (3, 13), (7, 32), (7, 100)] {
         let aft = Aft::new(HarmonicLayout::new(h, n_t).unwrap()).unwrap();
         let mut s = aft.scratch();
@@ -112,7 +112,7 @@ fn loop_area(ws: &Workspace) -> f64 {
 /// difference falls like 1/N_t (4× per 4× samples when slip or separation dominate; it is zero for the Jenkins element, whose slip force is constant).
 #[test]
 fn dissipated_energy_equals_loop_area() {
-    let mut rng = Rng(99);
+    let mut rng = XorShift(99);
     for variant in [Variant::OneD, Variant::TwoD] {
         for trial in 0..3 {
             let el = LocalElement {
@@ -172,7 +172,7 @@ fn separation_fraction_under_harmonic_normal_motion() {
 }
 
 /// Random local coefficients of three signals with amplitudes `amp`, decaying as 1/n.
-fn random_input(rng: &mut Rng, h: usize, amp: [f64; 3]) -> Vec<f64> {
+fn random_input(rng: &mut XorShift, h: usize, amp: [f64; 3]) -> Vec<f64> {
     let m = 2 * h + 1;
     let mut x = vec![0.0; 3 * m];
     for (c, a) in amp.iter().enumerate() {
@@ -204,7 +204,7 @@ enum Case {
 fn check_jacobian(variant: Variant, h: usize, case: Case, seed: u64) {
     let aft = Aft::new(HarmonicLayout::with_default_samples(h)).unwrap();
     let mut ws = Workspace::new(&aft);
-    let mut rng = Rng(seed);
+    let mut rng = XorShift(seed);
     // k_t = 10, μ n0 = 0.5: sticks for |u − w| ≤ 0.05; k_n v = n0 at |v| = 0.05.
     let (n0, amp) = match case {
         Case::FullStick => (1.0, [0.01, 0.008, 0.01]),
@@ -321,7 +321,7 @@ fn jacobian_matches_finite_differences_in_every_regime() {
 fn returned_state_is_periodic() {
     let aft = Aft::new(HarmonicLayout::with_default_samples(3)).unwrap();
     let mut ws = Workspace::new(&aft);
-    let mut rng = Rng(5);
+    let mut rng = XorShift(5);
     let el = LocalElement {
         params: params(10.0, 20.0, 0.5, 1.0),
         variant: Variant::TwoD,

@@ -12,8 +12,9 @@ use nlrom::contact::aft::global_index;
 use nlrom::contact::grounded::DofElements;
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 
-mod contact_common;
-use contact_common::{check_derivative, check_jacobian, forces, Rng};
+mod support;
+use support::contact::{check_derivative, check_jacobian, forces};
+use support::random::XorShift;
 
 fn case_elements(elements: &str) -> Vec<FrictionElement> {
     let text = format!(
@@ -58,7 +59,7 @@ fn two_dof_element_equals_grounded_element_on_the_difference() {
     )
     .unwrap();
     let layout = HarmonicLayout::with_default_samples(3);
-    let mut rng = Rng(5);
+    let mut rng = XorShift(5);
     let q2 = rng.vec(layout.len(2), 0.1);
     let q1: Vec<f64> = (0..7)
         .map(|l| q2[global_index(&layout, l, 1, 2)] - q2[global_index(&layout, l, 0, 2)])
@@ -151,7 +152,7 @@ fn jacobian_and_preload_derivative_match_finite_differences() {
     for h in [1, 3, 7] {
         let layout = HarmonicLayout::with_default_samples(h);
         let n = layout.len(3);
-        let mut rng = Rng(13 + h as u64);
+        let mut rng = XorShift(13 + h as u64);
         let q = rng.vec(n, 0.1);
         let mut state = set.initial_state();
         let mut f = vec![0.0; n];

@@ -12,11 +12,12 @@ use nlrom::cyclic::{harmonic_indices, CyclicGeometry};
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 use nlrom::vec3::{mat_mul, Mat3};
 
-mod contact_common;
-use contact_common::{check_derivative, check_jacobian, forces, Rng};
+mod support;
+use support::contact::{check_derivative, check_jacobian, forces};
+use support::random::XorShift;
 
 /// A rotation matrix from a random axis and angle (Rodrigues).
-fn random_rotation(rng: &mut Rng) -> Mat3 {
+fn random_rotation(rng: &mut XorShift) -> Mat3 {
     let g = CyclicGeometry::new(
         7,
         [0.0; 3],
@@ -40,7 +41,7 @@ fn complex(q: &[f64], m: usize, c: usize, n: usize) -> (f64, f64) {
 
 #[test]
 fn relative_kinematics_match_complex_arithmetic() {
-    let mut rng = Rng(3);
+    let mut rng = XorShift(3);
     let h = 4;
     let m = 2 * h + 1;
     let geo = CyclicGeometry::new(24, [0.0; 3], [0.0, 0.0, 1.0]).unwrap();
@@ -90,7 +91,7 @@ fn relative_kinematics_match_complex_arithmetic() {
 
 #[test]
 fn force_map_is_the_transpose_of_the_kinematic_map() {
-    let mut rng = Rng(11);
+    let mut rng = XorShift(11);
     let h = 3;
     let m = 2 * h + 1;
     let frame = random_rotation(&mut rng);
@@ -124,7 +125,7 @@ fn rigid_disk_rotation_gives_no_relative_motion_at_k0() {
     let k = harmonic_indices(24, 0, h); // all zero
     let x_t = [0.2, 0.013, 0.01];
     let frame = [[0.0, 0.0, 1.0], [0.6, -0.8, 0.0], [0.8, 0.6, 0.0]];
-    let mut rng = Rng(17);
+    let mut rng = XorShift(17);
     for sigma in [-1, 1] {
         let r = geo.rotation(sigma);
         let x_c = mat_vec(&r, x_t); // the contact node sits on the target's image
@@ -198,7 +199,7 @@ fn pair_set(variant: Variant, rot: &Mat3, axis: [f64; 3], h: usize) -> PairSet {
 const IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
 /// q with node displacements of amplitude ~0.1 (tangential stick limit 0.05) and small normal parts.
-fn random_q(rng: &mut Rng, layout: &HarmonicLayout) -> Vec<f64> {
+fn random_q(rng: &mut XorShift, layout: &HarmonicLayout) -> Vec<f64> {
     let mut q = rng.vec(layout.len(15), 0.08);
     // a static normal offset keeps the pairs mostly closed
     for v in q.iter_mut().take(15) {
@@ -214,7 +215,7 @@ fn assembled_jacobian_and_preload_derivative_match_finite_differences() {
             let layout = HarmonicLayout::with_default_samples(h);
             let set = pair_set(variant, &IDENTITY, [0.0, 0.0, 1.0], h);
             let n = layout.len(15);
-            let mut rng = Rng(23 + h as u64);
+            let mut rng = XorShift(23 + h as u64);
             let q = random_q(&mut rng, &layout);
             let mut state = set.initial_state();
             let mut f = vec![0.0; n];
@@ -263,7 +264,7 @@ fn frame_invariance_and_rigid_motion() {
     let layout = HarmonicLayout::with_default_samples(h);
     let m = layout.coefficients();
     let n = layout.len(15);
-    let mut rng = Rng(31);
+    let mut rng = XorShift(31);
     let g = random_rotation(&mut rng);
     let q = random_q(&mut rng, &layout);
     // q rotated node by node, coefficient by coefficient.
@@ -334,7 +335,7 @@ fn result_does_not_depend_on_the_thread_count() {
     let h = 3;
     let layout = HarmonicLayout::with_default_samples(h);
     let n = layout.len(15);
-    let mut rng = Rng(41);
+    let mut rng = XorShift(41);
     let q = random_q(&mut rng, &layout);
     let set = pair_set(Variant::OneD, &IDENTITY, [0.0, 0.0, 1.0], h);
     let run = |threads: usize| {

@@ -3,16 +3,16 @@
 //! ((k − mω² + ¾ k3 A²)² + (cω)²) A² = F², both turning points traced, no skipped segment;
 //! level continuation of a linear system; a failing corrector is reported with the points kept.
 
-mod hbm_support;
+mod support;
 
 use faer::Mat;
-use hbm_support::{chain4, PolynomialSprings};
 use nlrom::continuation::{trace, ContinuationOptions, PathEnd, PathPoint};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::response::output_response;
 use nlrom::hbm::{FrequencyPath, HbmSystem, LevelPath, LinearModel, ResponseOptions};
 use nlrom::nonlinear::{Linearization, ParameterSystem};
 use nlrom::{Error, Result};
+use support::hbm::{chain4, PolynomialSprings};
 
 const K: f64 = 1.0;
 const M: f64 = 1.0;

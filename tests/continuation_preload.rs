@@ -3,15 +3,15 @@
 //! the linear start x = 0 and sliders at rest, at the same n0 values (1e-8 relative), and the
 //! parameter derivative against central finite differences of the residual.
 
-mod hbm_support;
+mod support;
 
-use hbm_support::{tangential_normal_element, two_oscillators};
 use nlrom::contact::grounded::DofElements;
 use nlrom::continuation::{trace, ContinuationOptions, PathEnd};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel, PreloadPath};
 use nlrom::nonlinear::{norm, solve_fixed, Linearization, NewtonOptions, ParameterSystem};
 use nlrom::Result;
+use support::hbm::{tangential_normal_element, two_oscillators};
 
 const OMEGA: f64 = 1.0;
 

@@ -11,9 +11,8 @@
 //! the orientation of the tangent (the sign of det [J; tᵀ]) and follows the unstable branch back
 //! down in ω. The second test traces both turning points of a damped variant.
 
-mod hbm_support;
+mod support;
 
-use hbm_support::{tangential_normal_element, two_oscillators};
 use nlrom::contact::grounded::DofElements;
 use nlrom::continuation::{trace, ContinuationOptions, Path, PathEnd};
 use nlrom::harmonics::HarmonicLayout;
@@ -21,6 +20,7 @@ use nlrom::hbm::response::output_response;
 use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel, ResponseOptions};
 use nlrom::nonlinear::{norm, solve_dense, Linearization, ParameterSystem};
 use nlrom::Result;
+use support::hbm::{tangential_normal_element, two_oscillators};
 
 fn model(h: usize) -> LinearModel {
     two_oscillators(0.005, [0.05, 0.03], h)

@@ -5,14 +5,14 @@
 //! damping 0.01, forces 0.1 and 0.06, H = 5, 256 samples), whose response near ω = 1.6 rad/s
 //! separates over part of the period.
 
-mod hbm_support;
+mod support;
 
-use hbm_support::{tangential_normal_element, two_oscillators};
 use nlrom::continuation::{trace, ContinuationOptions, PathEnd};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::frf::frequency_response;
 use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel, ResponseOptions};
 use nlrom::nonlinear::{norm, solve_fixed, NewtonOptions, ParameterSystem};
+use support::hbm::{tangential_normal_element, two_oscillators};
 
 fn model() -> LinearModel {
     two_oscillators(0.01, [0.1, 0.06], 5)

@@ -5,14 +5,10 @@
 //! Without CB (T_kᴴ K T_k on the sparse sector) to 1e-8, with CB to the CB accuracy. Also: the
 //! properties of K_k (Hermitian, K_{N−k} = conj K_k, real k = 0, N/2), GSI, and bad input.
 
-mod cyclic_common;
+mod support;
 
 use std::path::PathBuf;
 
-use cyclic_common::{
-    check_union_against_full, full_model_frequencies, max_rel_error, merge_sectors,
-    sparse_sector_frequencies, union_below_cut,
-};
 use faer::{c64, Mat};
 use nlrom::case::Case;
 use nlrom::cyclic::{match_frontiers, CyclicGeometry};
@@ -21,6 +17,10 @@ use nlrom::mesh::msh::read_msh;
 use nlrom::model::{self, StructuralModel};
 use nlrom::reduction::Sector;
 use nlrom::Error;
+use support::cyclic::{
+    check_union_against_full, full_model_frequencies, max_rel_error, merge_sectors,
+    sparse_sector_frequencies, union_below_cut,
+};
 
 const N: usize = 8;
 

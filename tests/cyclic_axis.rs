@@ -8,20 +8,20 @@
 //! accuracy (1e-3). Plate theory as a sanity check: the lowest k = 0 mode, 2516 Hz, against
 //! 2554 Hz for a clamped thin circular plate (λ² = 10.22).
 
-mod cyclic_common;
+mod support;
 
 use std::path::PathBuf;
 
-use cyclic_common::{
-    check_union_against_full, full_model_frequencies, max_rel_error, merge_sectors,
-    sparse_sector_frequencies,
-};
 use nlrom::case::Case;
 use nlrom::cyclic::{axis_basis, match_frontiers, CyclicGeometry};
 use nlrom::eigen::hermitian_modes;
 use nlrom::mesh::msh::read_msh;
 use nlrom::model::{self, StructuralModel};
 use nlrom::reduction::{free_frontier_pairs, Sector};
+use support::cyclic::{
+    check_union_against_full, full_model_frequencies, max_rel_error, merge_sectors,
+    sparse_sector_frequencies,
+};
 
 const N: usize = 8;
 

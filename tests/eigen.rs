@@ -9,12 +9,15 @@
 //! alone allows ~ε·κ ≈ 4e-10); residuals to the solver's default tolerance 1e-8; M-orthonormality
 //! to 1e-10.
 
+mod support;
+
 use faer::prelude::Solve;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, Side};
 use nlrom::eigen::{lowest_modes, EigenOptions, Modes, ShiftInvert};
 use nlrom::Error;
 use std::f64::consts::PI;
+use support::random::SplitMix;
 
 /// Spring stiffness of the chains and lattices (N/m).
 const SPRING: f64 = 1.0e6;
@@ -131,23 +134,10 @@ fn m_orthonormality_error(m: &SparseColMat<usize, f64>, phi: &Mat<f64>) -> f64 {
     worst
 }
 
-/// A small deterministic generator (SplitMix64) for the random pencil, uniform in [0, 1).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// A random sparse symmetric positive definite matrix of size `n`: about `per_row`
 /// off-diagonal entries per row, uniform in [−off, off], and a strictly dominant diagonal
 /// `Σ|a_ij| + U(0.1, 1.1)` (so SPD by Gershgorin).
-fn random_spd(n: usize, per_row: usize, off: f64, rng: &mut Rng) -> SparseColMat<usize, f64> {
+fn random_spd(n: usize, per_row: usize, off: f64, rng: &mut SplitMix) -> SparseColMat<usize, f64> {
     let mut e = Vec::new();
     let mut row_sum = vec![0.0; n];
     for i in 0..n {
@@ -232,7 +222,7 @@ fn compute_message(e: Error) -> String {
 // (a) random sparse SPD pencil vs the dense Cholesky-transformed solution.
 #[test]
 fn random_pencil_matches_dense_reference() {
-    let mut rng = Rng(7);
+    let mut rng = SplitMix(7);
     let n_dof = 300;
     let k = random_spd(n_dof, 8, 1.0, &mut rng);
     let m = random_spd(n_dof, 6, 0.05, &mut rng);
@@ -258,7 +248,7 @@ fn random_pencil_matches_dense_reference() {
 // The dense fallback (N_dof below the Krylov subspace) against the same reference.
 #[test]
 fn small_pencil_uses_dense_path() {
-    let mut rng = Rng(11);
+    let mut rng = SplitMix(11);
     let k = random_spd(40, 6, 1.0, &mut rng);
     let m = random_spd(40, 4, 0.05, &mut rng);
     let modes = lowest_modes(k.as_ref(), m.as_ref(), 5, &EigenOptions::default()).unwrap();
@@ -452,7 +442,7 @@ fn too_few_finite_eigenvalues_is_an_error() {
 // One factorisation serves the static solve (multi-RHS) and the modes, as Craig–Bampton needs.
 #[test]
 fn factorisation_is_reusable_for_solves_and_modes() {
-    let mut rng = Rng(3);
+    let mut rng = SplitMix(3);
     let n_dof = 150;
     let k = random_spd(n_dof, 8, 1.0, &mut rng);
     let m = random_spd(n_dof, 4, 0.05, &mut rng);

@@ -3,10 +3,9 @@
 //! 1 at ω = 0.952957 and 1.249892; Den Hartog's rigid-Coulomb amplitude ratios (H = 7, large k_t);
 //! the stuck limit (μ → ∞) equal to the linear FRF.
 
-mod hbm_support;
+mod support;
 
 use faer::{c64, Mat};
-use hbm_support::{chain4, complex_solve, friction_elements};
 use nlrom::contact::grounded::DofElements;
 use nlrom::contact::law::ContactParams;
 use nlrom::continuation::{trace, ContinuationOptions, PathEnd};
@@ -14,6 +13,7 @@ use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::response::output_response;
 use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel, ResponseOptions};
 use nlrom::nonlinear::{solve_fixed, NewtonOptions};
+use support::hbm::{chain4, complex_solve, friction_elements};
 
 fn sdof(c: f64, f: f64, h: usize) -> LinearModel {
     let one = Mat::from_fn(1, 1, |_, _| 1.0);

@@ -1,14 +1,14 @@
 //! Harmonic balance on matrix-defined systems: exactness on linear systems (against a direct
 //! complex solve), condensed = uncondensed, analytic derivatives against finite differences.
 
-mod hbm_support;
+mod support;
 
 use faer::{c64, Mat};
-use hbm_support::{chain4, complex_solve, Embedded, PolynomialSprings};
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 use nlrom::hbm::response::output_response;
 use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel, MatrixBlock, ResponseOptions};
 use nlrom::nonlinear::{solve_fixed, Linearization, NewtonOptions, ParameterSystem};
+use support::hbm::{chain4, complex_solve, Embedded, PolynomialSprings};
 
 fn c(re: f64) -> c64 {
     c64::new(re, 0.0)

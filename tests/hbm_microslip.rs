@@ -4,11 +4,10 @@
 //! response equals the AFT one to first order in 1/N_t, and at every point the excitation's
 //! work per cycle equals the viscous plus the friction dissipation.
 
-mod common;
+mod support;
 
 use std::path::Path;
 
-use common::cli::root;
 use nlrom::case::{Case, Evaluation};
 use nlrom::contact::grounded::DofElements;
 use nlrom::harmonics::HarmonicLayout;
@@ -19,6 +18,7 @@ use nlrom::model;
 use nlrom::nonlinear::{solve_fixed, NewtonOptions};
 use nlrom::problem::matrix_case::matrix_setup;
 use nlrom::problem::settings::case_continuation;
+use support::cli::root;
 
 fn case_text(evaluation: &str) -> String {
     let m = root().join("cases/chain3");

@@ -1,12 +1,12 @@
 //! The linear part of matrix-defined cases: damping models against closed forms, rows of the
 //! excitation/elements/outputs, a case's FRF equal to the direct linear solution, bad input.
 
-mod hbm_support;
+mod support;
 
 use std::path::Path;
+use support::random::Lcg;
 
 use faer::{c64, Mat};
-use hbm_support::{complex_solve, dense};
 use nlrom::case::Case;
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::frf::frequency_response;
@@ -15,6 +15,7 @@ use nlrom::model;
 use nlrom::model::damping::modal_damping;
 use nlrom::problem::matrix_case::matrix_setup;
 use nlrom::problem::settings::case_continuation;
+use support::hbm::{complex_solve, dense};
 
 /// A 3-DOF chain ground–1–2–3 (springs 2, 1, 1; masses 1, 1, 2) in Matrix Market files.
 fn write_chain(dir: &Path) {
@@ -69,13 +70,8 @@ fn modal_damping_matches_closed_forms() {
 #[test]
 fn modal_damping_is_exact_for_clustered_modes_above_128() {
     let n = 210;
-    let mut seed = 12345_u64;
-    let mut rand = move || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut lcg = Lcg(12345);
+    let mut rand = move || lcg.next() - 0.5;
     let g = Mat::<f64>::from_fn(n, n, |_, _| rand());
     let q = g.qr().compute_Q();
     let lambda: Vec<f64> = (0..n)
@@ -117,7 +113,7 @@ fn linear_matrix_case_frf_equals_the_direct_solution() {
     assert_eq!(setup.output_rows, vec![0, 2]);
     assert!(setup.nonlinear_rows.is_empty());
     // a linear case condenses on no DOF: use a zero force on an empty set
-    let zero = hbm_support::PolynomialSprings {
+    let zero = support::hbm::PolynomialSprings {
         k1: vec![],
         k3: vec![],
     };

@@ -4,16 +4,16 @@
 //! branches (stable), and a direct Floquet computation (RK4 integration of the variational
 //! equation over one period, monodromy matrix) at points on each branch.
 
-mod hbm_support;
+mod support;
 
 use faer::linalg::solvers::Solve;
 use faer::{c64, Mat};
-use hbm_support::{chain4, PolynomialSprings};
 use nlrom::continuation::{trace, ContinuationOptions, PathEnd, PathPoint};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::frf::frequency_response;
 use nlrom::hbm::stability::{floquet, is_stable, HillOptions};
 use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel, ResponseOptions};
+use support::hbm::{chain4, PolynomialSprings};
 
 const K: f64 = 1.0;
 const M: f64 = 1.0;

@@ -4,7 +4,7 @@
 //! assembled here independently from the interface's weights, and the coupling is stiffer than
 //! that by the array's spurious stiffness when the array is used instead.
 
-mod common;
+mod support;
 
 use std::path::Path;
 
@@ -20,7 +20,7 @@ use nlrom::problem::sector::SectorProblem;
 use nlrom::reduction::reduce;
 use nlrom::rom::{HarmonicRom, Rom};
 
-use common::sector_hb::hb_outputs;
+use support::sector_hb::hb_outputs;
 
 /// The case with the interpolated coupling, μ = 1e6 (never slips), n0 = 1e6 N (the smallest
 /// node's share, ≈ 2e3 N, keeps it closed: k_n × the relative motion is far below) and H = 1.
@@ -66,7 +66,7 @@ fn interpolated_springs(
                 l.push((h.row_of(t, d as u8).unwrap(), col));
             }
         }
-        common::springs::add_spring(&mut kc, &l, g);
+        support::springs::add_spring(&mut kc, &l, g);
     }
     kc
 }

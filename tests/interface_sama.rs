@@ -1,8 +1,11 @@
 //! SAMA and node-to-node contact pairs on the bundled shrouded sector (N = 24): conforming and
 //! non-conforming shroud faces, and the `nlrom contact` command.
 
+mod support;
+
+use support::cli::nlrom;
+
 use std::path::Path;
-use std::process::Command;
 
 use faer::c64;
 use nlrom::case::{Case, ContactModel};
@@ -322,14 +325,6 @@ fn pair_forces_are_the_adjoint_of_the_relative_displacement() {
     let uc = [c64::new(1.0, 0.0), c64::new(0.0, 0.0), c64::new(0.0, 0.0)];
     let r = iface.relative_displacement(p, phi, uc, ut);
     assert!(r.iter().all(|x| x.norm() < 1e-15), "{r:?}");
-}
-
-fn nlrom(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_nlrom"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("runs")
 }
 
 #[test]

@@ -2,12 +2,15 @@
 //! misalignment cases, rigid translation, bad input), random curved surfaces (BVH projection
 //! against a brute-force search over every face), and the area lumping rule.
 
+mod support;
+
 use nlrom::case::{Contact, ContactElement, ContactModel, Misalignment, Rotation};
 use nlrom::interface::project::closest_on_face;
 use nlrom::interface::surface::{SurfaceFace, TargetSurface};
 use nlrom::interface::weights::lumped_face_area;
 use nlrom::interface::{build_interface, ContactInterface};
 use nlrom::mesh::{ElementBlock, ElementType, Mesh, MshFormat, MshVersion, PhysicalGroup};
+use support::random::SplitMix;
 
 /// Nodes and hexa8 elements of an `n × n × 1` block over [0, 2]² × [z0, z0 + 1], with the quad4
 /// faces of its bottom (`top = false`) or top layer of nodes.
@@ -332,30 +335,17 @@ fn bad_input_gives_clear_errors() {
 // Random curved surfaces: BVH projection against brute force
 // ---------------------------------------------------------------------------------------------
 
-/// Deterministic uniform numbers in [0, 1) (SplitMix64).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// A curved height field z = f(x, y) over [0, 1]², `n × n` cells of faces (triangle3/6 pairs or
 /// quad8/quad9), nodes (mid-side included) jittered in x, y and lying exactly on the surface
 /// (triangle3 faces use the corner nodes only: a faceted surface).
-fn curved_surface(kind: ElementType, n: usize, rng: &mut Rng) -> TargetSurface {
+fn curved_surface(kind: ElementType, n: usize, rng: &mut SplitMix) -> TargetSurface {
     let f = |x: f64, y: f64| 0.15 * (3.0 * x).sin() * (2.0 * y).cos() + 0.1 * x * y;
     let m = 2 * n + 1; // nodes per row on the half-step grid
     let h = 0.5 / n as f64;
     let mut points = Vec::new();
     for j in 0..m {
         for i in 0..m {
-            let jit = |r: &mut Rng, k: usize| {
+            let jit = |r: &mut SplitMix, k: usize| {
                 if k == 0 || k == m - 1 {
                     0.0
                 } else {
@@ -488,7 +478,7 @@ fn sampled_distance(s: &TargetSurface, x: [f64; 3]) -> f64 {
 
 #[test]
 fn bvh_projection_matches_brute_force_on_random_curved_surfaces() {
-    let mut rng = Rng(7);
+    let mut rng = SplitMix(7);
     for kind in [
         ElementType::Triangle6,
         ElementType::Quad8,
@@ -538,7 +528,7 @@ fn bvh_projection_matches_brute_force_on_random_curved_surfaces() {
 
 #[test]
 fn points_beyond_the_border_have_a_tangential_offset() {
-    let mut rng = Rng(11);
+    let mut rng = SplitMix(11);
     let s = curved_surface(ElementType::Quad8, 4, &mut rng);
     // Beyond the edge x = 1 of the surface: the nearest point is on the border, not orthogonal.
     let p = s.project([1.2, 0.5, 0.0], 2.0).unwrap();

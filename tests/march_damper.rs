@@ -3,33 +3,17 @@
 //! same contact forces (paper: "perfectly superposed"), the iteration counts of Fig. 5, and the
 //! `nlrom march` command with its results file.
 
+mod support;
+
+use support::cli::{json_report, nlrom};
+
 use std::path::Path;
-use std::process::Command;
 
 use nlrom::case::{Case, MarchScheme};
 use nlrom::march::element::Direction;
 use nlrom::march::{march, MarchOutcome};
 use nlrom::output::{read_results, H5Reader, ResponseDof};
 use nlrom::problem::march_case::{case_march, CaseMarch};
-
-/// Runs `nlrom march CASE -o OUT --json EXTRA...`, asserts success and returns the JSON report.
-fn march_json(case: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
-    let res = Command::new(env!("CARGO_BIN_EXE_nlrom"))
-        .arg("march")
-        .arg(case)
-        .arg("-o")
-        .arg(out)
-        .arg("--json")
-        .args(extra)
-        .output()
-        .unwrap();
-    assert!(
-        res.status.success(),
-        "{}",
-        String::from_utf8_lossy(&res.stderr)
-    );
-    serde_json::from_slice(&res.stdout).unwrap()
-}
 
 fn damper_case() -> Case {
     Case::load(Path::new(concat!(
@@ -253,7 +237,12 @@ fn march_command_writes_the_results_file() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("damper.h5");
     let case = concat!(env!("CARGO_MANIFEST_DIR"), "/cases/damper.toml");
-    let report = march_json(Path::new(case), &out, &["--scheme", "quasi-static"]);
+    let report = json_report(
+        "march",
+        Path::new(case),
+        &out,
+        &["--scheme", "quasi-static"],
+    );
     assert_eq!(report["scheme"], "quasi-static");
     assert_eq!(report["steps"], 900);
     assert!(report["wall_seconds"].as_f64().unwrap() > 0.0);
@@ -290,13 +279,12 @@ fn march_command_writes_the_results_file() {
     // of N = 8) are clear input errors (exit 2)
     let bad = dir.path().join("bad.toml");
     std::fs::write(&bad, "[damper]\nmass = 0.01\ninertia = 1e-7\ncentrifugal_force = 10.0\nplatform = []\ncontact = []\n").unwrap();
-    let res = Command::new(env!("CARGO_BIN_EXE_nlrom"))
-        .args(["march"])
-        .arg(&bad)
-        .args(["-o"])
-        .arg(dir.path().join("x.h5"))
-        .output()
-        .unwrap();
+    let res = nlrom(&[
+        "march",
+        bad.to_str().unwrap(),
+        "-o",
+        dir.path().join("x.h5").to_str().unwrap(),
+    ]);
     assert_eq!(res.status.code(), Some(2));
     let err = String::from_utf8_lossy(&res.stderr);
     assert!(err.contains("damper") && err.contains("contact"), "{err}");
@@ -312,13 +300,12 @@ fn march_command_writes_the_results_file() {
         damper_text.replace("damping_ratio = 0.2 ", "damping_ratio = 1.5 "),
     )
     .unwrap();
-    let res = Command::new(env!("CARGO_BIN_EXE_nlrom"))
-        .arg("march")
-        .arg(&overdamped)
-        .arg("-o")
-        .arg(dir.path().join("z.h5"))
-        .output()
-        .unwrap();
+    let res = nlrom(&[
+        "march",
+        overdamped.to_str().unwrap(),
+        "-o",
+        dir.path().join("z.h5").to_str().unwrap(),
+    ]);
     let err = String::from_utf8_lossy(&res.stderr);
     assert_eq!(res.status.code(), Some(2), "{err}");
     assert!(
@@ -348,13 +335,12 @@ steps_per_period = 100
         ),
     )
     .unwrap();
-    let res = Command::new(env!("CARGO_BIN_EXE_nlrom"))
-        .arg("march")
-        .arg(&sector_case)
-        .arg("-o")
-        .arg(dir.path().join("y.h5"))
-        .output()
-        .unwrap();
+    let res = nlrom(&[
+        "march",
+        sector_case.to_str().unwrap(),
+        "-o",
+        dir.path().join("y.h5").to_str().unwrap(),
+    ]);
     let err = String::from_utf8_lossy(&res.stderr);
     assert_eq!(res.status.code(), Some(2), "{err}");
     assert!(
@@ -410,7 +396,7 @@ steady_tolerance = 1e-7
     )
     .unwrap();
     let out = dir.path().join("sdof.h5");
-    let report = march_json(&case, &out, &[]);
+    let report = json_report("march", &case, &out, &[]);
     let amp = report["first_harmonic_last_period"][0].as_f64().unwrap();
     assert!((amp - 0.991341).abs() < 1e-3, "{amp}");
     assert!(report["steady_period"].as_u64().unwrap() < 200);

@@ -5,6 +5,10 @@
 // The Siconos reference rows are copied digit for digit as printed in the reference files.
 #![allow(clippy::excessive_precision)]
 
+mod support;
+
+use support::cli::{json_report, nlrom};
+
 use nlrom::march::carpenter::{carpenter, stability_limits};
 use nlrom::march::moreau_jean::moreau_jean;
 use nlrom::march::obstacle::{NonsmoothHistory, NonsmoothSettings, NonsmoothSystem, Obstacle};
@@ -767,24 +771,6 @@ fn bad_step_and_gamma_are_errors_naming_the_key() {
 // The command line on the bundled case
 // ---------------------------------------------------------------------------------------------
 
-fn march_json(case: &std::path::Path, out: &std::path::Path, extra: &[&str]) -> serde_json::Value {
-    let res = std::process::Command::new(env!("CARGO_BIN_EXE_nlrom"))
-        .arg("march")
-        .arg(case)
-        .arg("-o")
-        .arg(out)
-        .arg("--json")
-        .args(extra)
-        .output()
-        .unwrap();
-    assert!(
-        res.status.success(),
-        "{}",
-        String::from_utf8_lossy(&res.stderr)
-    );
-    serde_json::from_slice(&res.stdout).unwrap()
-}
-
 #[test]
 fn nlrom_march_runs_both_nonsmooth_schemes_on_the_bundled_wall_case() {
     let case = std::path::Path::new(concat!(
@@ -794,13 +780,13 @@ fn nlrom_march_runs_both_nonsmooth_schemes_on_the_bundled_wall_case() {
     let dir = std::env::temp_dir().join(format!("nlrom_wall_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let mj_out = dir.join("mj.h5");
-    let r = march_json(case, &mj_out, &[]);
+    let r = json_report("march", case, &mj_out, &[]);
     assert_eq!(r["scheme"], "moreau-jean");
     assert_eq!(r["steps"], 9000);
     assert!(r["steps_with_impulse"].as_u64().unwrap() > 100);
     assert!(r["max_energy_residual_j"].as_f64().unwrap() < 1e-12);
     let c_out = dir.join("c.h5");
-    let rc = march_json(case, &c_out, &["--scheme", "carpenter"]);
+    let rc = json_report("march", case, &c_out, &["--scheme", "carpenter"]);
     assert_eq!(rc["scheme"], "carpenter");
     // 2/ω = 2/(2π·1300) = 2.449e-4 s.
     let limit = rc["stability_limit_s"].as_f64().unwrap();
@@ -823,12 +809,14 @@ fn nlrom_march_runs_both_nonsmooth_schemes_on_the_bundled_wall_case() {
     let fb: f64 = b.contact_force.iter().skip(1).step_by(2).sum();
     assert!((fa - fb).abs() < 0.05 * fa, "{fa} vs {fb}");
     // An obstacle case marched by a smooth scheme is refused, naming the key.
-    let res = std::process::Command::new(env!("CARGO_BIN_EXE_nlrom"))
-        .args(["march", case.to_str().unwrap(), "-o"])
-        .arg(dir.join("x.h5"))
-        .args(["--scheme", "newmark"])
-        .output()
-        .unwrap();
+    let res = nlrom(&[
+        "march",
+        case.to_str().unwrap(),
+        "-o",
+        dir.join("x.h5").to_str().unwrap(),
+        "--scheme",
+        "newmark",
+    ]);
     assert_eq!(res.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&res.stderr).contains("obstacle"));
     std::fs::remove_dir_all(&dir).ok();
@@ -877,13 +865,12 @@ fn bad_obstacle_and_gamma_keys_are_reported_with_their_path() {
     ] {
         let path = dir.join("bad.toml");
         std::fs::write(&path, base.replace(from, to)).unwrap();
-        let res = std::process::Command::new(env!("CARGO_BIN_EXE_nlrom"))
-            .arg("march")
-            .arg(&path)
-            .arg("-o")
-            .arg(dir.join("bad.h5"))
-            .output()
-            .unwrap();
+        let res = nlrom(&[
+            "march",
+            path.to_str().unwrap(),
+            "-o",
+            dir.join("bad.h5").to_str().unwrap(),
+        ]);
         let err = String::from_utf8_lossy(&res.stderr);
         assert_eq!(res.status.code(), Some(2), "{to}: {err}");
         assert!(err.contains(key), "{to}: {err}");

@@ -8,7 +8,7 @@
 //!
 //! A travelling wave (k ≠ 0, N/2) is an input error naming `engine_order` (tests/march_damper.rs).
 
-mod common;
+mod support;
 
 use faer::linalg::solvers::Solve;
 use faer::{c64, Mat};
@@ -20,8 +20,8 @@ use nlrom::problem::march_case::{case_march, CaseMarch};
 use nlrom::problem::sector::SectorProblem;
 use nlrom::reduction::reduce;
 
-use common::cli::root;
-use common::sector_hb::hb_outputs;
+use support::cli::root;
+use support::sector_hb::hb_outputs;
 
 const N: usize = 8;
 const FORCE: [f64; 3] = [0.3, -0.2, 1.0];

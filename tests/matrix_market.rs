@@ -1,6 +1,9 @@
 //! Matrix Market import/export and the DOF map.
 
+mod support;
+
 use std::path::{Path, PathBuf};
+use support::random::Lcg;
 
 use faer::c64;
 use faer::sparse::{SparseColMat, Triplet};
@@ -47,19 +50,6 @@ fn read_error(text: &str) -> String {
     match msg.strip_prefix(&prefix) {
         Some(rest) => rest.to_string(),
         None => panic!("the message does not start with the file's path: {msg}"),
-    }
-}
-
-/// A deterministic pseudo-random generator (64-bit LCG), values in [0, 1).
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
 }
 

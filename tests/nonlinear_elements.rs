@@ -15,8 +15,8 @@ use nlrom::commands::{solve_case, Reporter, RomPolicy, SolveOptions};
 use nlrom::contact::grounded::DofElements;
 use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
 
-mod contact_common;
-use contact_common::Rng;
+mod support;
+use support::random::XorShift;
 
 fn case_text(elements: &str) -> String {
     format!(
@@ -263,7 +263,7 @@ fn jacobians_and_frequency_derivatives_match_differences() {
         for h in [1, 3, 5] {
             let layout = HarmonicLayout::new(h, 64).unwrap();
             let n = layout.len(2);
-            let mut rng = Rng(7 + h as u64);
+            let mut rng = XorShift(7 + h as u64);
             let q = rng.vec(n, 0.3);
             let omega = 1.3;
             let (_, jac, dw) = evaluate(&set, &layout, &q, omega);

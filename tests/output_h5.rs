@@ -2,7 +2,7 @@
 //! independent reader (dtypes, complex128, compound records, enums, string attributes), refusal of
 //! malformed datasets, atomic writes, and reader errors that name the file and the dataset.
 
-mod common;
+mod support;
 
 use std::path::Path;
 
@@ -253,7 +253,7 @@ out = {
 }
 print(json.dumps(out))
 "#;
-    let out = common::python::run_python(script, &[path.as_path()]);
+    let out = support::python::run_python(script, &[path.as_path()]);
     let v: Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["root_attrs"]["program"], "nlrom");
     assert_eq!(v["root_attrs"]["version"], env!("CARGO_PKG_VERSION"));

@@ -2,7 +2,7 @@
 //! curve / dataset, and `tools/post/nlrom_results.py` (h5py only) loading it, with the derived
 //! datasets (amplitude = abs(Q1), frequency_hz = ω/2π) recomputed in numpy.
 
-mod common;
+mod support;
 
 use std::collections::BTreeMap;
 
@@ -306,7 +306,7 @@ out = {
 print(json.dumps(out))
 "#;
     let v: Value =
-        serde_json::from_str(&common::python::run_python(script, &[path.as_path()])).unwrap();
+        serde_json::from_str(&support::python::run_python(script, &[path.as_path()])).unwrap();
     let s = sample();
     assert_eq!(v["title"], "shroud sweep");
     assert_eq!(v["kind"], "results");

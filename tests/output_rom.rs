@@ -1,7 +1,7 @@
 //! The ROM file (`nlrom::output::{write_rom, read_rom}`): bitwise round trip of every field,
 //! h5py reading the layout of `docs/results-file.md`, "ROM file", and errors that name the file and the dataset.
 
-mod common;
+mod support;
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -264,7 +264,7 @@ out = {
 print(json.dumps(out))
 "#;
     let v: Value =
-        serde_json::from_str(&common::python::run_python(script, &[path.as_path()])).unwrap();
+        serde_json::from_str(&support::python::run_python(script, &[path.as_path()])).unwrap();
     assert_eq!(v["file_kind"], "rom");
     assert_eq!(v["title"], "shrouded sector");
     assert_eq!(v["harmonic_indices"], serde_json::json!([0, 3, 12]));

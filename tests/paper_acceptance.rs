@@ -6,11 +6,11 @@
 //! Goal: resonance frequency within 0.5 %, peak amplitude within 3 %. Every preload of both
 //! modes is checked by `python3 tools/validation/paper_comparison.py` (`docs/validation.md`, "The SAMA paper's experiment").
 
-mod common;
+mod support;
 
 use std::path::{Path, PathBuf};
 
-use common::cli::{json_report, root};
+use support::cli::{json_report, root};
 
 /// `cases/paper/m1_<model>.toml` with one preload (`n0` = 113 N, no sweep), the window
 /// 776–796 Hz around the resonance, absolute mesh path, written to `dir`.
@@ -31,7 +31,7 @@ fn one_preload_case(dir: &Path, model: &str) -> PathBuf {
 
 /// (resonance frequency in Hz, peak amplitude in m) of `nlrom solve CASE --json`.
 fn resonance(case: &Path, out: &Path) -> (f64, f64) {
-    let json = json_report("solve", case, out);
+    let json = json_report("solve", case, out, &[]);
     let frf = &json["frf"][0];
     assert_eq!(frf["end"], "reached_end", "{frf}");
     (

@@ -2,13 +2,13 @@
 //! its message; the others are written and agree with `nlrom solve`; exit status 1;
 //! summary.csv), and meshes run with a template case.
 
-mod common;
+mod support;
 
 use std::path::{Path, PathBuf};
 
-use common::cli::{nlrom, root};
 use nlrom::output::read_results;
 use serde_json::Value;
+use support::cli::{nlrom, root};
 
 /// The chain of `cases/chain3_jenkins.toml` with H = 3, N_t = 64 and slip force n0 of element 1;
 /// `harmonics` replaces H (0 makes the case invalid).

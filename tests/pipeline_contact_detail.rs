@@ -9,14 +9,14 @@
 //!   independent quantity, within 3 % (the difference is O(Δf²/k_t) per sample step, 32 samples);
 //! - `tools/post/plot_contact.py` reads the file with h5py and writes both PNGs.
 
-mod common;
+mod support;
 
 use std::path::Path;
 
-use common::cli::{json_report, root};
-use common::python::run_python;
 use nlrom::output::read_results;
 use serde_json::Value;
+use support::cli::{json_report, root};
+use support::python::run_python;
 
 fn slipping_demo(dir: &Path) -> std::path::PathBuf {
     let text = std::fs::read_to_string(root().join("cases/demo.toml"))
@@ -41,7 +41,7 @@ fn per_element_state_and_loops_at_the_peak() {
     let dir = tempfile::tempdir().unwrap();
     let case = slipping_demo(dir.path());
     let out = dir.path().join("slip.h5");
-    let summary: Value = json_report("run", &case, &out);
+    let summary: Value = json_report("run", &case, &out, &[]);
     let resonance_hz = summary["frf"][0]["resonance_hz"].as_f64().unwrap();
 
     let r = read_results(&out).unwrap();

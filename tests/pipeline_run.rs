@@ -3,13 +3,13 @@
 //! memory), ROM reuse by key (reused while unchanged, rebuilt when the material changes, the
 //! results identical), and the demo end to end.
 
-mod common;
+mod support;
 
 use std::path::{Path, PathBuf};
 
-use common::cli::{nlrom, root};
 use nlrom::output::{read_results, read_rom};
 use serde_json::Value;
+use support::cli::{nlrom, root};
 
 /// Runs nlrom, asserts exit status 0 and returns (stdout JSON, stderr).
 fn ok_json(args: &[&str]) -> (Value, String) {

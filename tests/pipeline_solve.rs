@@ -3,11 +3,10 @@
 //! `frequency_response`, the stuck limit against a direct linear solve, sweeps in order, bad
 //! input (exit 2 naming the key) and a failing continuation (exit 1, converged points written).
 
-mod common;
+mod support;
 
 use std::path::{Path, PathBuf};
 
-use common::cli::{json_report, nlrom, root, stderr};
 use faer::linalg::solvers::Solve;
 use faer::{c64, Mat};
 use nlrom::case::Case;
@@ -19,10 +18,11 @@ use nlrom::model;
 use nlrom::output::{read_results, ResponseDof, ResultsFile};
 use nlrom::problem::matrix_case::matrix_setup;
 use nlrom::problem::settings::case_continuation;
+use support::cli::{json_report, nlrom, root, stderr};
 
 /// `nlrom solve CASE -o OUT --json -q`: asserts exit status 0, returns the JSON report.
 fn solve_json(case: &Path, out: &Path) -> serde_json::Value {
-    json_report("solve", case, out)
+    json_report("solve", case, out, &[])
 }
 
 /// The chain of `cases/chain3_jenkins.toml` (matrices of `cases/chain3/`) with the given force,

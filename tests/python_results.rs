@@ -2,12 +2,12 @@
 //! documented datasets exist with the documented shapes and units (`docs/results-file.md`), and the FRF peak computed in Python by `tools/post/plot_frf.py`
 //! from the file equals the summary `nlrom solve --json` printed.
 
-mod common;
+mod support;
 
 use std::path::Path;
 use std::process::Command;
 
-use common::python::run_python;
+use support::python::run_python;
 
 /// Runs `nlrom ARGS` and returns its stdout (panics with stderr on failure).
 fn nlrom(args: &[&str]) -> String {

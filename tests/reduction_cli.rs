@@ -2,17 +2,11 @@
 //! (`cases/sector8_cs.toml`): the JSON keys of `docs/user-guide.md`, consistency between the stages, and exit
 //! status 2 with a message for bad input.
 
-use std::process::Command;
+mod support;
+
+use support::cli::nlrom;
 
 use serde_json::Value;
-
-fn nlrom(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_nlrom"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("runs")
-}
 
 fn modes_json(args: &[&str]) -> Value {
     let mut all = vec!["modes", "cases/sector8_cs.toml", "--json"];

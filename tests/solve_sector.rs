@@ -3,7 +3,7 @@
 //! cyclic constraint, stuck limit against the ROM plus independently assembled contact springs,
 //! and the cyclic consistency of the pair rows, σ and phases under a rigid rotation.
 
-mod common;
+mod support;
 
 use std::path::PathBuf;
 
@@ -288,7 +288,7 @@ fn contact_springs(s: &Setup, k: usize, closed: &[bool]) -> Mat<c64> {
             let col = [0, 1, 2].map(|a| -e * rot[a][d]);
             l.push((rom_row(t[d]), col));
         }
-        common::springs::add_spring(&mut kc, &l, g);
+        support::springs::add_spring(&mut kc, &l, g);
     }
     kc
 }

@@ -6,6 +6,9 @@
 //! means the same case.
 #![allow(dead_code)]
 
+#[path = "../support/random.rs"]
+mod random;
+
 use faer::Mat;
 use nlrom::case::WeightedDofs;
 use nlrom::contact::grounded::{DofElement, DofElements};
@@ -14,6 +17,7 @@ use nlrom::continuation::{ContinuationOptions, PathEnd};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::frf::frequency_response;
 use nlrom::hbm::{HbmSystem, LinearModel, ResponseOptions};
+use random::Lcg;
 
 /// One generated case: a linear model, its friction elements and the continuation settings.
 pub struct Case {
@@ -32,25 +36,6 @@ pub struct Outcome {
     pub iterations: usize,
     pub worst_residual: f64,
     pub seconds: f64,
-}
-
-/// Minimal LCG (Knuth's MMIX constants), uniform in [0, 1).
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn log_uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        (lo.ln() + self.next() * (hi.ln() - lo.ln())).exp()
-    }
-    fn pick<T: Copy>(&mut self, values: &[T]) -> T {
-        values[((self.next() * values.len() as f64) as usize).min(values.len() - 1)]
-    }
 }
 
 fn jenkins(dofs: Vec<usize>, weights: Vec<f64>, params: ContactParams) -> DofElement {

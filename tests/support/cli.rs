@@ -22,17 +22,19 @@ pub fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
-/// `nlrom COMMAND CASE -o OUT --json -q` (`solve` or `run`): asserts exit status 0, returns the
-/// JSON report.
-pub fn json_report(command: &str, case: &Path, out: &Path) -> serde_json::Value {
-    let o = nlrom(&[
+/// `nlrom COMMAND CASE -o OUT --json -q EXTRA...` (`solve`, `run` or `march`): asserts exit
+/// status 0, returns the JSON report.
+pub fn json_report(command: &str, case: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
         command,
         case.to_str().unwrap(),
         "-o",
         out.to_str().unwrap(),
         "--json",
         "-q",
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let o = nlrom(&args);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     serde_json::from_slice(&o.stdout).expect("one JSON object on stdout")
 }
