@@ -567,3 +567,71 @@ fn moreau_jean_at_a_hundred_times_carpenters_limit_agrees_with_carpenter() {
     let span = uc.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
     assert!(span > 1e-8, "u_y {span}");
 }
+
+// ---------------------------------------------------------------------------------------------
+// `nlrom march` on a casing case and tools/post/plot_nonsmooth.py
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn nlrom_march_writes_temperatures_and_plot_nonsmooth_compares_two_steps() {
+    // The thermal coarse blade at 1000/3 Hz (one 3 ms period) at h = 2.5e-6 s and 1e-5 s.
+    let dir = std::env::temp_dir().join(format!("nlrom_casing_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mesh = root().join("meshes/blade_coarse.msh");
+    let run = |h: &str, name: &str| -> serde_json::Value {
+        let text = thermal_blade("\"root\"", 9e-6, 0.1)
+            .replace("../meshes/blade_coarse.msh", &mesh.display().to_string())
+            .replace("33.333333333333336", "333.33333333333336")
+            .replace(
+                "time_step_s = 1e-5",
+                &format!("time_step_s = {h}\nactivation_tolerance = 1e-8"),
+            )
+            .replace("gap = 1e-6", "gap = 0.0");
+        let case = dir.join(format!("{name}.toml"));
+        std::fs::write(&case, text).unwrap();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_nlrom"))
+            .arg("march")
+            .arg(&case)
+            .arg("-o")
+            .arg(dir.join(format!("{name}.h5")))
+            .arg("--json")
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let fine = run("2.5e-6", "fine");
+    let coarse = run("1e-5", "coarse");
+    for r in [&fine, &coarse] {
+        let frictional = r["frictional_heat_j"].as_f64().unwrap();
+        assert!(frictional > 0.0, "{r}");
+        assert!(r["heat_balance_residual_j"].as_f64().unwrap().abs() < 1e-9 * frictional);
+        assert!(r["max_temperature_rise_k"].as_f64().unwrap() > 0.0);
+    }
+    let py = std::process::Command::new("python3")
+        .current_dir(root())
+        .arg("tools/post/plot_nonsmooth.py")
+        .arg(dir.join("fine.h5"))
+        .arg(dir.join("coarse.h5"))
+        .arg("-o")
+        .arg(dir.join("plot.png"))
+        .args(["--labels", "fine", "coarse"])
+        .output()
+        .unwrap();
+    assert!(
+        py.status.success(),
+        "{}",
+        String::from_utf8_lossy(&py.stderr)
+    );
+    let e: serde_json::Value = serde_json::from_slice(&py.stdout).unwrap();
+    for key in ["gap", "temperature", "force"] {
+        let v = e["coarse"][key].as_f64().unwrap();
+        assert!(v.is_finite() && v < 0.05, "{key}: {v} ({e})");
+    }
+    assert!(dir.join("plot.png").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
