@@ -2,10 +2,14 @@
 //! enough to be read in chunks gives the same mesh as the same records laid out so that the
 //! line-based reader refuses them (a blank line after every record: the sequential token reader
 //! then reads the block), in MSH 4.1 and 2.2; and a bad token deep inside a large block gives the
-//! error of the sequential reader, naming its line.
+//! error of the sequential reader, naming its line; read from a file, by the library and by
+//! `nlrom mesh info`, the error names the file and the line.
 
-use nlrom::mesh::msh::parse_msh;
+mod support;
+
+use nlrom::mesh::msh::{parse_msh, read_msh};
 use nlrom::mesh::Mesh;
+use support::cli::{nlrom, stderr};
 
 /// Nodes of an n × n × n lattice (tags from 1, coordinates with 17 significant digits, some
 /// negative and some in exponent form) and its cells' Kuhn tetrahedra; every `tri_every`-th
@@ -205,4 +209,51 @@ fn a_bad_token_deep_in_a_large_block_is_reported_at_its_line() {
     );
     assert_eq!(e.line, line_of(&broken, at));
     assert_eq!(e.section, "$Elements");
+}
+
+/// A bad record in a middle chunk of a file's block (not the first chunk, not the last): the
+/// error of `read_msh` and of `nlrom mesh info` names the file and the record's line.
+#[test]
+fn a_bad_line_in_a_parallel_chunk_names_the_file_and_the_line() {
+    let m = lattice(26);
+    let dir = tempfile::tempdir().unwrap();
+    let cases: Vec<(&str, String, String, String, &str, &str)> = vec![
+        // (file name, text, record to break, its replacement, section, expected message part)
+        (
+            "elements41.msh",
+            msh41(&m, ""),
+            format!("\n60000 {} ", m.tets[59_999][0]),
+            "\n60000 987654321 ".to_string(),
+            "$Elements",
+            "element 60000 references node 987654321, which is not in $Nodes",
+        ),
+        (
+            "nodes22.msh",
+            msh22(&m, "", 4999),
+            format!("\n15000 {} ", num(14_999, m.nodes[14_999].1[0])),
+            "\n15000 1,5 ".to_string(),
+            "$Nodes",
+            "expected a number, found '1,5'",
+        ),
+    ];
+    for (name, text, from, to, section, message) in cases {
+        assert_eq!(text.matches(from.as_str()).count(), 1, "{name}");
+        let at = text.find(&from).unwrap() + 1;
+        let broken = text.replacen(&from, &to, 1);
+        let line = line_of(&broken, at);
+        assert!(line > 8192, "{name}: line {line} is in the first chunk");
+        let path = dir.path().join(name);
+        std::fs::write(&path, &broken).unwrap();
+        let e = read_msh(&path).unwrap_err().to_string();
+        let place = format!("{}: line {line} ", path.display());
+        assert!(e.contains(&place), "{name}: {e}");
+        assert!(e.contains(section) && e.contains(message), "{name}: {e}");
+        let out = nlrom(&["mesh", "info", path.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(2), "{name}");
+        let err = stderr(&out);
+        assert!(
+            err.contains(&place) && err.contains(message),
+            "{name}: {err}"
+        );
+    }
 }

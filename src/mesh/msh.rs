@@ -698,6 +698,8 @@ impl State {
         let (mut i, _max_tag) = rd.size(i, "the maximum node tag")?;
         self.node_tags.reserve(total);
         self.coords.reserve(total);
+        ascii::huge_pages(&mut self.node_tags);
+        ascii::huge_pages(&mut self.coords);
         for _ in 0..nblocks {
             let at = skip_ws(i);
             let (r, dim) = rd.int(i, "the entity dimension")?;
@@ -769,24 +771,33 @@ impl State {
     }
 
     /// The ASCII node records `tag x y z` of MSH 2.2, one per line, read in parallel
-    /// ([`ascii`]); `None` (nothing read) for small blocks or when any line is not such a record:
+    /// ([`ascii`]); `None` (nothing read) for an empty block or when any line is not such a record:
     /// the caller then reads them sequentially.
     fn nodes_v22_parallel<'a>(&mut self, i: &'a [u8], n: usize) -> Option<&'a [u8]> {
-        if n < ascii::CHUNK_LINES {
+        if n == 0 {
             return None;
         }
-        let mut records = vec![(0u64, [0.0; 3]); n];
-        let rest = ascii::read_records(skip_ws(i), n, 1, &mut records, |line, slot| {
-            let (r, tag) = ascii::uint(line)?;
-            let (r, x) = ascii::float(r)?;
-            let (r, y) = ascii::float(r)?;
-            let (r, z) = ascii::float(r)?;
-            slot[0] = (tag, [x, y, z]);
-            (tag != 0).then_some(r)
-        })?;
-        self.node_tags.extend(records.iter().map(|r| r.0));
-        self.coords.extend(records.iter().map(|r| r.1));
-        Some(rest)
+        self.node_tags = ascii::zeroed(n);
+        self.coords = ascii::zeroed(n);
+        let rest = ascii::read_records2(
+            skip_ws(i),
+            n,
+            (&mut self.node_tags, 1),
+            (&mut self.coords, 1),
+            |line, tag, p| {
+                let (r, t) = ascii::uint(line)?;
+                let (r, x) = ascii::float(r)?;
+                let (r, y) = ascii::float(r)?;
+                let (r, z) = ascii::float(r)?;
+                (tag[0], p[0]) = (t, [x, y, z]);
+                (t != 0).then_some(r)
+            },
+        );
+        if rest.is_none() {
+            self.node_tags.clear();
+            self.coords.clear();
+        }
+        rest
     }
 
     /// A 4.1 ASCII node block (n tag lines, then n coordinate lines) read in parallel, as
@@ -797,7 +808,7 @@ impl State {
         n: usize,
         extra: usize,
     ) -> Option<&'a [u8]> {
-        if n < ascii::CHUNK_LINES {
+        if n == 0 {
             return None;
         }
         let first = self.node_tags.len();
@@ -915,8 +926,8 @@ impl State {
                 kind,
                 entity,
                 physicals: Vec::new(),
-                tags: Vec::with_capacity(n),
-                connectivity: Vec::with_capacity(n * nn),
+                tags: Vec::new(),
+                connectivity: Vec::new(),
             };
             i = match rd.binary {
                 Some(e) => self.element_block_binary(r, n, &mut block, e)?.0,
@@ -949,8 +960,8 @@ impl State {
             .lookup
             .as_ref()
             .expect("nodes are read before elements");
-        block.tags = vec![0; n];
-        block.connectivity = vec![0; n * nn];
+        block.tags = ascii::zeroed(n);
+        block.connectivity = ascii::zeroed(n * nn);
         // Fixed-size records: decode chunks of records in parallel; report the first bad one.
         let bad = block
             .tags
@@ -996,28 +1007,39 @@ impl State {
         n: usize,
         block: &mut ElementBlock,
     ) -> Option<&'a [u8]> {
-        if n < ascii::CHUNK_LINES {
+        if n == 0 {
             return None;
         }
         let nn = block.kind.num_nodes();
-        block.tags.resize(n, 0);
-        block.connectivity.resize(n * nn, 0);
-        let read = ascii::read_records2(
-            skip_ws(i),
-            n,
-            (&mut block.tags, 1),
-            (&mut block.connectivity, nn),
-            |line, tag, conn| {
+        block.tags = ascii::zeroed(n);
+        block.connectivity = ascii::zeroed(n * nn);
+        /// The records `tag node...` into `tags` and `conn`, node tags mapped by `index`.
+        fn records<'a>(
+            i: &'a [u8],
+            n: usize,
+            (tags, conn, nn): (&mut [u64], &mut [u32], usize),
+            index: impl Fn(u64) -> Option<u32> + Sync,
+        ) -> Option<&'a [u8]> {
+            ascii::read_records2(i, n, (tags, 1), (conn, nn), |line, tag, conn| {
                 let (mut r, t) = ascii::uint(line)?;
                 tag[0] = t;
                 for c in conn.iter_mut() {
                     let (r2, node) = ascii::uint(r)?;
-                    *c = lookup.get(node)?;
+                    *c = index(node)?;
                     r = r2;
                 }
                 Some(r)
-            },
-        );
+            })
+        }
+        let out = (&mut block.tags[..], &mut block.connectivity[..], nn);
+        // The usual contiguous numbering without the lookup's match per node.
+        let read = match *lookup {
+            NodeLookup::Contiguous { first, n: count } => records(skip_ws(i), n, out, |node| {
+                let k = node.wrapping_sub(first);
+                (k < count).then_some(k as u32)
+            }),
+            _ => records(skip_ws(i), n, out, |node| lookup.get(node)),
+        };
         if read.is_none() {
             block.tags.clear();
             block.connectivity.clear();
@@ -1077,7 +1099,7 @@ impl State {
             tags: Vec<u64>,
             connectivity: Vec<u32>,
         }
-        if n < ascii::CHUNK_LINES {
+        if n == 0 {
             return None;
         }
         let lookup = self.lookup.as_ref()?;
@@ -1111,13 +1133,16 @@ impl State {
                     if !same {
                         // Most chunks hold one run: room for all their lines.
                         let room = if runs.is_empty() { lines } else { 0 };
-                        runs.push(Run {
+                        let mut run = Run {
                             kind,
                             entity,
                             physical,
                             tags: Vec::with_capacity(room),
                             connectivity: Vec::with_capacity(room * kind.num_nodes()),
-                        });
+                        };
+                        ascii::huge_pages(&mut run.tags);
+                        ascii::huge_pages(&mut run.connectivity);
+                        runs.push(run);
                     }
                     let run = runs.last_mut().expect("pushed");
                     run.tags.push(tag);
