@@ -588,7 +588,29 @@ fn nlrom_march_writes_temperatures_and_plot_nonsmooth_compares_two_steps() {
             )
             .replace("gap = 1e-6", "gap = 0.0");
         let case = dir.join(format!("{name}.toml"));
-        std::fs::write(&case, text).unwrap();
+        std::fs::write(&case, text.clone()).unwrap();
+        if h == "1e-5" {
+            // Without a nonsmooth scheme the casing is refused with its key.
+            let plain = dir.join("plain.toml");
+            std::fs::write(&plain, &text).unwrap();
+            let out = std::process::Command::new(env!("CARGO_BIN_EXE_nlrom"))
+                .arg("march")
+                .arg(&plain)
+                .arg("-o")
+                .arg(dir.join("plain.h5"))
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(
+                !out.status.success() && err.contains("key 'casing'"),
+                "{err}"
+            );
+        }
+        std::fs::write(
+            &case,
+            text.replace("[march]\n", "[march]\nscheme = \"moreau-jean\"\n"),
+        )
+        .unwrap();
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_nlrom"))
             .arg("march")
             .arg(&case)
