@@ -38,7 +38,7 @@ use faer::Mat;
 
 use crate::error::{Error, Result};
 use crate::nonlinear::{
-    newton_core, norm, solve_dense_signed, solve_fixed, Iterate, Linearization, NewtonOptions,
+    newton_core, norm, solve_fixed, Iterate, LinearSolver, Linearization, NewtonOptions,
     NewtonSolution, ParameterSystem,
 };
 
@@ -200,12 +200,14 @@ pub fn trace_from<S: ParameterSystem>(
         lambda: range,
         residual: system.residual_scale(),
     };
-    let first = initial_tangent(&start.linearization, &scales, direction).ok_or_else(|| {
-        Error::Compute(format!(
+    let solver = LinearSolver::new(system.jacobian_blocks(), opts.newton.linear_solver);
+    let first =
+        initial_tangent(&start.linearization, &scales, direction, &solver).ok_or_else(|| {
+            Error::Compute(format!(
             "the Jacobian at the start point (parameter {}) is singular; try another start value",
             opts.start
         ))
-    })?;
+        })?;
     let mut orientation = first.orientation;
     let mut tangent = first.t;
     let mut step = opts.initial_step / range / tangent[tangent.len() - 1].abs().max(1e-3);
@@ -407,11 +409,16 @@ fn bordered(lin: &Linearization, s: &Scales, border: &[f64]) -> Mat<f64> {
 }
 
 /// The unit tangent at the start, oriented so that λ moves towards the end.
-fn initial_tangent(lin: &Linearization, s: &Scales, direction: f64) -> Option<Tangent> {
+fn initial_tangent(
+    lin: &Linearization,
+    s: &Scales,
+    direction: f64,
+    solver: &LinearSolver,
+) -> Option<Tangent> {
     let n = lin.residual.len();
     let mut border = vec![0.0; n + 1];
     border[n] = direction;
-    tangent_with(lin, s, &border)
+    tangent_with(lin, s, &border, solver)
 }
 
 /// A unit tangent and its orientation: the sign (±1) of det [∂r/∂u ∂r/∂μ; tᵀ].
@@ -447,11 +454,16 @@ impl Tangent {
 /// Solves [∂r/∂u ∂r/∂μ; bᵀ] t = [0; 1] and normalises t (so that t·b > 0). det [J; tᵀ] has the
 /// sign of det [J; bᵀ]: with c the cofactor vector of J (J c = 0), det [J; vᵀ] = v · c and
 /// t ∥ c / (b · c).
-fn tangent_with(lin: &Linearization, s: &Scales, border: &[f64]) -> Option<Tangent> {
+fn tangent_with(
+    lin: &Linearization,
+    s: &Scales,
+    border: &[f64],
+    solver: &LinearSolver,
+) -> Option<Tangent> {
     let a = bordered(lin, s, border);
     let mut rhs = vec![0.0; border.len()];
     rhs[border.len() - 1] = 1.0;
-    let (t, orientation) = solve_dense_signed(&a, &rhs)?;
+    let (t, orientation) = solver.solve_signed(a.as_ref(), &rhs)?;
     let len = norm(&t);
     (len > 0.0 && len.is_finite()).then(|| Tangent {
         t: t.iter().map(|v| v / len).collect(),
@@ -533,12 +545,13 @@ fn correct_on<S: ParameterSystem>(
         max_halvings: opts.newton.max_halvings.min(2),
         ..opts.newton
     };
+    let solver = LinearSolver::new(system.jacobian_blocks(), opts.newton.linear_solver);
     let (it, iterations) =
-        newton_core(predicted.to_vec(), &mut eval, 1.0, &newton).map_err(|f| f.message)?;
+        newton_core(predicted.to_vec(), &mut eval, 1.0, &newton, &solver).map_err(|f| f.message)?;
     let residual = norm(&it.g[..n]);
     let z = it.z;
     let (lin, end) = it.extra;
-    let new_tangent = tangent_with(&lin, s, tangent);
+    let new_tangent = tangent_with(&lin, s, tangent, &solver);
     let sol = NewtonSolution {
         x: z[..n].iter().map(|u| u * s.x).collect(),
         parameter: z[n] * s.lambda,

@@ -72,6 +72,15 @@ impl HarmonicLayout {
         debug_assert!(n >= 1 && n <= self.harmonics && dof < n_dof);
         n_dof + 2 * ((n - 1) * n_dof + dof)
     }
+
+    /// Sizes of the harmonic blocks of a vector of `n_dof` DOFs: `n_dof` static coefficients,
+    /// then `2 n_dof` (Re, Im interleaved) per harmonic. A linear operator that does not mix
+    /// harmonics is block-diagonal over them.
+    pub fn blocks(&self, n_dof: usize) -> Vec<usize> {
+        std::iter::once(n_dof)
+            .chain(std::iter::repeat_n(2 * n_dof, self.harmonics))
+            .collect()
+    }
 }
 
 /// A nonlinear force acting on `n_dofs()` DOFs, evaluated on harmonic vectors

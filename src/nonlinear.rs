@@ -14,6 +14,10 @@ use faer::{Col, Mat};
 
 use crate::error::Result;
 
+pub mod linsolve;
+
+pub use linsolve::{LinearSolver, SolverChoice};
+
 /// The residual of a parameter-dependent system at one point, its Jacobian and its parameter
 /// derivative.
 #[derive(Clone, Debug)]
@@ -62,6 +66,13 @@ pub trait ParameterSystem: Sync {
         state: &Self::State,
         out: &mut Linearization,
     ) -> Result<Self::State>;
+
+    /// Sizes of the leading diagonal blocks of ∂r/∂x (in order, summing to
+    /// [`ParameterSystem::dim`]) outside which ∂r/∂x is sparse and of low rank, for the
+    /// structured linear solve ([`LinearSolver`]); empty (the default): no such structure.
+    fn jacobian_blocks(&self) -> Vec<usize> {
+        Vec::new()
+    }
 }
 
 /// Newton settings.
@@ -76,6 +87,8 @@ pub struct NewtonOptions {
     pub max_iterations: usize,
     /// Most step halvings per iteration when the residual grows.
     pub max_halvings: usize,
+    /// The linear solver of the steps and tangents ([`linsolve`]).
+    pub linear_solver: SolverChoice,
 }
 
 impl Default for NewtonOptions {
@@ -85,6 +98,7 @@ impl Default for NewtonOptions {
             increment_tolerance: 1e-6,
             max_iterations: 20,
             max_halvings: 4,
+            linear_solver: SolverChoice::Dense,
         }
     }
 }
@@ -120,12 +134,13 @@ pub struct NewtonFailure {
 
 /// Newton on g(z) = 0 from `z0`. `eval(z)` returns the iterate at z (an `Err` counts as a failed
 /// iteration, e.g. a singular condensation); `floor` is the smallest ‖z‖ the increment test is
-/// relative to. Returns the converged iterate and the number of steps.
+/// relative to; `solver` solves the steps. Returns the converged iterate and the number of steps.
 pub fn newton_core<E>(
     z0: Vec<f64>,
     eval: &mut dyn FnMut(&[f64]) -> Result<Iterate<E>>,
     floor: f64,
     opts: &NewtonOptions,
+    solver: &LinearSolver,
 ) -> std::result::Result<(Iterate<E>, usize), NewtonFailure> {
     let fail = |message: String, iterations: usize| NewtonFailure {
         message,
@@ -136,7 +151,8 @@ pub fn newton_core<E>(
         return Err(fail("the residual at the start is not finite".into(), 0));
     }
     for it in 1..=opts.max_iterations {
-        let step = solve_dense(&current.matrix, &current.g)
+        let step = solver
+            .solve(current.matrix.as_ref(), &current.g)
             .ok_or_else(|| fail(format!("singular Jacobian at iteration {it}"), it))?;
         let (next, taken) = damped_step(&current, &step, eval, opts)
             .map_err(|e| fail(format!("iteration {it}: {e}"), it))?;
@@ -213,24 +229,13 @@ pub fn solve_dense(a: &Mat<f64>, b: &[f64]) -> Option<Vec<f64>> {
 /// partial-pivoting LU factors: sign det P · Π sign u_ii. The sign of the determinant of the
 /// bordered Jacobian orients a continuation tangent (Allgower & Georg 1990, §2.1).
 pub fn solve_dense_signed(a: &Mat<f64>, b: &[f64]) -> Option<(Vec<f64>, f64)> {
+    solve_dense_signed_ref(a.as_ref(), b)
+}
+
+/// [`solve_dense_signed`] on a view.
+pub fn solve_dense_signed_ref(a: faer::MatRef<'_, f64>, b: &[f64]) -> Option<(Vec<f64>, f64)> {
     let lu = a.partial_piv_lu();
-    let u = lu.U();
-    let n = u.nrows();
-    let (min, max) = (0..n)
-        .map(|i| u[(i, i)].abs())
-        .fold((f64::INFINITY, 0.0_f64), |(lo, hi), d| {
-            (lo.min(d), hi.max(d))
-        });
-    if min <= 1e-15 * max {
-        return None;
-    }
-    let negative_pivots = (0..n).filter(|&i| u[(i, i)] < 0.0).count();
-    let sign = permutation_sign(lu.P().arrays().0)
-        * if negative_pivots.is_multiple_of(2) {
-            1.0
-        } else {
-            -1.0
-        };
+    let sign = linsolve::lu_sign(&lu)?;
     let mut x = Col::from_fn(b.len(), |i| b[i]);
     lu.solve_in_place(x.as_mut());
     let x: Vec<f64> = (0..b.len()).map(|i| x[i]).collect();
@@ -300,7 +305,8 @@ pub fn solve_fixed<S: ParameterSystem>(
         })
     };
     let floor = norm(x0).max(f64::MIN_POSITIVE);
-    let (it, iterations) = newton_core(x0.to_vec(), &mut eval, floor, opts)?;
+    let solver = LinearSolver::new(system.jacobian_blocks(), opts.linear_solver);
+    let (it, iterations) = newton_core(x0.to_vec(), &mut eval, floor, opts, &solver)?;
     let residual = it.norm();
     let (linearization, end) = it.extra;
     Ok(NewtonSolution {

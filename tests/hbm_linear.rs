@@ -381,6 +381,27 @@ fn condensation_of_a_complex_block() {
             cond.force_derivative[i]
         );
     }
+    // the form of one residual evaluation: the same D̄ and F̄, and ∂D̄/∂ω q and ∂F̄/∂ω equal to
+    // the full derivative's (checked against finite differences above)
+    let qv = [c64::new(0.3, -0.2), c64::new(-0.1, 0.4)];
+    let applied = linear.condense_applied(1, omega, &qv).unwrap();
+    for i in 0..2 {
+        let expect: c64 = (0..2)
+            .map(|j| cond.stiffness_derivative[(i, j)] * qv[j])
+            .sum();
+        let got = applied.stiffness_derivative_q[i];
+        assert!(
+            (got - expect).norm() <= 1e-12 * expect.norm(),
+            "{got} vs {expect}"
+        );
+        let df = cond.force_derivative[i];
+        assert!((applied.force_derivative[i] - df).norm() <= 1e-12 * df.norm());
+        assert!((applied.force[i] - cond.force[i]).norm() <= 1e-14 * cond.force[i].norm());
+        for j in 0..2 {
+            let d = cond.stiffness[(i, j)];
+            assert!((applied.stiffness[(i, j)] - d).norm() <= 1e-14 * d.norm());
+        }
+    }
     // recovery of the linear output row 0 reproduces the full solve
     let x_full = complex_solve(&d, &f);
     let q_n: Vec<c64> = nonlinear.iter().map(|&r| x_full[r]).collect();

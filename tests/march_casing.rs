@@ -469,3 +469,191 @@ fn bad_casing_and_thermal_keys_are_reported_with_their_path() {
     ));
     assert!(err.contains("on the rotation axis"), "{err}");
 }
+
+// ---------------------------------------------------------------------------------------------
+// Moreau–Jean against Carpenter on the blade (Thorin et al. 2018, §3)
+// ---------------------------------------------------------------------------------------------
+
+/// η = Σ|a − b| / Σ|b| (Thorin et al. 2018, eq. 19, rectangle rule on a common grid).
+fn eta(a: &[f64], b: &[f64]) -> f64 {
+    let num: f64 = a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum();
+    num / b.iter().map(|y| y.abs()).sum::<f64>()
+}
+
+/// Samples of a history on the grid of step `coarse` (`k` times its step): the gap of
+/// obstacle `i` and recorded column `col` at t_k, and the mean contact force of obstacle `i`
+/// over each coarse step (the sum of its impulses in it over the coarse step).
+fn on_grid(
+    h: &nlrom::march::obstacle::NonsmoothHistory,
+    k: usize,
+    coarse: f64,
+    i: usize,
+    col: usize,
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let m = h.gap.len() / h.len();
+    let r = h.dofs.len();
+    let steps = (h.len() - 1) / k;
+    let gap = (0..=steps).map(|s| h.gap[s * k * m + i]).collect();
+    let column = (0..=steps).map(|s| h.x[s * k * r + col]).collect();
+    let force = (1..=steps)
+        .map(|s| {
+            ((s - 1) * k + 1..=s * k)
+                .map(|t| h.impulse[t * m + i])
+                .sum::<f64>()
+                / coarse
+        })
+        .collect();
+    (gap, column, force)
+}
+
+#[test]
+fn moreau_jean_at_a_hundred_times_carpenters_limit_agrees_with_carpenter() {
+    // The coarse thermal blade touching the casing at rest (g0 = 0), 100 N per tip node at
+    // 2000/60 Hz, μ = 0.15, α = 0.1 m/s, over 2 ms (the friction drives the blade's flexural
+    // vibration, ≈ 1.3 kHz): Carpenter at 0.9 times its limit 2/ω_max and Moreau–Jean at
+    // h = 1e-5 s, more than a hundred times that limit, agree on the middle tip node's
+    // circumferential displacement, temperature and contact force (Thorin et al. 2018, §3.3: the
+    // two schemes agree within 0.82 / 5.1 / 7.3 %).
+    use nlrom::march::carpenter::{carpenter, stability_limits};
+    let text = thermal_blade("\"root\"", 9e-6, 0.1)
+        .replace(
+            "time_step_s = 1e-5",
+            "time_step_s = 1e-5\nactivation_tolerance = 1e-8",
+        )
+        .replace("gap = 1e-6", "gap = 0.0");
+    let nc = build(&text);
+    let sys = &nc.system;
+    let lim = stability_limits(sys).unwrap();
+    let coarse = 1e-5;
+    assert!(coarse > 100.0 * lim.mechanical, "limit {}", lim.mechanical);
+    assert!(lim.thermal > 1e-3, "heat limit {}", lim.thermal);
+    let k = (coarse / (0.9 * lim.mechanical)).ceil() as usize;
+    let n_coarse = 200;
+    let middle = 2;
+    let uy_col = 3 * middle + 1;
+    let theta_col = nc.response.len() + middle;
+    let c = carpenter(
+        sys,
+        &NonsmoothSettings {
+            step: coarse / k as f64,
+            steps: n_coarse * k,
+            ..nc.settings.clone()
+        },
+    )
+    .unwrap();
+    let mj = moreau_jean(
+        sys,
+        &NonsmoothSettings {
+            step: coarse,
+            steps: n_coarse,
+            ..nc.settings.clone()
+        },
+    )
+    .unwrap();
+    let (_, tc, fc) = on_grid(&c, k, coarse, middle, theta_col);
+    let (_, t1, f1) = on_grid(&mj, 1, coarse, middle, theta_col);
+    let (_, uc, _) = on_grid(&c, k, coarse, middle, uy_col);
+    let (_, u1, _) = on_grid(&mj, 1, coarse, middle, uy_col);
+    let (eu, et, ef) = (eta(&u1, &uc), eta(&t1, &tc), eta(&f1, &fc));
+    assert!(
+        eu < 0.02 && et < 0.02 && ef < 0.02,
+        "u_y {eu:.4}, θ {et:.4}, λ/h {ef:.4} (k = {k})"
+    );
+    eprintln!(
+        "η: u_y {eu:.2e}, θ {et:.2e}, λ/h {ef:.2e} at h = {coarse:.0e} s = {:.0} h_c",
+        coarse / lim.mechanical
+    );
+    // The friction does bend the blade: u_y is not negligible against its own range.
+    let span = uc.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+    assert!(span > 1e-8, "u_y {span}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// `nlrom march` on a casing case and tools/post/plot_nonsmooth.py
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn nlrom_march_writes_temperatures_and_plot_nonsmooth_compares_two_steps() {
+    // The thermal coarse blade at 1000/3 Hz (one 3 ms period) at h = 2.5e-6 s and 1e-5 s.
+    let dir = std::env::temp_dir().join(format!("nlrom_casing_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mesh = root().join("meshes/blade_coarse.msh");
+    let run = |h: &str, name: &str| -> serde_json::Value {
+        let text = thermal_blade("\"root\"", 9e-6, 0.1)
+            .replace("../meshes/blade_coarse.msh", &mesh.display().to_string())
+            .replace("33.333333333333336", "333.33333333333336")
+            .replace(
+                "time_step_s = 1e-5",
+                &format!("time_step_s = {h}\nactivation_tolerance = 1e-8"),
+            )
+            .replace("gap = 1e-6", "gap = 0.0");
+        let case = dir.join(format!("{name}.toml"));
+        std::fs::write(&case, text.clone()).unwrap();
+        if h == "1e-5" {
+            // Without a nonsmooth scheme the casing is refused with its key.
+            let plain = dir.join("plain.toml");
+            std::fs::write(&plain, &text).unwrap();
+            let out = std::process::Command::new(env!("CARGO_BIN_EXE_nlrom"))
+                .arg("march")
+                .arg(&plain)
+                .arg("-o")
+                .arg(dir.join("plain.h5"))
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(
+                !out.status.success() && err.contains("key 'casing'"),
+                "{err}"
+            );
+        }
+        std::fs::write(
+            &case,
+            text.replace("[march]\n", "[march]\nscheme = \"moreau-jean\"\n"),
+        )
+        .unwrap();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_nlrom"))
+            .arg("march")
+            .arg(&case)
+            .arg("-o")
+            .arg(dir.join(format!("{name}.h5")))
+            .arg("--json")
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let fine = run("2.5e-6", "fine");
+    let coarse = run("1e-5", "coarse");
+    for r in [&fine, &coarse] {
+        let frictional = r["frictional_heat_j"].as_f64().unwrap();
+        assert!(frictional > 0.0, "{r}");
+        assert!(r["heat_balance_residual_j"].as_f64().unwrap().abs() < 1e-9 * frictional);
+        assert!(r["max_temperature_rise_k"].as_f64().unwrap() > 0.0);
+    }
+    let py = std::process::Command::new("python3")
+        .current_dir(root())
+        .arg("tools/post/plot_nonsmooth.py")
+        .arg(dir.join("fine.h5"))
+        .arg(dir.join("coarse.h5"))
+        .arg("-o")
+        .arg(dir.join("plot.png"))
+        .args(["--labels", "fine", "coarse"])
+        .output()
+        .unwrap();
+    assert!(
+        py.status.success(),
+        "{}",
+        String::from_utf8_lossy(&py.stderr)
+    );
+    let e: serde_json::Value = serde_json::from_slice(&py.stdout).unwrap();
+    for key in ["gap", "temperature", "force"] {
+        let v = e["coarse"][key].as_f64().unwrap();
+        assert!(v.is_finite() && v < 0.05, "{key}: {v} ({e})");
+    }
+    assert!(dir.join("plot.png").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}

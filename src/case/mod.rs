@@ -708,6 +708,24 @@ pub struct HarmonicBalance {
     /// Time samples per period for the AFT, ≥ 2H+2; `None`: see [`HarmonicBalance::samples`].
     #[serde(default)]
     pub time_samples: Option<usize>,
+    /// The linear solver of the Newton steps and continuation tangents (`linear_solver`).
+    #[serde(default)]
+    pub linear_solver: LinearSolverKey,
+}
+
+/// `harmonic_balance.linear_solver`: how the Newton steps and tangents are solved
+/// ([`crate::nonlinear::linsolve`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LinearSolverKey {
+    /// The cheaper of `dense` and `structured` by their flop counts, per solve.
+    Auto,
+    /// Dense LU of the whole Jacobian (the default).
+    #[default]
+    Dense,
+    /// Block LUs per harmonic plus an exact low-rank (Woodbury) correction for the contact
+    /// elements that couple harmonics.
+    Structured,
 }
 
 impl Default for HarmonicBalance {
@@ -715,6 +733,7 @@ impl Default for HarmonicBalance {
         HarmonicBalance {
             harmonics: 1,
             time_samples: None,
+            linear_solver: LinearSolverKey::Dense,
         }
     }
 }

@@ -387,6 +387,7 @@ impl Case {
         let default = HarmonicBalance {
             harmonics: h,
             time_samples: None,
+            ..HarmonicBalance::default()
         }
         .samples();
         self.require(n >= 2 * h + 2, "harmonic_balance.time_samples", || {

@@ -50,9 +50,14 @@ pub fn march_command(
     if let Some(s) = chosen.filter(|s| s.is_nonsmooth()) {
         return nonsmooth_command(&case, s, output, rep, as_json);
     }
-    if !case.obstacle.is_empty() {
+    if !case.obstacle.is_empty() || !case.casing.is_empty() {
+        let key = if case.obstacle.is_empty() {
+            "casing"
+        } else {
+            "obstacle"
+        };
         return Err(Error::input(format!(
-            "{}: key 'obstacle': `[[obstacle]]` contacts are marched by `--scheme moreau-jean` or `--scheme carpenter` (or `scheme` in [march])",
+            "{}: key '{key}': `[[{key}]]` contacts are marched by `--scheme moreau-jean` or `--scheme carpenter` (or `scheme` in [march])",
             case_path.display()
         )));
     }

@@ -133,6 +133,20 @@ pub struct Uncondensed {
     pub damping: Mat<c64>,
 }
 
+/// One harmonic n condensed at one frequency for one residual evaluation
+/// ([`LinearModel::condense_applied`]).
+#[derive(Clone, Debug)]
+pub struct CondensedApplied {
+    /// D̄⁽ⁿ⁾ (N/m), n_N × n_N.
+    pub stiffness: Mat<c64>,
+    /// F̄_e⁽ⁿ⁾ (N), length n_N.
+    pub force: Vec<c64>,
+    /// ∂D̄⁽ⁿ⁾/∂ω Q⁽ⁿ⁾ (N·s), length n_N.
+    pub stiffness_derivative_q: Vec<c64>,
+    /// ∂F̄_e⁽ⁿ⁾/∂ω (N·s), length n_N.
+    pub force_derivative: Vec<c64>,
+}
+
 /// One harmonic n condensed on the nonlinear DOFs at one frequency (eqs. 16–18).
 #[derive(Clone, Debug)]
 pub struct Condensed {
@@ -297,13 +311,9 @@ impl LinearModel {
         }
     }
 
-    /// Harmonic n condensed on the nonlinear DOFs at ω (rad/s), with its ω-derivatives and the
-    /// response recovery (eqs. 16–18). Fails when D_LL⁽ⁿ⁾ is singular (ω·n at a natural frequency
-    /// of the undamped linear partition with the nonlinear DOFs fixed).
-    pub fn condense(&self, n: usize, omega: f64) -> Result<Condensed> {
+    /// The excitation of harmonic n on the nonlinear and on the linear rows of its block.
+    fn forcing_parts(&self, n: usize) -> (Vec<c64>, Vec<c64>) {
         let part = &self.blocks[self.harmonic_block[n]];
-        let s = n as f64 * omega;
-        let nf = n as f64;
         let force = &self.forcing[n];
         let f_at = |rows: &[usize]| -> Vec<c64> {
             if force.is_empty() {
@@ -312,7 +322,80 @@ impl LinearModel {
                 rows.iter().map(|&r| force[r]).collect()
             }
         };
-        let (f_n, f_l) = (f_at(&part.nonlinear), f_at(&part.linear));
+        (f_at(&part.nonlinear), f_at(&part.linear))
+    }
+
+    /// Harmonic n condensed at ω (rad/s) for one evaluation of the residual at the harmonic
+    /// `q_n` of the nonlinear DOFs: D̄⁽ⁿ⁾ and F̄⁽ⁿ⁾ as [`LinearModel::condense`], but of the
+    /// ω-derivatives only the products ∂D̄⁽ⁿ⁾/∂ω q_n and ∂F̄⁽ⁿ⁾/∂ω, by matrix–vector products
+    /// (differentiating eq. 16: ∂D̄/∂ω q = D'_NN q − D'_NL v − D_NL D_LL⁻¹(D'_LN q − D'_LL v) with
+    /// v = D_LL⁻¹ D_LN q), without the three n_N × n_L × n_N products of the full ∂D̄/∂ω.
+    pub fn condense_applied(&self, n: usize, omega: f64, q_n: &[c64]) -> Result<CondensedApplied> {
+        let part = &self.blocks[self.harmonic_block[n]];
+        let s = n as f64 * omega;
+        let nf = n as f64;
+        let (f_n, f_l) = self.forcing_parts(n);
+        let n_n = part.nonlinear.len();
+        let n_l = part.linear.len();
+        let d_nn = part.dynamic(Part::NN, s);
+        let dd_nn = part.dynamic_derivative(Part::NN, nf, omega);
+        let q = MatRef::from_column_major_slice(q_n, n_n, 1);
+        let dd_nn_q = &dd_nn * q;
+        if n_l == 0 {
+            return Ok(CondensedApplied {
+                stiffness: d_nn,
+                force: f_n,
+                stiffness_derivative_q: (0..n_n).map(|i| dd_nn_q[(i, 0)]).collect(),
+                force_derivative: vec![c64::new(0.0, 0.0); n_n],
+            });
+        }
+        let (lu, xw) = solve_ll(part, n, omega, &f_l)?;
+        let d_nl = part.dynamic(Part::NL, s);
+        let nl_xw = &d_nl * &xw;
+        let stiffness = Mat::from_fn(n_n, n_n, |i, j| d_nn[(i, j)] - nl_xw[(i, j)]);
+        let force_c: Vec<c64> = (0..n_n).map(|i| f_n[i] - nl_xw[(i, n_n)]).collect();
+        // [v | w] and t = D_LL⁻¹ [D'_LN q − D'_LL v | −D'_LL w]
+        let vw = Mat::from_fn(n_l, 2, |i, j| {
+            if j == 0 {
+                (0..n_n).map(|k| xw[(i, k)] * q_n[k]).sum()
+            } else {
+                xw[(i, n_n)]
+            }
+        });
+        let dd_ll = part.dynamic_derivative(Part::LL, nf, omega);
+        let dd_ln = part.dynamic_derivative(Part::LN, nf, omega);
+        let dd_nl = part.dynamic_derivative(Part::NL, nf, omega);
+        let ll_vw = &dd_ll * &vw;
+        let ln_q = &dd_ln * q;
+        let mut t = Mat::from_fn(n_l, 2, |i, j| {
+            let ln = if j == 0 {
+                ln_q[(i, 0)]
+            } else {
+                c64::new(0.0, 0.0)
+            };
+            ln - ll_vw[(i, j)]
+        });
+        lu.solve_in_place(t.as_mut());
+        let nl_vw = &dd_nl * &vw;
+        let nl_t = &d_nl * &t;
+        Ok(CondensedApplied {
+            stiffness,
+            force: force_c,
+            stiffness_derivative_q: (0..n_n)
+                .map(|i| dd_nn_q[(i, 0)] - nl_vw[(i, 0)] - nl_t[(i, 0)])
+                .collect(),
+            force_derivative: (0..n_n).map(|i| -nl_vw[(i, 1)] - nl_t[(i, 1)]).collect(),
+        })
+    }
+
+    /// Harmonic n condensed on the nonlinear DOFs at ω (rad/s), with its ω-derivatives and the
+    /// response recovery (eqs. 16–18). Fails when D_LL⁽ⁿ⁾ is singular (ω·n at a natural frequency
+    /// of the undamped linear partition with the nonlinear DOFs fixed).
+    pub fn condense(&self, n: usize, omega: f64) -> Result<Condensed> {
+        let part = &self.blocks[self.harmonic_block[n]];
+        let s = n as f64 * omega;
+        let nf = n as f64;
+        let (f_n, f_l) = self.forcing_parts(n);
         let n_n = part.nonlinear.len();
         let n_l = part.linear.len();
         let d_nn = part.dynamic(Part::NN, s);
@@ -327,17 +410,7 @@ impl LinearModel {
                 recovery_offset: vec![c64::new(0.0, 0.0); part.outputs.len()],
             });
         }
-        let d_ll = part.dynamic(Part::LL, s);
-        let lu = factor(&d_ll, n, omega)?;
-        // [X | w] = D_LL⁻¹ [D_LN | F_L]
-        let d_ln = part.dynamic(Part::LN, s);
-        let mut rhs = Mat::<c64>::zeros(n_l, n_n + 1);
-        rhs.as_mut().subcols_mut(0, n_n).copy_from(&d_ln);
-        for (i, f) in f_l.iter().enumerate() {
-            rhs[(i, n_n)] = *f;
-        }
-        lu.solve_in_place(rhs.as_mut());
-        let xw = rhs;
+        let (lu, xw) = solve_ll(part, n, omega, &f_l)?;
         let d_nl = part.dynamic(Part::NL, s);
         let dd_nl = part.dynamic_derivative(Part::NL, nf, omega);
         let dd_ln = part.dynamic_derivative(Part::LN, nf, omega);
@@ -399,6 +472,26 @@ fn output_recovery(part: &Partitioned, xw: Option<MatRef<'_, c64>>) -> Mat<c64> 
         }
     }
     r
+}
+
+/// The LU of D_LL⁽ⁿ⁾ at ω and [X | w] = D_LL⁻¹ [D_LN | F_L] (eq. 16).
+fn solve_ll(
+    part: &Partitioned,
+    n: usize,
+    omega: f64,
+    f_l: &[c64],
+) -> Result<(PartialPivLu<c64>, Mat<c64>)> {
+    let s = n as f64 * omega;
+    let n_n = part.nonlinear.len();
+    let lu = factor(&part.dynamic(Part::LL, s), n, omega)?;
+    let d_ln = part.dynamic(Part::LN, s);
+    let mut xw = Mat::<c64>::zeros(part.linear.len(), n_n + 1);
+    xw.as_mut().subcols_mut(0, n_n).copy_from(&d_ln);
+    for (i, f) in f_l.iter().enumerate() {
+        xw[(i, n_n)] = *f;
+    }
+    lu.solve_in_place(xw.as_mut());
+    Ok((lu, xw))
 }
 
 /// LU of D_LL⁽ⁿ⁾ with a check on the pivots (relative 1e-13) for singularity.

@@ -6,7 +6,7 @@
 use faer::c64;
 use rayon::prelude::*;
 
-use super::linear::{Condensed, LinearModel};
+use super::linear::{Condensed, CondensedApplied, LinearModel};
 use crate::error::{Error, Result};
 use crate::harmonics::{HarmonicForce, HarmonicLayout};
 use crate::nonlinear::{Linearization, ParameterSystem};
@@ -57,6 +57,36 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         self.force
     }
 
+    /// Every harmonic condensed at ω for an evaluation at Q (in parallel over the harmonics;
+    /// [`LinearModel::condense_applied`]).
+    pub fn condense_all_applied(&self, q: &[f64], omega: f64) -> Result<Vec<CondensedApplied>> {
+        let nd = self.linear.n_condensed();
+        (0..=self.layout.harmonics)
+            .into_par_iter()
+            .map(|n| {
+                let q_n: Vec<c64> = (0..nd)
+                    .map(|i| {
+                        if n == 0 {
+                            c64::new(q[self.layout.static_index(i)], 0.0)
+                        } else {
+                            let c = self.layout.cos_index(n, i, nd);
+                            c64::new(q[c], q[c + 1])
+                        }
+                    })
+                    .collect();
+                self.linear.condense_applied(n, omega, &q_n)
+            })
+            .collect()
+    }
+
+    /// Sizes of the diagonal blocks of ∂r/∂Q over the harmonics
+    /// ([`HarmonicLayout::blocks`]): D̄ is block-diagonal over them, and the contact Jacobian
+    /// couples them only on the DOFs of elements whose state changes within the period (the
+    /// structured solve of [`crate::nonlinear::linsolve`]).
+    pub fn jacobian_blocks(&self) -> Vec<usize> {
+        self.layout.blocks(self.linear.n_condensed())
+    }
+
     /// Number of real unknowns n_N (2H + 1).
     pub fn dim(&self) -> usize {
         self.layout.len(self.linear.n_condensed())
@@ -83,7 +113,7 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         out: &mut Linearization,
         level_derivative: Option<&mut [f64]>,
     ) -> Result<F::State> {
-        let condensed = self.condense_all(omega)?;
+        let condensed = self.condense_all_applied(q, omega)?;
         out.residual.iter_mut().for_each(|v| *v = 0.0);
         out.d_parameter.iter_mut().for_each(|v| *v = 0.0);
         out.jacobian.fill(0.0);
@@ -112,7 +142,7 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
     fn add_harmonic(
         &self,
         n: usize,
-        c: &Condensed,
+        c: &CondensedApplied,
         q: &[f64],
         level: f64,
         out: &mut Linearization,
@@ -126,8 +156,8 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
                     let cj = self.layout.static_index(j);
                     out.jacobian[(ri, cj)] += c.stiffness[(i, j)].re;
                     out.residual[ri] += c.stiffness[(i, j)].re * q[cj];
-                    out.d_parameter[ri] += c.stiffness_derivative[(i, j)].re * q[cj];
                 }
+                out.d_parameter[ri] += c.stiffness_derivative_q[i].re;
                 out.residual[ri] -= level * c.force[i].re;
                 out.d_parameter[ri] -= level * c.force_derivative[i].re;
             }
@@ -141,7 +171,7 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         for i in 0..nd {
             let ri = self.layout.cos_index(n, i, nd);
             let mut dq = c64::new(0.0, 0.0);
-            let mut ddq = c64::new(0.0, 0.0);
+            let ddq = c.stiffness_derivative_q[i];
             for j in 0..nd {
                 let cj = self.layout.cos_index(n, j, nd);
                 let d = c.stiffness[(i, j)];
@@ -151,7 +181,6 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
                 out.jacobian[(ri + 1, cj + 1)] += d.re;
                 let qj = c64::new(q[cj], q[cj + 1]);
                 dq += d * qj;
-                ddq += c.stiffness_derivative[(i, j)] * qj;
             }
             let f = c.force[i] * level;
             let df = c.force_derivative[i] * level;
@@ -181,6 +210,10 @@ pub struct FrequencyPath<'s, 'a, F: HarmonicForce> {
 
 impl<F: HarmonicForce> ParameterSystem for FrequencyPath<'_, '_, F> {
     type State = F::State;
+
+    fn jacobian_blocks(&self) -> Vec<usize> {
+        self.system.jacobian_blocks()
+    }
 
     fn dim(&self) -> usize {
         self.system.dim()
@@ -215,6 +248,10 @@ pub struct LevelPath<'s, 'a, F: HarmonicForce> {
 
 impl<F: HarmonicForce> ParameterSystem for LevelPath<'_, '_, F> {
     type State = F::State;
+
+    fn jacobian_blocks(&self) -> Vec<usize> {
+        self.system.jacobian_blocks()
+    }
 
     fn dim(&self) -> usize {
         self.system.dim()
@@ -279,6 +316,10 @@ pub struct PreloadPath<'a, F: HarmonicForce, B: Fn(f64) -> Result<F> + Sync> {
 
 impl<F: HarmonicForce, B: Fn(f64) -> Result<F> + Sync> ParameterSystem for PreloadPath<'_, F, B> {
     type State = F::State;
+
+    fn jacobian_blocks(&self) -> Vec<usize> {
+        self.layout.blocks(self.linear.n_condensed())
+    }
 
     fn dim(&self) -> usize {
         self.layout.len(self.linear.n_condensed())

@@ -29,7 +29,7 @@ use faer::Mat;
 
 use super::lcp;
 use super::obstacle::{
-    mul, DenseLu, HeatTerms, NonsmoothHistory, NonsmoothSettings, NonsmoothSystem,
+    mul, HeatTerms, NonsmoothHistory, NonsmoothSettings, NonsmoothSystem, SparseRows, StepLu,
 };
 use crate::eigen::pencil::direct_eigenvalues;
 use crate::error::{Error, Result};
@@ -107,9 +107,9 @@ pub fn carpenter(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsmoo
         .zip(&cm)
         .map(|(m, c)| m / (h * h) + c / (2.0 * h))
         .collect();
-    let ac_lu = DenseLu::new(&ac, nm, "carpenter: M/h² + C/(2h)")?;
+    let ac_lu = StepLu::new(&ac, nm, "carpenter: M/h² + C/(2h)")?;
     let cap_lu = if nm < n {
-        Some(DenseLu::new(
+        Some(StepLu::new(
             &sub(&sys.damping, nm..n),
             n - nm,
             "carpenter: the heat capacity C^θθ",
@@ -128,7 +128,7 @@ pub fn carpenter(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsmoo
     let f0 = sys.load(s.start);
     let kx = mul(&sys.stiffness, &x);
     let cv = mul(&sys.damping, &sys.v0);
-    let m_lu = DenseLu::new(&mm, nm, "carpenter: the mass matrix")?;
+    let m_lu = StepLu::new(&mm, nm, "carpenter: the mass matrix")?;
     let a0 = m_lu.solve(&(0..nm).map(|r| f0[r] - cv[r] - kx[r]).collect::<Vec<_>>());
     let mut u_prev: Vec<f64> = (0..nm)
         .map(|r| x[r] - h * sys.v0[r] + 0.5 * h * h * a0[r])
@@ -151,12 +151,17 @@ pub fn carpenter(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsmoo
     let b_prev: Vec<f64> = (0..nm * nm)
         .map(|ij| mm[ij] / (h * h) - cm[ij] / (2.0 * h))
         .collect();
+    // The products of the loop on the non-zero entries.
+    let k_rows = SparseRows::new(&sys.stiffness, n, 0..n, 0..n);
+    let c_th = SparseRows::new(&sys.damping, n, nm..n, 0..n);
+    let m_rows = SparseRows::new(&mm, nm, 0..nm, 0..nm);
+    let b_rows = SparseRows::new(&b_prev, nm, 0..nm, 0..nm);
     for step in 0..s.steps {
         let tn = s.start + step as f64 * h;
         let f = sys.load(tn);
-        let kx = mul(&sys.stiffness, &x);
-        let mu_n = mul(&mm, &x[..nm]);
-        let bp = mul(&b_prev, &u_prev);
+        let kx = k_rows.mul(&x);
+        let mu_n = m_rows.mul(&x[..nm]);
+        let bp = b_rows.mul(&u_prev);
         let rhs: Vec<f64> = (0..nm)
             .map(|r| f[r] - kx[r] + 2.0 * mu_n[r] / (h * h) - bp[r])
             .collect();
@@ -190,13 +195,8 @@ pub fn carpenter(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsmoo
             for (r, d) in (nm..n).zip(&dtheta) {
                 x1[r] += h * d;
             }
-            let stored: f64 = (nm..n)
-                .map(|r| {
-                    (0..n)
-                        .map(|c| sys.damping[r * n + c] * (x1[c] - x[c]))
-                        .sum::<f64>()
-                })
-                .sum();
+            let dx: Vec<f64> = x1.iter().zip(&x).map(|(a, b)| a - b).collect();
+            let stored: f64 = (0..n - nm).map(|a| c_th.row_dot(a, &dx)).sum();
             heat.stored += stored;
             heat.exchanged += h * (nm..n).map(|r| f[r] - kx[r]).sum::<f64>();
             heat.frictional += h

@@ -26,7 +26,8 @@ use std::time::Instant;
 
 use super::lcp;
 use super::obstacle::{
-    mul, DenseLu, EnergyTerms, HeatTerms, NonsmoothHistory, NonsmoothSettings, NonsmoothSystem,
+    EnergyTerms, HeatTerms, NonsmoothHistory, NonsmoothSettings, NonsmoothSystem, SparseRows,
+    StepLu,
 };
 use crate::error::{Error, Result};
 
@@ -48,7 +49,8 @@ pub fn moreau_jean(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsm
                 + h * h * gamma[i] * gamma[j] * sys.stiffness[ij]
         })
         .collect();
-    let lu = DenseLu::new(&mhat, n, "the Moreau–Jean iteration matrix M + hγC + h²γ²K")?;
+    let lu = StepLu::new(&mhat, n, "the Moreau–Jean iteration matrix M + hγC + h²γ²K")?;
+    let b = Blocks::new(sys);
     let m = sys.obstacles.len();
     let columns: Vec<Vec<f64>> = sys.obstacles.iter().map(|o| o.column(n)).collect();
     let z: Vec<Vec<f64>> = columns.iter().map(|c| lu.solve(c)).collect();
@@ -87,9 +89,9 @@ pub fn moreau_jean(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsm
         let fg: Vec<f64> = (0..n)
             .map(|r| gamma[r] * f1[r] + (1.0 - gamma[r]) * f0[r])
             .collect();
-        let kx = mul(&sys.stiffness, &x);
-        let kv = mul(&sys.stiffness, &v);
-        let cv = mul(&sys.damping, &v);
+        let kx = b.k.mul(&x);
+        let kv = b.k.mul(&v);
+        let cv = b.c.mul(&v);
         let rhs: Vec<f64> = (0..n)
             .map(|r| -h * (cv[r] + kx[r] - fg[r]) - h * h * gamma[r] * kv[r])
             .collect();
@@ -136,6 +138,7 @@ pub fn moreau_jean(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsm
             .collect();
         accumulate_energy(
             sys,
+            &b,
             s.gamma,
             h,
             (&x, &x1),
@@ -147,7 +150,17 @@ pub fn moreau_jean(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsm
             &mut energy,
         );
         if thermal {
-            accumulate_heat(sys, &gamma, h, (&x, &x1), &fg, &columns, &lambda, &mut heat);
+            accumulate_heat(
+                sys,
+                &b,
+                s.gamma_thermal,
+                h,
+                (&x, &x1),
+                &fg,
+                &columns,
+                &lambda,
+                &mut heat,
+            );
         }
         x = x1;
         v = v1;
@@ -170,12 +183,45 @@ pub fn moreau_jean(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsm
     Ok(hist)
 }
 
+/// The blocks of M, C and K the time loop multiplies by, as sparse rows.
+struct Blocks {
+    /// K and C (all rows and columns).
+    k: SparseRows,
+    c: SparseRows,
+    /// M^uu, C^uu, K^uu.
+    m_uu: SparseRows,
+    c_uu: SparseRows,
+    k_uu: SparseRows,
+    /// K^uθ (mechanical rows, thermal columns).
+    k_ut: SparseRows,
+    /// The thermal rows of C and K.
+    c_th: SparseRows,
+    k_th: SparseRows,
+}
+
+impl Blocks {
+    fn new(sys: &NonsmoothSystem) -> Self {
+        let (n, nm) = (sys.n, sys.n_mech);
+        Blocks {
+            k: SparseRows::new(&sys.stiffness, n, 0..n, 0..n),
+            c: SparseRows::new(&sys.damping, n, 0..n, 0..n),
+            m_uu: SparseRows::new(&sys.mass, n, 0..nm, 0..nm),
+            c_uu: SparseRows::new(&sys.damping, n, 0..nm, 0..nm),
+            k_uu: SparseRows::new(&sys.stiffness, n, 0..nm, 0..nm),
+            k_ut: SparseRows::new(&sys.stiffness, n, 0..nm, nm..n),
+            c_th: SparseRows::new(&sys.damping, n, nm..n, 0..n),
+            k_th: SparseRows::new(&sys.stiffness, n, nm..n, 0..n),
+        }
+    }
+}
+
 /// Adds one step to the mechanical energy balance (module doc of [`super::obstacle`]):
 /// with v_γ = γv_{n+1} + (1−γ)v_n over the mechanical rows, the step's equation times v_γᵀ gives
 /// ΔE + (γ − ½)(‖Δv‖²_M + ‖Δu‖²_K) + h v_γᵀC v_γ = h v_γᵀ(f_γ − K^uθ θ_γ) + v_γᵀH^u λ.
 #[allow(clippy::too_many_arguments)]
 fn accumulate_energy(
     sys: &NonsmoothSystem,
+    b: &Blocks,
     gamma: f64,
     h: f64,
     (x0, x1): (&[f64], &[f64]),
@@ -190,25 +236,14 @@ fn accumulate_energy(
     let vg: Vec<f64> = (0..nm)
         .map(|r| gamma * v1[r] + (1.0 - gamma) * v0[r])
         .collect();
-    let quad = |a: &[f64], z: &[f64]| -> f64 {
-        (0..nm)
-            .map(|i| z[i] * (0..nm).map(|j| a[i * n + j] * z[j]).sum::<f64>())
-            .sum()
-    };
     let dv: Vec<f64> = (0..nm).map(|r| v1[r] - v0[r]).collect();
     let du: Vec<f64> = (0..nm).map(|r| x1[r] - x0[r]).collect();
-    let (kin, strain) = sys.mechanical_energy(x1, v1);
-    e.damping += h * quad(&sys.damping, &vg);
-    e.numerical += (gamma - 0.5) * (quad(&sys.mass, &dv) + quad(&sys.stiffness, &du));
+    let (kin, strain) = (0.5 * b.m_uu.quad(v1), 0.5 * b.k_uu.quad(x1));
+    e.damping += h * b.c_uu.quad(&vg);
+    e.numerical += (gamma - 0.5) * (b.m_uu.quad(&dv) + b.k_uu.quad(&du));
     e.external += h * (0..nm).map(|r| vg[r] * fg[r]).sum::<f64>();
-    let coupling: f64 = (0..nm)
-        .map(|r| {
-            vg[r]
-                * (nm..n)
-                    .map(|c| sys.stiffness[r * n + c] * (x0[c] + gamma * (x1[c] - x0[c])))
-                    .sum::<f64>()
-        })
-        .sum();
+    let theta_g: Vec<f64> = (0..n).map(|c| x0[c] + gamma * (x1[c] - x0[c])).collect();
+    let coupling: f64 = (0..nm).map(|r| vg[r] * b.k_ut.row_dot(r, &theta_g)).sum();
     e.thermal -= h * coupling;
     e.contact += columns
         .iter()
@@ -225,7 +260,8 @@ fn accumulate_energy(
 #[allow(clippy::too_many_arguments)]
 fn accumulate_heat(
     sys: &NonsmoothSystem,
-    gamma: &[f64],
+    b: &Blocks,
+    gamma_thermal: f64,
     h: f64,
     (x0, x1): (&[f64], &[f64]),
     fg: &[f64],
@@ -235,12 +271,10 @@ fn accumulate_heat(
 ) {
     let (n, nm) = (sys.n, sys.n_mech);
     let dx: Vec<f64> = (0..n).map(|c| x1[c] - x0[c]).collect();
-    for r in nm..n {
-        let row = &sys.damping[r * n..(r + 1) * n];
-        q.stored += row.iter().zip(&dx).map(|(a, b)| a * b).sum::<f64>();
-        let krow = &sys.stiffness[r * n..(r + 1) * n];
-        let kxg: f64 = (0..n).map(|c| krow[c] * (x0[c] + gamma[r] * dx[c])).sum();
-        q.exchanged += h * (fg[r] - kxg);
+    let xg: Vec<f64> = (0..n).map(|c| x0[c] + gamma_thermal * dx[c]).collect();
+    for (a, r) in (nm..n).enumerate() {
+        q.stored += b.c_th.row_dot(a, &dx);
+        q.exchanged += h * (fg[r] - b.k_th.row_dot(a, &xg));
         q.frictional += columns
             .iter()
             .zip(lambda)

@@ -402,15 +402,48 @@ impl NonsmoothHistory {
     }
 }
 
-/// Dense LU of a square row-major matrix, reused for many right-hand sides.
-pub(crate) struct DenseLu {
-    lu: faer::linalg::solvers::PartialPivLu<f64>,
-    n: usize,
+/// LU of a square row-major matrix, reused for many right-hand sides: dense (faer's partial
+/// pivoting) for small or dense matrices, sparse (faer's supernodal LU with a fill-reducing
+/// ordering) when n ≥ [`SPARSE_FROM`] and at most a fifth of the entries are non-zero, as for FE
+/// models.
+pub enum StepLu {
+    /// Dense partial-pivoting LU of an n × n matrix.
+    Dense {
+        /// The factors.
+        lu: faer::linalg::solvers::PartialPivLu<f64>,
+        /// The order n.
+        n: usize,
+    },
+    /// Sparse LU of an n × n matrix.
+    Sparse {
+        /// The factors.
+        lu: faer::sparse::linalg::solvers::Lu<usize, f64>,
+        /// The order n.
+        n: usize,
+    },
 }
 
-impl DenseLu {
+/// The order from which a sparse matrix is factorised sparse.
+pub const SPARSE_FROM: usize = 200;
+
+impl StepLu {
     /// Factorises `a` (row-major n × n); an error naming `what` when it is singular.
-    pub(crate) fn new(a: &[f64], n: usize, what: &str) -> Result<Self> {
+    pub fn new(a: &[f64], n: usize, what: &str) -> Result<Self> {
+        let nnz = a.iter().filter(|v| **v != 0.0).count();
+        if n >= SPARSE_FROM && 5 * nnz <= n * n {
+            let triplets: Vec<faer::sparse::Triplet<usize, usize, f64>> = a
+                .iter()
+                .enumerate()
+                .filter(|(_, v)| **v != 0.0)
+                .map(|(ij, &v)| faer::sparse::Triplet::new(ij / n, ij % n, v))
+                .collect();
+            let m = faer::sparse::SparseColMat::try_new_from_triplets(n, n, &triplets)
+                .map_err(|e| Error::Compute(format!("{what}: {e:?}")))?;
+            let lu = m
+                .sp_lu()
+                .map_err(|e| Error::Compute(format!("{what} cannot be factorised: {e:?}")))?;
+            return Ok(StepLu::Sparse { lu, n });
+        }
         let m = faer::Mat::from_fn(n, n, |i, j| a[i * n + j]);
         let lu = m.partial_piv_lu();
         let u = lu.U();
@@ -425,14 +458,74 @@ impl DenseLu {
                 lo / hi
             )));
         }
-        Ok(DenseLu { lu, n })
+        Ok(StepLu::Dense { lu, n })
     }
 
     /// A⁻¹ b.
-    pub(crate) fn solve(&self, b: &[f64]) -> Vec<f64> {
-        let mut x = faer::Col::from_fn(self.n, |i| b[i]);
-        self.lu.solve_in_place(x.as_mut());
-        (0..self.n).map(|i| x[i]).collect()
+    pub fn solve(&self, b: &[f64]) -> Vec<f64> {
+        let n = match self {
+            StepLu::Dense { n, .. } | StepLu::Sparse { n, .. } => *n,
+        };
+        let mut x = faer::Col::from_fn(n, |i| b[i]);
+        match self {
+            StepLu::Dense { lu, .. } => lu.solve_in_place(x.as_mut()),
+            StepLu::Sparse { lu, .. } => lu.solve_in_place(x.as_mut()),
+        }
+        (0..n).map(|i| x[i]).collect()
+    }
+}
+
+/// The non-zero entries of a block of a row-major matrix, row by row (CSR), for the products of
+/// the time loop: a FE model's matrices hold a few per cent of non-zeros.
+pub struct SparseRows {
+    ptr: Vec<usize>,
+    col: Vec<usize>,
+    val: Vec<f64>,
+}
+
+impl SparseRows {
+    /// Rows `rows` and columns `cols` of the row-major matrix `a` with `n` columns; column
+    /// indices are kept global (products take full-length vectors).
+    pub fn new(
+        a: &[f64],
+        n: usize,
+        rows: std::ops::Range<usize>,
+        cols: std::ops::Range<usize>,
+    ) -> Self {
+        let mut ptr = vec![0];
+        let (mut col, mut val) = (Vec::new(), Vec::new());
+        for r in rows {
+            for c in cols.clone() {
+                let v = a[r * n + c];
+                if v != 0.0 {
+                    col.push(c);
+                    val.push(v);
+                }
+            }
+            ptr.push(col.len());
+        }
+        SparseRows { ptr, col, val }
+    }
+
+    /// (A x)_r of row r (local index).
+    pub fn row_dot(&self, r: usize, x: &[f64]) -> f64 {
+        (self.ptr[r]..self.ptr[r + 1])
+            .map(|k| self.val[k] * x[self.col[k]])
+            .sum()
+    }
+
+    /// A x over the block's rows.
+    pub fn mul(&self, x: &[f64]) -> Vec<f64> {
+        (0..self.ptr.len() - 1)
+            .map(|r| self.row_dot(r, x))
+            .collect()
+    }
+
+    /// zᵀ A z for a square block whose rows start at 0.
+    pub fn quad(&self, z: &[f64]) -> f64 {
+        (0..self.ptr.len() - 1)
+            .map(|r| z[r] * self.row_dot(r, z))
+            .sum()
     }
 }
 

@@ -1,9 +1,9 @@
 //! The solver settings of a case: the [`ContinuationOptions`] of its `[continuation]` table.
 
-use crate::case::Case;
+use crate::case::{Case, LinearSolverKey};
 use crate::continuation::ContinuationOptions;
 use crate::error::{Error, Result};
-use crate::nonlinear::NewtonOptions;
+use crate::nonlinear::{NewtonOptions, SolverChoice};
 
 /// The continuation settings of a case's `[continuation]` table (rad/s).
 pub fn case_continuation(case: &Case) -> Result<ContinuationOptions> {
@@ -24,6 +24,11 @@ pub fn case_continuation(case: &Case) -> Result<ContinuationOptions> {
     opts.newton = NewtonOptions {
         tolerance: c.tolerance.unwrap_or(opts.newton.tolerance),
         max_iterations: c.max_iterations.unwrap_or(opts.newton.max_iterations),
+        linear_solver: match case.harmonic_balance.linear_solver {
+            LinearSolverKey::Auto => SolverChoice::Auto,
+            LinearSolverKey::Dense => SolverChoice::Dense,
+            LinearSolverKey::Structured => SolverChoice::Structured,
+        },
         ..opts.newton
     };
     Ok(opts)

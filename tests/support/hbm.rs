@@ -253,3 +253,74 @@ pub fn tangential_normal_element(n0: f64) -> Result<nlrom::contact::grounded::Do
         2,
     )
 }
+
+/// A synthetic contact interface of `contact_dofs` / 6 node-to-node pairs (frames along x, y, z;
+/// k_t = k_n = 1 N/m, μ = 0.5, n0 = 1 N, 1-D friction) on a chain of as many unit masses and
+/// unit springs (C = 0.01 K), every DOF nonlinear, forced on harmonic 1; with H harmonics and
+/// `samples` AFT samples. Returns the linear model, the pairs, the layout and a harmonic-1 state
+/// x of 0.5–2 m per DOF with varied phases, where the pairs stick, slip and separate — or, with
+/// `slipping` = Some(F), where only every ⌈1/F⌉-th pair moves that much and the others move 50
+/// times less and stick all period.
+pub fn synthetic_interface(
+    contact_dofs: usize,
+    h: usize,
+    samples: usize,
+    slipping: Option<f64>,
+) -> Result<(
+    nlrom::hbm::LinearModel,
+    nlrom::contact::pairs::PairSet,
+    HarmonicLayout,
+    Vec<f64>,
+)> {
+    use nlrom::contact::law::{ContactParams, Variant};
+    use nlrom::contact::pairs::{PairElement, PairSet};
+    let pairs = contact_dofs / 6;
+    let n = 6 * pairs;
+    let k = Mat::from_fn(n, n, |i, j| match i.abs_diff(j) {
+        0 => 2.0,
+        1 => -1.0,
+        _ => 0.0,
+    });
+    let m = Mat::<f64>::identity(n, n);
+    let c = Mat::from_fn(n, n, |i, j| 0.01 * k[(i, j)]);
+    let force: Vec<f64> = (0..n).map(|i| 0.3 * ((i % 7) as f64 - 3.0)).collect();
+    let linear = nlrom::hbm::LinearModel::from_real(
+        k.as_ref(),
+        m.as_ref(),
+        Some(c.as_ref()),
+        &force,
+        (0..n).collect(),
+        vec![0],
+        h,
+    )?;
+    let params = ContactParams::new(1.0, 1.0, 0.5, 1.0, "synthetic")?;
+    let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let set = PairSet::new(
+        n,
+        Variant::OneD,
+        (0..pairs)
+            .map(|p| PairElement {
+                contact: [6 * p, 6 * p + 1, 6 * p + 2],
+                target: Some([6 * p + 3, 6 * p + 4, 6 * p + 5]),
+                frame: identity,
+                sigma: 0,
+                params,
+                preload_rate: 1.0,
+            })
+            .collect(),
+        None,
+    )?;
+    let layout = HarmonicLayout::new(h, samples)?;
+    let mut x = vec![0.0; layout.len(n)];
+    let every = slipping.map_or(1, |f| (1.0 / f).ceil() as usize);
+    for d in 0..n {
+        let c1 = layout.cos_index(1, d, n);
+        let (mut a, phi) = (0.5 + 1.5 * ((d * 37 % 101) as f64 / 100.0), d as f64 * 0.7);
+        if (d / 6) % every != 0 {
+            a *= 0.02;
+        }
+        x[c1] = a * phi.cos();
+        x[c1 + 1] = a * phi.sin();
+    }
+    Ok((linear, set, layout, x))
+}

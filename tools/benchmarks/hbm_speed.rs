@@ -2,41 +2,51 @@
 //! numbers of docs/performance.md, "Harmonic balance").
 //!
 //! ```text
-//! cargo run --release --example hbm_speed -- sector CASE.toml [H] [POINTS]
-//! cargo run --release --example hbm_speed -- synthetic [CONTACT_DOFS] [H] [SAMPLES]
+//! cargo run --release --example hbm_speed -- sector CASE.toml [H] [POINTS] [KEY=VALUE ...]
+//! cargo run --release --example hbm_speed -- synthetic [CONTACT_DOFS] [H] [SAMPLES] [EVERY]
 //! ```
 //!
 //! `sector`: the case's sector problem (reduction, SAMA interfaces, preload balance) with H
 //! harmonics (default 3; the case's AFT samples), a continuation of POINTS points (default 8) from
 //! the case's start frequency: wall time per point and per Newton iteration (corrector
-//! iterations; the predictor's tangent solves are included in the per-point time), then the
-//! split of one Newton iteration at the last point.
+//! iterations; the predictor's tangent solves are included in the per-point time), the linear
+//! solves by path (dense LU or structured, with the mean rank of the low-rank correction), then
+//! the split of one Newton iteration at the last point. KEY=VALUE overrides the case:
+//! `solver=dense|auto|structured` (`harmonic_balance.linear_solver`), `n0=N` (every contact's
+//! preload), `start=F` (`continuation.start`, in the case's unit).
 //!
 //! `synthetic`: CONTACT_DOFS / 6 node-to-node pairs (frames along x, y, z; k_t = k_n = 1 N/m,
 //! μ = 0.5, n0 = 1 N, 1-D friction) on a chain of CONTACT_DOFS unit masses and unit springs
 //! (C = 0.01 K), every DOF nonlinear, forced on harmonic 1 so that the pairs stick, slip and
 //! separate; H (default 3) and SAMPLES (default 4(H+1) rounded up to a power of two): the split
-//! of one Newton iteration.
+//! of one Newton iteration. With EVERY > 1 only one pair in EVERY moves that much, the others 50
+//! times less and stick all period (microslip of the interface).
 //!
 //! The split (best of `REPEAT` runs, wall clock, `faer::get_global_parallelism` threads):
 //! condensation of the linear part at ω; AFT = contact forces alone (inverse DFT, contact law
 //! march, DFT); contact Jacobian = forces with the analytic Jacobian minus forces alone;
 //! linear assembly = the whole residual + Jacobian evaluation minus the contact part; dense LU
-//! = faer's partial-pivoting LU and solve of the Jacobian (`nonlinear::solve_dense`).
+//! = faer's partial-pivoting LU and solve of the Jacobian (`nonlinear::solve_dense`); structured
+//! solve = the block LUs and low-rank correction of `nonlinear::linsolve` on the same Jacobian.
+
+#[path = "../../tests/support/hbm.rs"]
+mod hbm_support;
 
 use std::f64::consts::PI;
 use std::path::Path;
 use std::time::Instant;
 
+use hbm_support::synthetic_interface;
+
 use faer::Mat;
-use nlrom::case::Case;
-use nlrom::contact::law::{ContactParams, Variant};
-use nlrom::contact::pairs::{PairElement, PairSet};
+use nlrom::case::{Case, LinearSolverKey};
 use nlrom::continuation::trace;
-use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
-use nlrom::hbm::{FrequencyPath, HbmSystem, LinearModel};
+use nlrom::harmonics::HarmonicForce;
+use nlrom::hbm::{FrequencyPath, HbmSystem};
 use nlrom::interface::build_interfaces;
-use nlrom::nonlinear::{solve_dense, Linearization, ParameterSystem};
+use nlrom::nonlinear::{
+    linsolve, solve_dense, LinearSolver, Linearization, ParameterSystem, SolverChoice,
+};
 use nlrom::problem::sector::SectorProblem;
 use nlrom::problem::settings::case_continuation;
 use nlrom::reduction::reduce;
@@ -57,14 +67,19 @@ fn main() -> Result<()> {
         rayon::current_num_threads()
     );
     match args.first().map(String::as_str) {
-        Some("sector") => sector(Path::new(&args[1]), num(2, 3), num(3, 8)),
+        Some("sector") => sector(
+            Path::new(&args[1]),
+            num(2, 3),
+            num(3, 8),
+            args.get(4..).unwrap_or_default(),
+        ),
         Some("synthetic") => {
             let h = num(2, 3);
             let samples = num(3, (4 * (h + 1)).next_power_of_two());
-            synthetic(num(1, 1500), h, samples)
+            synthetic(num(1, 1500), h, samples, num(4, 1))
         }
         _ => {
-            eprintln!("usage: hbm_speed sector CASE.toml [H] [POINTS] | synthetic [CONTACT_DOFS] [H] [SAMPLES]");
+            eprintln!("usage: hbm_speed sector CASE.toml [H] [POINTS] | synthetic [CONTACT_DOFS] [H] [SAMPLES] [EVERY]");
             Ok(())
         }
     }
@@ -85,6 +100,17 @@ fn cpu_seconds() -> f64 {
         .map_or(0.0, |(u, s)| (u + s) / 100.0)
 }
 
+/// Peak resident memory of this process so far (GB), from /proc/self/status (VmHWM); 0 where
+/// unavailable.
+fn peak_rss_gb() -> f64 {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))
+        .and_then(|v| v.split_whitespace().next()?.parse::<f64>().ok())
+        .map_or(0.0, |kb| kb / 1024.0 / 1024.0)
+}
+
 /// Best wall time (s) of `REPEAT` runs of `f`, and the CPU time of that run.
 fn best<T>(mut f: impl FnMut() -> T) -> (f64, f64) {
     (0..REPEAT)
@@ -96,9 +122,31 @@ fn best<T>(mut f: impl FnMut() -> T) -> (f64, f64) {
         .fold((f64::INFINITY, 0.0), |a, b| if b.0 < a.0 { b } else { a })
 }
 
-fn sector(path: &Path, h: usize, points: usize) -> Result<()> {
+fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<()> {
     let mut case = Case::load(path)?;
     case.harmonic_balance.harmonics = h;
+    for o in overrides {
+        let (key, value) = o.split_once('=').expect("KEY=VALUE");
+        match key {
+            "solver" => {
+                case.harmonic_balance.linear_solver = match value {
+                    "dense" => LinearSolverKey::Dense,
+                    "auto" => LinearSolverKey::Auto,
+                    "structured" => LinearSolverKey::Structured,
+                    other => panic!("solver={other}: dense, auto or structured"),
+                }
+            }
+            "n0" => {
+                let n0: f64 = value.parse().expect("n0=NUMBER");
+                case.contact.iter_mut().for_each(|c| c.n0 = n0);
+            }
+            "start" => {
+                let c = case.continuation.as_mut().expect("a [continuation] table");
+                c.start = value.parse().expect("start=NUMBER");
+            }
+            other => panic!("unknown override {other}: solver, n0, start"),
+        }
+    }
     let t = Instant::now();
     let sm = model::build(&case, &mut |_| {})?;
     let rom = reduce(&case, &sm, &mut |_| {})?;
@@ -107,8 +155,9 @@ fn sector(path: &Path, h: usize, points: usize) -> Result<()> {
     let problem = SectorProblem::build(&case, &rom, mesh, &interfaces)?;
     let system = problem.system()?;
     eprintln!(
-        "setup (model, reduction, interfaces) {:.1} s; H = {h}, N_t = {}, {} contact DOF, {} unknowns",
+        "setup (model, reduction, interfaces) {:.1} s, peak RSS {:.2} GB; H = {h}, N_t = {}, {} contact DOF, {} unknowns",
         t.elapsed().as_secs_f64(),
+        peak_rss_gb(),
         problem.layout.time_samples,
         problem.linear.n_condensed(),
         system.dim()
@@ -120,8 +169,10 @@ fn sector(path: &Path, h: usize, points: usize) -> Result<()> {
     let mut opts = case_continuation(&case)?;
     opts.max_points = points;
     let (t, c) = (Instant::now(), cpu_seconds());
+    let before = linsolve::stats();
     let path = trace(&fp, &opts, &mut |_| {})?;
     let (wall, cpu) = (t.elapsed().as_secs_f64(), cpu_seconds() - c);
+    let after = linsolve::stats();
     let iterations: usize = path.points.iter().map(|p| p.iterations).sum();
     let n = path.points.len();
     println!(
@@ -133,6 +184,17 @@ fn sector(path: &Path, h: usize, points: usize) -> Result<()> {
         wall / iterations.max(1) as f64,
         cpu / n as f64,
         cpu / iterations.max(1) as f64
+    );
+    let structured = after.structured - before.structured;
+    println!(
+        "linear solves ({:?}): {} dense LU, {structured} structured (mean rank {:.0} = {:.1} % of the unknowns), {} fallbacks to the dense LU; peak RSS {:.2} GB",
+        opts.newton.linear_solver,
+        after.dense - before.dense,
+        (after.rank_sum - before.rank_sum) as f64 / structured.max(1) as f64,
+        100.0 * (after.rank_sum - before.rank_sum) as f64
+            / (after.size_sum - before.size_sum).max(1) as f64,
+        after.fallbacks - before.fallbacks,
+        peak_rss_gb()
     );
     let last = &path.points[n - 1];
     split(&fp, &system, &last.x, last.parameter, &last.state)
@@ -149,7 +211,7 @@ fn split<F: HarmonicForce>(
     let layout = system.layout();
     let force = system.force();
     let nf = x.len();
-    let condense = best(|| system.condense_all(omega).unwrap());
+    let condense = best(|| system.condense_all_applied(x, omega).unwrap());
     let aft = best(|| {
         let mut s = state.clone();
         let mut f = vec![0.0; nf];
@@ -172,6 +234,13 @@ fn split<F: HarmonicForce>(
     faer::set_global_parallelism(faer::Par::Seq);
     let lu_seq = best(|| solve_dense(&lin.jacobian, &lin.residual).unwrap());
     faer::set_global_parallelism(par);
+    let solver = LinearSolver::new(fp.jacobian_blocks(), SolverChoice::Structured);
+    let mut rank = None;
+    let structured = best(|| {
+        let (x, path) = solver.solve_path(lin.jacobian.as_ref(), &lin.residual);
+        rank = Some(path);
+        x.unwrap()
+    });
     let total = whole.0 + lu.0;
     let row = |what: &str, t: (f64, f64)| {
         println!(
@@ -194,6 +263,8 @@ fn split<F: HarmonicForce>(
         minus(minus(whole, aft_jac), condense),
     );
     row("dense LU + solve", lu);
+    row("structured solve (in place of the dense LU)", structured);
+    println!("  structured path: {rank:?}");
     println!(
         "  dense LU + solve on 1 thread: {:.4} s (CPU {:.2} s; wall {:.2}× the parallel one); {:.1} GFLOP/s parallel",
         lu_seq.0,
@@ -204,57 +275,19 @@ fn split<F: HarmonicForce>(
     Ok(())
 }
 
-fn synthetic(contact_dofs: usize, h: usize, samples: usize) -> Result<()> {
-    let pairs = contact_dofs / 6;
-    let n = 6 * pairs;
-    let k = Mat::from_fn(n, n, |i, j| match i.abs_diff(j) {
-        0 => 2.0,
-        1 => -1.0,
-        _ => 0.0,
-    });
-    let m = Mat::<f64>::identity(n, n);
-    let c = Mat::from_fn(n, n, |i, j| 0.01 * k[(i, j)]);
-    let force: Vec<f64> = (0..n).map(|i| 0.3 * ((i % 7) as f64 - 3.0)).collect();
-    let linear = LinearModel::from_real(
-        k.as_ref(),
-        m.as_ref(),
-        Some(c.as_ref()),
-        &force,
-        (0..n).collect(),
-        vec![0],
-        h,
-    )?;
-    let params = ContactParams::new(1.0, 1.0, 0.5, 1.0, "synthetic")?;
-    let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let set = PairSet::new(
-        n,
-        Variant::OneD,
-        (0..pairs)
-            .map(|p| PairElement {
-                contact: [6 * p, 6 * p + 1, 6 * p + 2],
-                target: Some([6 * p + 3, 6 * p + 4, 6 * p + 5]),
-                frame: identity,
-                sigma: 0,
-                params,
-                preload_rate: 1.0,
-            })
-            .collect(),
-        None,
-    )?;
-    let layout = HarmonicLayout::new(h, samples)?;
+fn synthetic(contact_dofs: usize, h: usize, samples: usize, every: usize) -> Result<()> {
+    let slipping = (every > 1).then(|| 1.0 / every as f64);
+    let (linear, set, layout, x) = synthetic_interface(contact_dofs, h, samples, slipping)?;
+    let n = linear.n_condensed();
+    let pairs = n / 6;
     let system = HbmSystem::new(layout, &linear, &set)?;
     let fp = FrequencyPath {
         system: &system,
         level: 1.0,
     };
-    // harmonic-1 motion of 0.5–2 m per DOF with varied phases: stick, slip and separation mixed
-    let mut x = vec![0.0; system.dim()];
-    for d in 0..n {
-        let c1 = layout.cos_index(1, d, n);
-        let (a, phi) = (0.5 + 1.5 * ((d * 37 % 101) as f64 / 100.0), d as f64 * 0.7);
-        x[c1] = a * phi.cos();
-        x[c1 + 1] = a * phi.sin();
-    }
-    println!("synthetic: {pairs} pairs, {n} contact DOF, H = {h}, N_t = {samples}");
+    println!(
+        "synthetic: {pairs} pairs ({} moving), {n} contact DOF, H = {h}, N_t = {samples}",
+        pairs.div_ceil(every.max(1))
+    );
     split(&fp, &system, &x, 0.8, &set.initial_state())
 }

@@ -1,0 +1,81 @@
+//! The linear solve of a harmonic balance Newton step at interface scale (criterion): the
+//! Jacobian of a synthetic contact interface — a chain of unit masses and springs whose every DOF
+//! belongs to a node-to-node friction pair (k_t = k_n = 1 N/m, μ = 0.5, n0 = 1 N; the
+//! `synthetic_interface` of `tests/support/hbm.rs`) — at a harmonic-1 state where one pair in
+//! `EVERY` slips and separates and the others stick, solved by the dense LU and by the
+//! structured path of `nlrom::nonlinear::linsolve` (block LUs per harmonic and the exact
+//! Woodbury correction for the pairs that couple harmonics), and by the automatic choice. The
+//! rank of the correction and the ratio of the two times are printed once.
+//!
+//! Run: `cargo bench --bench hbm_scale` (about a minute).
+
+#[path = "../tests/support/hbm.rs"]
+mod hbm_support;
+
+use std::time::{Duration, Instant};
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use hbm_support::synthetic_interface;
+use nlrom::hbm::{FrequencyPath, HbmSystem};
+use nlrom::nonlinear::linsolve::SolvePath;
+use nlrom::nonlinear::{LinearSolver, Linearization, ParameterSystem, SolverChoice};
+
+/// Contact DOF of the interface (a multiple of 6).
+const CONTACT_DOFS: usize = 480;
+/// Harmonics.
+const H: usize = 3;
+/// One pair in `EVERY` moves enough to slip and separate (≈ 12 % of the pairs).
+const EVERY: f64 = 8.0;
+
+fn scale(c: &mut Criterion) {
+    let (linear, set, layout, x) =
+        synthetic_interface(CONTACT_DOFS, H, 32, Some(1.0 / EVERY)).unwrap();
+    let system = HbmSystem::new(layout, &linear, &set).unwrap();
+    let fp = FrequencyPath {
+        system: &system,
+        level: 1.0,
+    };
+    let mut lin = Linearization::zeros(fp.dim());
+    fp.evaluate(&x, 0.8, &fp.initial_state(), &mut lin).unwrap();
+    let a = lin.jacobian.as_ref();
+    let b = lin.residual.clone();
+    let dense = LinearSolver::dense();
+    let structured = LinearSolver::new(fp.jacobian_blocks(), SolverChoice::Structured);
+    let auto = LinearSolver::new(fp.jacobian_blocks(), SolverChoice::Auto);
+    let time = |s: &LinearSolver| {
+        let t = Instant::now();
+        let (x, path) = s.solve_path(a, &b);
+        (t.elapsed().as_secs_f64(), x.unwrap().0, path)
+    };
+    let (td, xd, _) = time(&dense);
+    let (ts, xs, path) = time(&structured);
+    let (_, _, auto_path) = time(&auto);
+    let diff = xd
+        .iter()
+        .zip(&xs)
+        .map(|(p, q)| (p - q).abs())
+        .fold(0.0, f64::max);
+    let rank = match path {
+        SolvePath::Structured { rank } => rank,
+        SolvePath::Dense => 0,
+    };
+    println!(
+        "{CONTACT_DOFS} contact DOF, H = {H}, {} unknowns: rank of the correction {rank} ({:.1} %), auto takes {auto_path:?}; one solve dense {td:.3} s, structured {ts:.3} s ({:.1}×); max |x_s − x_d| {diff:.1e}",
+        b.len(),
+        100.0 * rank as f64 / b.len() as f64,
+        td / ts
+    );
+    let mut g = c.benchmark_group("hbm_scale");
+    g.sample_size(10).measurement_time(Duration::from_secs(8));
+    g.bench_function("dense_lu", |bench| {
+        bench.iter(|| dense.solve(a, &b).unwrap())
+    });
+    g.bench_function("structured", |bench| {
+        bench.iter(|| structured.solve(a, &b).unwrap())
+    });
+    g.bench_function("auto", |bench| bench.iter(|| auto.solve(a, &b).unwrap()));
+    g.finish();
+}
+
+criterion_group!(benches, scale);
+criterion_main!(benches);
