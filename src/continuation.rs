@@ -590,6 +590,7 @@ fn kink_step<S: ParameterSystem>(
 ) -> Option<(NewtonSolution<S::State>, Tangent, f64)> {
     let n = system.dim();
     let y_c = scaled(current, s);
+    let solver = LinearSolver::new(system.jacobian_blocks(), opts.newton.linear_solver);
     for factor in [1.0, 2.0, 4.0] {
         let s_p = factor * min_step;
         let y_p: Vec<f64> = y_c.iter().zip(tangent).map(|(y, t)| y + s_p * t).collect();
@@ -598,7 +599,7 @@ fn kink_step<S: ParameterSystem>(
         system
             .evaluate(&x, y_p[n] * s.lambda, &current.state, &mut lin)
             .ok()?;
-        let Some(beyond) = tangent_with(&lin, s, tangent) else {
+        let Some(beyond) = tangent_with(&lin, s, tangent, &solver) else {
             continue;
         };
         let beyond = beyond.oriented(orientation);
