@@ -339,3 +339,61 @@ fn returned_state_is_periodic() {
         assert!((a - b).abs() < 1e-12);
     }
 }
+
+/// The forces are those of the periodic state marched from the sliders at rest, whatever slider
+/// state the caller passes (a warm start): closed forms for u = U0 + A cos τ on a Jenkins element
+/// (k_t, slip force F_s) — stuck (k_t (|U0| + A) < F_s: f = k_t u), a one-way shakedown
+/// (k_t (U0 + A) > F_s but k_t A < F_s: slip at τ = 0 sets the slider to U0 + A − F_s/k_t, then
+/// stick: F⁽⁰⁾ = F_s − k_t A, F⁽¹⁾ = k_t A) and two-way slip (the first harmonic of
+/// `jenkins_closed_forms`, independent of U0).
+#[test]
+fn forces_do_not_depend_on_the_callers_slider_state() {
+    let aft = Aft::new(HarmonicLayout::new(1, 4096).unwrap()).unwrap();
+    let mut ws = Workspace::new(&aft);
+    let (kt, fs) = (2.0, 0.5);
+    let el = LocalElement {
+        params: params(kt, 0.0, fs / 2.0, 2.0),
+        variant: Variant::OneD,
+        tangential: 1,
+        normal: false,
+    };
+    let two_way = |amp: f64| {
+        let beta = (1.0 - 2.0 * fs / (kt * amp)).acos();
+        amp * kt / std::f64::consts::PI * (beta - 0.5 * (2.0 * beta).sin())
+    };
+    // (U0, A, expected F⁽⁰⁾ or None when not in closed form, expected Re F⁽¹⁾)
+    let cases = [
+        (0.05, 0.1, Some(kt * 0.05), kt * 0.1),
+        (0.2, 0.1, Some(fs - kt * 0.1), kt * 0.1),
+        (0.0, 1.0, Some(0.0), two_way(1.0)),
+    ];
+    for (u0, amp, f0, f1) in cases {
+        for warm in [0.0, 0.3, -0.17, 0.12] {
+            let mut slider = [warm, 0.0];
+            let mut f = [0.0; 3];
+            evaluate(
+                &el,
+                &aft,
+                &[u0, amp, 0.0],
+                &mut slider,
+                &mut f,
+                false,
+                &mut ws,
+            )
+            .unwrap();
+            if let Some(f0) = f0 {
+                assert!(
+                    (f[0] - f0).abs() <= 1e-9,
+                    "U0 {u0} A {amp} warm {warm}: F0 {} vs {f0}",
+                    f[0]
+                );
+            }
+            let tol = if f0 == Some(0.0) { 1e-6 * f1 } else { 1e-9 };
+            assert!(
+                (f[1] - f1).abs() <= tol,
+                "U0 {u0} A {amp} warm {warm}: Re F1 {} vs {f1}",
+                f[1]
+            );
+        }
+    }
+}
