@@ -18,11 +18,49 @@ pub const CHUNK_LINES: usize = 1 << 13;
 /// Bytes per step of the newline count of [`line_chunks`].
 const COUNT_BLOCK: usize = 4096;
 
+/// The number of `\n` bytes in `b`: 16 bytes at a time with SSE2 on x86-64 (a byte compare
+/// subtracted into per-byte counters, summed every 255 steps), elsewhere
+/// [`count_newlines_swar`].
+pub fn count_newlines(b: &[u8]) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{
+            __m128i, _mm_cmpeq_epi8, _mm_cvtsi128_si64, _mm_loadu_si128, _mm_sad_epu8,
+            _mm_set1_epi8, _mm_setzero_si128, _mm_sub_epi8, _mm_unpackhi_epi64,
+        };
+        let mut total = 0usize;
+        let mut runs = b.chunks(16 * 255);
+        for run in &mut runs {
+            let mut blocks = run.chunks_exact(16);
+            // SAFETY: SSE2 is part of the x86-64 baseline, so these instructions exist on every
+            // x86-64 CPU; `_mm_loadu_si128` reads exactly the 16 bytes of a block of `b`, with
+            // no alignment requirement.
+            total += unsafe {
+                let newline = _mm_set1_epi8(b'\n' as i8);
+                let mut acc = _mm_setzero_si128();
+                for block in &mut blocks {
+                    let v = _mm_loadu_si128(block.as_ptr().cast::<__m128i>());
+                    // A match is 0xFF (-1): subtracting it counts one per byte lane.
+                    acc = _mm_sub_epi8(acc, _mm_cmpeq_epi8(v, newline));
+                }
+                let sums = _mm_sad_epu8(acc, _mm_setzero_si128());
+                (_mm_cvtsi128_si64(sums) + _mm_cvtsi128_si64(_mm_unpackhi_epi64(sums, sums)))
+                    as usize
+            };
+            total += blocks.remainder().iter().filter(|&&c| c == b'\n').count();
+        }
+        total
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    count_newlines_swar(b)
+}
+
 /// The number of `\n` bytes in `b`, eight bytes at a time (SWAR: a byte of the word XOR
 /// `0x0A…0A` is zero exactly where the input holds `\n`, and its high bit after adding `0x7F` to
 /// the low seven bits tells which), with per-byte counters summed every 255 words before they can
-/// overflow. About 9× faster than a byte-by-byte count on the x86-64 baseline.
-pub fn count_newlines(b: &[u8]) -> usize {
+/// overflow.
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+fn count_newlines_swar(b: &[u8]) -> usize {
     const LO: u64 = 0x0101_0101_0101_0101;
     const LOW7: u64 = 0x7F * LO;
     // The sum of the eight byte counters (each at most 255).
@@ -164,41 +202,47 @@ pub fn line_end(i: &[u8]) -> Option<&[u8]> {
     }
 }
 
-/// The value of eight ASCII digits read as a little-endian `u64` (first digit in the lowest
-/// byte), by three multiplications instead of eight (Lemire's SWAR method, as in fast_float).
+/// The value of eight decimal digit values (0–9, one per byte) read as a little-endian `u64`
+/// (first digit in the lowest byte), by three multiplications instead of eight (Lemire's SWAR
+/// method, as in fast_float).
 #[inline(always)]
-fn eight_digits(v: u64) -> u64 {
+fn eight_digit_values(v: u64) -> u64 {
     const MASK: u64 = 0x0000_00FF_0000_00FF;
     const MUL1: u64 = 0x000F_4240_0000_0064;
     const MUL2: u64 = 0x0000_2710_0000_0001;
-    let v = v.wrapping_sub(0x3030_3030_3030_3030);
     let v = v.wrapping_mul(10).wrapping_add(v >> 8);
     let v1 = (v & MASK).wrapping_mul(MUL1);
     let v2 = ((v >> 16) & MASK).wrapping_mul(MUL2);
     u64::from((v1.wrapping_add(v2) >> 32) as u32)
 }
 
+/// The leading digits of the 8 bytes `x` (little-endian, first byte lowest): their number `n`
+/// (0–8) and the bytes minus `'0'`.
+///
+/// After subtracting `'0'` from every byte, the digits are the bytes below 10. A borrow only
+/// runs from a byte below `'0'` into the bytes after it, so the bytes up to and including the
+/// first non-digit are exact; adding `0x76` sets the high bit of every exact byte of 10 or more
+/// (without a carry out of the digit bytes), and the byte's own high bit catches those above
+/// `0x89`. The first byte with a high bit set is the first non-digit.
+#[inline(always)]
+fn leading_digits(x: u64) -> (usize, u64) {
+    let v = x.wrapping_sub(0x3030_3030_3030_3030);
+    let non_digit = (v.wrapping_add(0x7676_7676_7676_7676) | v) & 0x8080_8080_8080_8080;
+    ((non_digit.trailing_zeros() / 8) as usize, v)
+}
+
 /// An unsigned decimal integer of at most 19 digits on the current line.
 ///
 /// A number of 1–7 digits followed by a blank or line end (every tag of a mesh below ten
-/// million) is read 8 bytes at a time: the digit bytes are found with bit masks and the number
-/// is converted by [`eight_digits`] after left-padding with `'0'`; others digit by digit.
+/// million) is read 8 bytes at a time ([`leading_digits`]): its digit values are shifted into
+/// the high bytes, zeros below, and converted by [`eight_digit_values`]; others digit by digit.
 #[inline(always)]
 pub fn uint(i: &[u8]) -> Option<(&[u8], u64)> {
     let i = blank(i);
     if let Some(word) = i.get(..8) {
-        let x = u64::from_le_bytes(word.try_into().expect("8 bytes"));
-        // A byte is a digit iff its high nibble is 3 and adding 6 keeps it 3.
-        let hi = x & 0xF0F0_F0F0_F0F0_F0F0;
-        let carry = x.wrapping_add(0x0606_0606_0606_0606) & 0xF0F0_F0F0_F0F0_F0F0;
-        let not_digit = (hi ^ 0x3030_3030_3030_3030) | (carry ^ 0x3030_3030_3030_3030);
-        let n = (not_digit.trailing_zeros() / 8) as usize;
+        let (n, v) = leading_digits(u64::from_le_bytes(word.try_into().expect("8 bytes")));
         if (1..8).contains(&n) && i[n].is_ascii_whitespace() {
-            // Keep the n digits, put them in the high bytes, fill the low bytes with '0'.
-            let digits = x & ((1u64 << (8 * n)) - 1);
-            let shift = 8 * (8 - n);
-            let padded = (digits << shift) | (0x3030_3030_3030_3030 & ((1u64 << shift) - 1));
-            return Some((&i[n..], eight_digits(padded)));
+            return Some((&i[n..], eight_digit_values(v << (64 - 8 * n as u32))));
         }
     }
     let mut value: u64 = 0;
@@ -231,10 +275,117 @@ pub fn int32(i: &[u8]) -> Option<(&[u8], i32)> {
     Some((rest, i32::try_from(v).ok()?))
 }
 
-/// A finite floating-point number on the current line.
+/// The powers of ten that are exact in an `f64` (10^22 < 2^53 · 2^22).
+const EXACT_POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// Whether the 8 bytes `w` are all ASCII digits.
+#[inline(always)]
+fn all_digits(w: u64) -> bool {
+    ((w & 0xF0F0_F0F0_F0F0_F0F0)
+        | ((w.wrapping_add(0x0606_0606_0606_0606) & 0xF0F0_F0F0_F0F0_F0F0) >> 4))
+        == 0x3333_3333_3333_3333
+}
+
+/// The common short form of a coordinate, `[±]digits[.digits][(e|E)[±]digits]` with at most 19
+/// significant digits ending at white space or the end of input, when its value is exact by
+/// Clinger's fast path (Clinger 1990, "How to read floating point numbers accurately"): the
+/// decimal significand m ≤ 2^53 and the power of ten 10^|e| with |e| ≤ 22 are both exact
+/// doubles, so m · 10^e or m / 10^-e is a single correctly rounded operation — the same double
+/// as any correct parser. Fraction digits are read 8 at a time. `None` for anything else (more
+/// digits, larger exponents, `inf`, `nan`, a malformed token), which [`float`] hands to the
+/// general parser.
+#[inline(always)]
+fn float_exact(i: &[u8]) -> Option<(&[u8], f64)> {
+    let (neg, mut p) = match i.first() {
+        Some(b'-') => (true, 1),
+        Some(b'+') => (false, 1),
+        _ => (false, 0),
+    };
+    let mut m = 0u64;
+    let int_start = p;
+    while let Some(&c) = i.get(p) {
+        let d = c.wrapping_sub(b'0');
+        if d > 9 || p - int_start == 19 {
+            break;
+        }
+        m = m * 10 + u64::from(d);
+        p += 1;
+    }
+    let int_digits = p - int_start;
+    let mut frac = 0;
+    if i.get(p) == Some(&b'.') {
+        p += 1;
+        let frac_start = p;
+        while int_digits + (p - frac_start) + 8 <= 19 {
+            match i.get(p..p + 8) {
+                Some(w) => {
+                    let w = u64::from_le_bytes(w.try_into().expect("8 bytes"));
+                    if !all_digits(w) {
+                        break;
+                    }
+                    m = m * 100_000_000 + eight_digit_values(w.wrapping_sub(0x3030_3030_3030_3030));
+                    p += 8;
+                }
+                None => break,
+            }
+        }
+        while let Some(&c) = i.get(p) {
+            let d = c.wrapping_sub(b'0');
+            if d > 9 || int_digits + (p - frac_start) == 19 {
+                break;
+            }
+            m = m * 10 + u64::from(d);
+            p += 1;
+        }
+        frac = p - frac_start;
+    }
+    if int_digits + frac == 0 {
+        return None;
+    }
+    let mut e = -(frac as i32);
+    if matches!(i.get(p), Some(b'e' | b'E')) {
+        p += 1;
+        let neg_e = i.get(p) == Some(&b'-');
+        if neg_e || i.get(p) == Some(&b'+') {
+            p += 1;
+        }
+        let start = p;
+        let mut x = 0i32;
+        while let Some(&c) = i.get(p) {
+            let d = c.wrapping_sub(b'0');
+            if d > 9 || p - start == 4 {
+                break;
+            }
+            x = x * 10 + i32::from(d);
+            p += 1;
+        }
+        if p == start {
+            return None;
+        }
+        e += if neg_e { -x } else { x };
+    }
+    if !ends_token(&i[p..]) || m > 1 << 53 || !(-22..=22).contains(&e) {
+        return None;
+    }
+    let v = if e < 0 {
+        m as f64 / EXACT_POW10[e.unsigned_abs() as usize]
+    } else {
+        m as f64 * EXACT_POW10[e as usize]
+    };
+    Some((&i[p..], if neg { -v } else { v }))
+}
+
+/// A finite floating-point number on the current line: the exact short form
+/// ([`float_exact`]), else `fast-float2` (Eisel–Lemire) on the bytes.
 #[inline(always)]
 pub fn float(i: &[u8]) -> Option<(&[u8], f64)> {
     let i = blank(i);
+    if let Some(r) = float_exact(i) {
+        return Some(r);
+    }
     let (v, n) = fast_float2::parse_partial::<f64, _>(i).ok()?;
     (n > 0 && v.is_finite() && ends_token(&i[n..])).then(|| (&i[n..], v))
 }
@@ -344,17 +495,28 @@ mod tests {
     }
 
     #[test]
-    fn newlines_counted_eight_bytes_at_a_time_equal_the_byte_count() {
-        // Every byte value next to newlines, runs of up to 300 newlines (per-byte counters
-        // past 255 words), lengths that leave every remainder of the 8-byte words.
+    fn newlines_counted_in_blocks_equal_the_byte_count() {
+        // Every byte value next to newlines, runs of newlines long enough to fill the per-byte
+        // counters of both counts (255 words of 8, 255 blocks of 16), lengths that leave every
+        // remainder of the words and blocks.
         let mut text: Vec<u8> = (0..=255u8).flat_map(|b| [b, b'\n', b ^ 0x0A]).collect();
         text.extend(std::iter::repeat_n(b'\n', 300 * 8 + 5));
+        text.extend(std::iter::repeat_n(b'\n', 2 * 255 * 16 + 3));
         text.extend((0..5000u32).map(|k| if k % 7 == 0 { b'\n' } else { (k % 251) as u8 }));
         for start in [0, 1, 3, 8] {
-            for end in [text.len(), text.len() - 1, text.len() - 7, 2048, 2049, 17] {
+            for end in [
+                text.len(),
+                text.len() - 1,
+                text.len() - 7,
+                9000,
+                2048,
+                2049,
+                17,
+            ] {
                 let b = &text[start..end];
                 let want = b.iter().filter(|&&c| c == b'\n').count();
                 assert_eq!(count_newlines(b), want, "{start}..{end}");
+                assert_eq!(count_newlines_swar(b), want, "{start}..{end}");
             }
         }
         assert_eq!(count_newlines(b""), 0);
@@ -385,6 +547,76 @@ mod tests {
         assert!(uint(b"-12345678").is_none());
         assert!(uint(b"x2345678").is_none());
         assert_eq!(uint(b"  00042  ").map(|r| r.1), Some(42));
+    }
+
+    #[test]
+    fn floats_by_the_exact_short_form_equal_the_standard_parser_bit_for_bit() {
+        // Gmsh's %.16g coordinates and the forms around the fast path's limits: 19 and 20
+        // significant digits, 2^53 ± 1, exponents ±22 and ±23, signs, leading and trailing dots.
+        let mut tokens: Vec<String> = [
+            "0",
+            "-0",
+            "+0",
+            "0.25",
+            "-0.2230769230769225",
+            "1e-05",
+            "1E+22",
+            "1e22",
+            "1e23",
+            "1e-22",
+            "1e-23",
+            "5.",
+            ".5",
+            "+.5",
+            "-5.e3",
+            "9007199254740992",
+            "9007199254740993",
+            "9007199254740991.5",
+            "1234567890123456789",
+            "12345678901234567890",
+            "0.1234567890123456789",
+            "0.00000000000000000001",
+            "123.456e-7",
+            "1.7976931348623157e308",
+            "4.9e-324",
+            "0.30000000000000004",
+            "1e0000",
+            "7e-0022",
+        ]
+        .iter()
+        .map(|t| t.to_string())
+        .collect();
+        // Pseudo-random coordinates as Gmsh writes them (shortest round trip, %.16g, %.17e).
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        for _ in 0..20_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let v = (x >> 11) as f64 / (1u64 << 53) as f64 * 10f64.powi((x % 13) as i32 - 6) - 0.5;
+            tokens.push(format!("{v}"));
+            tokens.push(format!("{v:.16}"));
+            tokens.push(format!("{v:.17e}"));
+            tokens.push(format!("{:.3}", v * 1e3));
+        }
+        let mut exact = 0;
+        for t in &tokens {
+            let want: f64 = t.parse().unwrap();
+            let text = format!("{t} \n");
+            let (rest, got) = float(text.as_bytes()).unwrap();
+            assert_eq!(got.to_bits(), want.to_bits(), "{t}");
+            assert_eq!(rest, b" \n", "{t}");
+            exact += usize::from(float_exact(t.as_bytes()).is_some());
+        }
+        // Most of them take the exact path; the others (long or huge) the general parser.
+        assert!(exact > tokens.len() / 2, "{exact} of {}", tokens.len());
+        assert!(float_exact(b"12345678901234567890").is_none());
+        assert!(float_exact(b"1e23").is_none());
+        assert!(float_exact(b"9007199254740993").is_none());
+        for bad in [
+            "1.5.2 ", "1e ", "1e+ ", ". ", "- ", "inf ", "1x ", "1,5 ", "0x10 ",
+        ] {
+            assert!(float(bad.as_bytes()).is_none(), "{bad}");
+        }
     }
 
     #[test]
