@@ -45,6 +45,7 @@ use std::f64::consts::{PI, TAU};
 
 use crate::contact::law::ContactParams;
 use crate::error::{Error, Result};
+use crate::vec3::dot;
 
 /// Most events marched before the evaluation gives up (a cycle has at most about eight; the
 /// bound only guards against a degenerate input that would loop).
@@ -183,11 +184,6 @@ fn basis_rate(t: f64) -> [f64; 3] {
     [0.0, -s, -c]
 }
 
-#[inline]
-fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
 /// Amplitude and phase (A, α) of X1 cos τ − X2 sin τ = A cos(τ + α).
 #[inline]
 fn polar(x1: f64, x2: f64) -> (f64, f64) {
@@ -240,7 +236,7 @@ impl Motion {
     }
 
     fn u_at(&self, t: f64) -> f64 {
-        dot(&self.u, &basis(t))
+        dot(self.u, basis(t))
     }
 
     /// n0e + k_n v1(τ) (the normal force in contact).
@@ -807,8 +803,8 @@ pub fn evaluate(
             PhaseKind::Separation => unreachable!("skipped above"),
         };
         for k in 0..3 {
-            friction[k] += dot(&m[k], &c);
-            normal[k] += dot(&m[k], &cn);
+            friction[k] += dot(m[k], c);
+            normal[k] += dot(m[k], cn);
             if jacobian {
                 for x in 0..7 {
                     fj[k][x] += m[k][0] * dc[0][x] + m[k][1] * dc[1][x] + m[k][2] * dc[2][x];

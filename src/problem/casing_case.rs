@@ -35,6 +35,7 @@ use crate::march::signal::Harmonic;
 use crate::mesh::Mesh;
 use crate::model::StructuralModel;
 use crate::output::ResponseDof;
+use crate::vec3::{cross, dot, norm, scale, sub};
 
 /// The largest number of DOF (displacements and temperatures) of the dense nonsmooth model.
 pub const MAX_DENSE_DOF: usize = 6000;
@@ -42,19 +43,10 @@ pub const MAX_DENSE_DOF: usize = 6000;
 /// The unit radial vector e_r and the radius r of point `p` about the axis through `o` along the
 /// unit vector `a`; `None` on the axis.
 pub fn radial(p: [f64; 3], o: [f64; 3], a: [f64; 3]) -> Option<([f64; 3], f64)> {
-    let d = [p[0] - o[0], p[1] - o[1], p[2] - o[2]];
-    let s = d[0] * a[0] + d[1] * a[1] + d[2] * a[2];
-    let r = [d[0] - s * a[0], d[1] - s * a[1], d[2] - s * a[2]];
-    let len = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
-    (len > 0.0).then(|| ([r[0] / len, r[1] / len, r[2] / len], len))
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+    let d = sub(p, o);
+    let r = sub(d, scale(dot(d, a), a));
+    let len = norm(r);
+    (len > 0.0).then(|| (r.map(|x| x / len), len))
 }
 
 /// Builds the nonsmooth march of the mesh `case` with `[[casing]]` on its structural model `sm`
