@@ -527,6 +527,9 @@ struct State {
     has_entities: bool,
     node_tags: Vec<u64>,
     coords: Vec<[f64; 3]>,
+    /// Nodes read so far by the blocks of a 4.1 `$Nodes` section (the arrays are allocated at
+    /// the declared size first).
+    nodes_read: usize,
     lookup: Option<NodeLookup>,
     blocks: Vec<ElementBlock>,
     periodic: Vec<PeriodicLink>,
@@ -696,10 +699,11 @@ impl State {
         let (i, total) = checked_count(at, i, total, 4, "nodes")?;
         let (i, _min_tag) = rd.size(i, "the minimum node tag")?;
         let (mut i, _max_tag) = rd.size(i, "the maximum node tag")?;
-        self.node_tags.reserve(total);
-        self.coords.reserve(total);
-        ascii::huge_pages(&mut self.node_tags);
-        ascii::huge_pages(&mut self.coords);
+        // The blocks write into zeroed arrays of the declared size (no `memset` pass, see
+        // `ascii::zeroed`); `nodes_read` counts what they hold.
+        self.node_tags = ascii::zeroed(total);
+        self.coords = ascii::zeroed(total);
+        self.nodes_read = 0;
         for _ in 0..nblocks {
             let at = skip_ws(i);
             let (r, dim) = rd.int(i, "the entity dimension")?;
@@ -720,16 +724,27 @@ impl State {
                 None => self.node_block_ascii(r, n, extra)?.0,
             };
         }
-        if self.node_tags.len() != total {
+        if self.nodes_read != total {
             return fail(
                 at,
                 format!(
                     "the header declares {total} nodes but the blocks hold {}",
-                    self.node_tags.len()
+                    self.nodes_read
                 ),
             );
         }
         Ok((i, ()))
+    }
+
+    /// The slots of the next `n` nodes of a 4.1 `$Nodes` section: index of the first, the
+    /// arrays grown if the blocks hold more nodes than the header declares.
+    fn next_nodes(&mut self, n: usize) -> usize {
+        let first = self.nodes_read;
+        if self.node_tags.len() < first + n {
+            self.node_tags.resize(first + n, 0);
+            self.coords.resize(first + n, [0.0; 3]);
+        }
+        first
     }
 
     fn node_block_binary<'a>(
@@ -743,14 +758,20 @@ impl State {
         let (i, tags) = bytes_n(i, n * 8, "node tags")?;
         let stride = 8 * (3 + extra);
         let (i, xyz) = bytes_n(i, n * stride, "node coordinates")?;
-        let first = self.node_tags.len();
-        self.node_tags
-            .extend(tags.chunks_exact(8).map(|t| e.u64(t)));
-        if let Some(k) = self.node_tags[first..].iter().position(|&t| t == 0) {
+        let first = self.next_nodes(n);
+        for (t, b) in self.node_tags[first..first + n]
+            .iter_mut()
+            .zip(tags.chunks_exact(8))
+        {
+            *t = e.u64(b);
+        }
+        if let Some(k) = self.node_tags[first..first + n]
+            .iter()
+            .position(|&t| t == 0)
+        {
             return fail(&start[k * 8..], "node tag 0 is not allowed");
         }
-        self.coords.resize(first + n, [0.0; 3]);
-        let bad = self.coords[first..]
+        let bad = self.coords[first..first + n]
             .par_chunks_mut(PAR_RECORDS)
             .enumerate()
             .filter_map(|(c, out)| {
@@ -767,6 +788,7 @@ impl State {
         if let Some(k) = bad {
             return fail(&start[n * 8 + k * stride..], "non-finite node coordinate");
         }
+        self.nodes_read = first + n;
         Ok((i, ()))
     }
 
@@ -800,8 +822,8 @@ impl State {
         rest
     }
 
-    /// A 4.1 ASCII node block (n tag lines, then n coordinate lines) read in parallel, as
-    /// [`State::nodes_v22_parallel`]; on `None` nothing is kept.
+    /// A 4.1 ASCII node block (n tag lines, then n coordinate lines) read in parallel into the
+    /// next `n` slots, as [`State::nodes_v22_parallel`]; on `None` nothing is counted.
     fn node_block_ascii_parallel<'a>(
         &mut self,
         i: &'a [u8],
@@ -811,30 +833,32 @@ impl State {
         if n == 0 {
             return None;
         }
-        let first = self.node_tags.len();
-        self.node_tags.resize(first + n, 0);
-        self.coords.resize(first + n, [0.0; 3]);
-        let read =
-            ascii::read_records(skip_ws(i), n, 1, &mut self.node_tags[first..], |line, t| {
+        let first = self.next_nodes(n);
+        let read = ascii::read_records(
+            skip_ws(i),
+            n,
+            1,
+            &mut self.node_tags[first..first + n],
+            |line, t| {
                 let (r, tag) = ascii::uint(line)?;
                 t[0] = tag;
                 (tag != 0).then_some(r)
+            },
+        )
+        .and_then(|i| {
+            ascii::read_records(i, n, 1, &mut self.coords[first..first + n], |line, p| {
+                let (r, x) = ascii::float(line)?;
+                let (r, y) = ascii::float(r)?;
+                let (mut r, z) = ascii::float(r)?;
+                for _ in 0..extra {
+                    r = ascii::float(r)?.0;
+                }
+                p[0] = [x, y, z];
+                Some(r)
             })
-            .and_then(|i| {
-                ascii::read_records(i, n, 1, &mut self.coords[first..], |line, p| {
-                    let (r, x) = ascii::float(line)?;
-                    let (r, y) = ascii::float(r)?;
-                    let (mut r, z) = ascii::float(r)?;
-                    for _ in 0..extra {
-                        r = ascii::float(r)?.0;
-                    }
-                    p[0] = [x, y, z];
-                    Some(r)
-                })
-            });
-        if read.is_none() {
-            self.node_tags.truncate(first);
-            self.coords.truncate(first);
+        });
+        if read.is_some() {
+            self.nodes_read = first + n;
         }
         read
     }
@@ -843,27 +867,27 @@ impl State {
         if let Some(r) = self.node_block_ascii_parallel(i, n, extra) {
             return Ok((r, ()));
         }
-        let first = self.node_tags.len();
-        for _ in 0..n {
+        let first = self.next_nodes(n);
+        for k in first..first + n {
             let at = skip_ws(i);
             let (r, tag) = uint(i)?;
             if tag == 0 {
                 return fail(at, "node tag 0 is not allowed");
             }
-            self.node_tags.push(tag);
+            self.node_tags[k] = tag;
             i = r;
         }
-        for _ in 0..n {
+        for k in first..first + n {
             let (r, x) = float(i)?;
             let (r, y) = float(r)?;
             let (mut r, z) = float(r)?;
             for _ in 0..extra {
                 r = float(r)?.0;
             }
-            self.coords.push([x, y, z]);
+            self.coords[k] = [x, y, z];
             i = r;
         }
-        debug_assert_eq!(self.coords.len(), first + n);
+        self.nodes_read = first + n;
         Ok((i, ()))
     }
 
