@@ -10,40 +10,20 @@ use std::process::{Command, Stdio};
 
 use nlrom::output::{read_results, read_rom};
 use serde_json::Value;
+use support::batch::{chain_case, summary_numbers};
 use support::cli::{nlrom, root, stderr};
 
 /// The chain of `cases/chain3_jenkins.toml` with H = 3, N_t = 64 and slip force n0 of element 1.
 fn chain(dir: &Path, name: &str, n0: f64) -> PathBuf {
-    let text = std::fs::read_to_string(root().join("cases/chain3_jenkins.toml"))
-        .unwrap()
-        .replace(
-            "\"chain3/",
-            &format!("\"{}/cases/chain3/", root().display()),
-        )
-        .replace("harmonics = 7", "harmonics = 3")
-        .replace("time_samples = 1024", "time_samples = 64")
-        .replace(
-            "kt = 1.0\nmu = 1.0\nn0 = 0.2\n\n[harmonic_balance]",
-            &format!("kt = 1.0\nmu = 1.0\nn0 = {n0}\n\n[harmonic_balance]"),
-        );
-    let path = dir.join(format!("{name}.toml"));
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
-/// The summary rows without the columns that name the run (output path, wall time): case,
-/// input, sweep point, status, resonance, peak amplitude, Q, points, message.
-fn numbers(csv: &Path) -> Vec<Vec<String>> {
-    let text = std::fs::read_to_string(csv).unwrap();
-    text.lines()
-        .skip(1)
-        .map(|l| {
-            let c: Vec<String> = l.splitn(11, ',').map(str::to_string).collect();
-            let mut keep = c[..8].to_vec();
-            keep.push(c[10].clone());
-            keep
-        })
-        .collect()
+    chain_case(
+        dir,
+        name,
+        n0,
+        &[
+            ("harmonics = 7", "harmonics = 3"),
+            ("time_samples = 1024", "time_samples = 64"),
+        ],
+    )
 }
 
 fn args<'a>(head: &[&'a str], cases: &'a [PathBuf]) -> Vec<&'a str> {
@@ -67,7 +47,7 @@ fn shards_merge_into_the_local_batch() {
         &cases,
     ));
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let expected = numbers(&local.join("summary.csv"));
+    let expected = summary_numbers(&local.join("summary.csv"));
     assert_eq!(expected.len(), 7);
     assert!(expected.iter().all(|r| r[3] == "ok"), "{expected:?}");
 
@@ -99,7 +79,7 @@ fn shards_merge_into_the_local_batch() {
     assert_eq!(sizes, [3, 2, 2]);
     let o = nlrom(&["batch", "merge", out, "--json", "-q"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    assert_eq!(numbers(&sharded.join("summary.csv")), expected);
+    assert_eq!(summary_numbers(&sharded.join("summary.csv")), expected);
     let report: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(report["shards"].as_array().unwrap().len(), 3);
     assert!(report["missing"].as_array().unwrap().is_empty());
@@ -142,10 +122,10 @@ fn shards_merge_into_the_local_batch() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let report: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(report["skipped"].as_array().unwrap().len(), 6);
-    assert_eq!(numbers(&sharded.join("summary.csv")), expected);
+    assert_eq!(summary_numbers(&sharded.join("summary.csv")), expected);
     let o = nlrom(&["batch", "merge", out, "-q"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    assert_eq!(numbers(&sharded.join("summary.csv")), expected);
+    assert_eq!(summary_numbers(&sharded.join("summary.csv")), expected);
 
     // more shards than cases: shard 9 of 9 is empty
     let o = nlrom(&args(

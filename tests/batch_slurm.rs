@@ -18,6 +18,7 @@ use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
+use support::batch::{chain_case, summary_numbers};
 use support::cli::{nlrom, root, stderr};
 
 /// The programs the test needs.
@@ -308,43 +309,34 @@ impl Drop for Cluster {
 /// in steps of at most 0.01 rad/s (about 1500 points, a fraction of a second each: long enough
 /// to cancel an array task between two of its cases).
 fn chain(dir: &Path, name: &str, n0: f64, f: f64) -> PathBuf {
-    let text = std::fs::read_to_string(root().join("cases/chain3_jenkins.toml"))
-        .unwrap()
-        .replace(
-            "\"chain3/",
-            &format!("\"{}/cases/chain3/", root().display()),
-        )
-        .replace(
-            "step_rad_s = 0.02",
-            "step_rad_s = 0.004\nmax_step_rad_s = 0.01",
-        )
-        .replace("force = [0.5]", &format!("force = [{f}]"))
-        .replace(
-            "kt = 1.0\nmu = 1.0\nn0 = 0.2\n\n[harmonic_balance]",
-            &format!("kt = 1.0\nmu = 1.0\nn0 = {n0}\n\n[harmonic_balance]"),
-        );
-    let path = dir.join(format!("{name}.toml"));
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
-/// The summary rows without the output path and wall time.
-fn numbers(csv: &Path) -> Vec<Vec<String>> {
-    let text = std::fs::read_to_string(csv).unwrap();
-    text.lines()
-        .skip(1)
-        .map(|l| {
-            let c: Vec<String> = l.splitn(11, ',').map(str::to_string).collect();
-            let mut keep = c[..8].to_vec();
-            keep.push(c[10].clone());
-            keep
-        })
-        .collect()
+    let force = format!("force = [{f}]");
+    chain_case(
+        dir,
+        name,
+        n0,
+        &[
+            (
+                "step_rad_s = 0.02",
+                "step_rad_s = 0.004\nmax_step_rad_s = 0.01",
+            ),
+            ("force = [0.5]", &force),
+        ],
+    )
 }
 
 fn json(o: &Output) -> Value {
     serde_json::from_slice(&o.stdout)
         .unwrap_or_else(|e| panic!("{e}: {}\n{}", String::from_utf8_lossy(&o.stdout), stderr(o)))
+}
+
+/// The record of shard `name` (`I/N`) in a merge report.
+fn shard<'a>(merged: &'a Value, name: &str) -> &'a Value {
+    merged["shards"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["shard"] == name)
+        .unwrap_or_else(|| panic!("no shard {name} in {merged}"))
 }
 
 #[test]
@@ -369,84 +361,90 @@ fn a_job_array_on_a_single_node_cluster_equals_the_local_batch() {
     let cases_dir = dir.path().join("cases");
     std::fs::create_dir(&cases_dir).unwrap();
     // 16 cases: 4 slip forces × 4 excitation levels
-    let cases: Vec<PathBuf> = (0..16)
+    let cases: Vec<String> = (0..16)
         .map(|i| {
             let n0 = 0.1 + 0.05 * (i % 4) as f64;
             let f = 0.3 + 0.1 * (i / 4) as f64;
-            chain(&cases_dir, &format!("c{i:02}"), n0, f)
+            let path = chain(&cases_dir, &format!("c{i:02}"), n0, f);
+            path.display().to_string()
         })
         .collect();
     let with_cases = |head: &[&str]| -> Vec<String> {
         head.iter()
             .map(|s| s.to_string())
-            .chain(cases.iter().map(|c| c.display().to_string()))
+            .chain(cases.iter().cloned())
             .collect()
     };
 
-    // the reference: the local batch
+    // the reference: the local batch, one case at a time
     let local = dir.path().join("local");
-    let a = with_cases(&["batch", "--out", local.to_str().unwrap(), "-q"]);
-    let a: Vec<&str> = a.iter().map(String::as_str).collect();
+    let args = with_cases(&["batch", "--out", local.to_str().unwrap(), "-q"]);
     let t = Instant::now();
-    let o = nlrom(&a);
+    let o = nlrom(&args.iter().map(String::as_str).collect::<Vec<_>>());
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let local_seconds = t.elapsed().as_secs_f64();
-    let expected = numbers(&local.join("summary.csv"));
+    let expected = summary_numbers(&local.join("summary.csv"));
     assert_eq!(expected.len(), 16);
     assert!(expected.iter().all(|r| r[3] == "ok"), "{expected:?}");
     let distinct: std::collections::BTreeSet<&String> = expected.iter().map(|r| &r[5]).collect();
     assert_eq!(distinct.len(), 16, "every case has its own peak amplitude");
 
     let cluster = Cluster::start(&dir.path().join("slurm"));
+    // `nlrom batch CASES --out OUT --slurm --array-size 4 --submit [--resume]`: the report
+    let submit = |out: &Path, resume: bool| -> Value {
+        let mut args = with_cases(&[
+            "batch",
+            "--out",
+            out.to_str().unwrap(),
+            "--slurm",
+            "--array-size",
+            "4",
+            "--submit",
+            "--json",
+        ]);
+        if resume {
+            args.insert(1, "--resume".into());
+        }
+        let o = cluster.nlrom(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}\n{}",
+            stderr(&o),
+            cluster.logs()
+        );
+        json(&o)
+    };
+    // `nlrom batch merge OUT --json`: exit status and report
+    let merge = |out: &Path| -> (Option<i32>, Value) {
+        let o = cluster.nlrom(&["batch", "merge", out.to_str().unwrap(), "--json", "-q"]);
+        (o.status.code(), json(&o))
+    };
 
     // 1. the whole batch as a job array of 4 tasks
     let out = dir.path().join("cluster");
-    let o_str = out.to_str().unwrap().to_string();
-    let submit = with_cases(&[
-        "batch",
-        "--out",
-        &o_str,
-        "--slurm",
-        "--array-size",
-        "4",
-        "--submit",
-        "--json",
-    ]);
-    let submit: Vec<&str> = submit.iter().map(String::as_str).collect();
     let t = Instant::now();
-    let o = cluster.nlrom(&submit);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}\n{}",
-        stderr(&o),
-        cluster.logs()
-    );
-    let report = json(&o);
+    let report = submit(&out, false);
     let job = report["job_id"].as_str().unwrap().to_string();
     assert_eq!(report["array"], "1-4");
     cluster.wait_job(&job, 300);
     let cluster_seconds = t.elapsed().as_secs_f64();
-    let o = cluster.nlrom(&["batch", "merge", &o_str, "--json", "-q"]);
+    let (code, merged) = merge(&out);
     assert_eq!(
-        o.status.code(),
+        code,
         Some(0),
-        "{}\n{}\nshard 1 log:\n{}",
-        String::from_utf8_lossy(&o.stdout),
-        stderr(&o),
+        "{merged}\nshard 1 log:\n{}",
         std::fs::read_to_string(out.join("logs/shard-1.log")).unwrap_or_default()
     );
-    let merged = json(&o);
-    assert_eq!(numbers(&out.join("summary.csv")), expected);
-    let shards = merged["shards"].as_array().unwrap();
-    assert_eq!(shards.len(), 4);
-    for (i, s) in shards.iter().enumerate() {
-        assert_eq!(s["shard"], format!("{}/4", i + 1));
+    assert_eq!(summary_numbers(&out.join("summary.csv")), expected);
+    assert_eq!(merged["shards"].as_array().unwrap().len(), 4);
+    for i in 1..=4 {
+        let s = shard(&merged, &format!("{i}/4"));
         assert_eq!(s["finished"], true);
         assert_eq!(s["cases"].as_array().unwrap().len(), 4);
-        assert_eq!(s["slurm_job"], format!("{job}_{}", i + 1));
+        assert_eq!(s["slurm_job"], format!("{job}_{i}"));
         assert!(s["cpu_seconds"].as_f64().unwrap() > 0.0);
-        assert!(out.join(format!("logs/shard-{}.log", i + 1)).is_file());
+        assert!(out.join(format!("logs/shard-{i}.log")).is_file());
     }
     eprintln!(
         "16 cases: local batch {local_seconds:.1} s, job array of 4 tasks {cluster_seconds:.1} s (submit to end)"
@@ -454,21 +452,7 @@ fn a_job_array_on_a_single_node_cluster_equals_the_local_batch() {
 
     // 2. cancel array task 1 once its first case is done; merge reports the rest missing
     let out = dir.path().join("cancelled");
-    let o_str = out.to_str().unwrap().to_string();
-    let submit = with_cases(&[
-        "batch",
-        "--out",
-        &o_str,
-        "--slurm",
-        "--array-size",
-        "4",
-        "--submit",
-        "--json",
-    ]);
-    let submit: Vec<&str> = submit.iter().map(String::as_str).collect();
-    let o = cluster.nlrom(&submit);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let job = json(&o)["job_id"].as_str().unwrap().to_string();
+    let job = submit(&out, false)["job_id"].as_str().unwrap().to_string();
     // shard 1 holds the cases at positions 0, 4, 8, 12
     cluster.wait_for("the first case of shard 1", 120, || {
         out.join("cases/c00.json").is_file()
@@ -476,9 +460,8 @@ fn a_job_array_on_a_single_node_cluster_equals_the_local_batch() {
     let o = cluster.run("scancel", &[&format!("{job}_1")]);
     assert!(o.status.success(), "{}", stderr(&o));
     cluster.wait_job(&job, 300);
-    let o = cluster.nlrom(&["batch", "merge", &o_str, "--json", "-q"]);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    let merged = json(&o);
+    let (code, merged) = merge(&out);
+    assert_eq!(code, Some(1), "{merged}");
     let missing: Vec<&str> = merged["missing"]
         .as_array()
         .unwrap()
@@ -492,13 +475,7 @@ fn a_job_array_on_a_single_node_cluster_equals_the_local_batch() {
     for m in &missing {
         assert!(["c04", "c08", "c12"].contains(m), "{m} is not in shard 1");
     }
-    let shard1 = merged["shards"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|s| s["shard"] == "1/4")
-        .unwrap();
-    assert_eq!(shard1["finished"], false, "{shard1}");
+    assert_eq!(shard(&merged, "1/4")["finished"], false);
     let message = merged["jobs"]
         .as_array()
         .unwrap()
@@ -511,41 +488,17 @@ fn a_job_array_on_a_single_node_cluster_equals_the_local_batch() {
     assert!(message.contains("shard 1/4"), "{message}");
 
     // 3. --resume resubmits array task 1 only, and the batch is complete
-    let mut resume = with_cases(&[
-        "batch",
-        "--out",
-        &o_str,
-        "--slurm",
-        "--array-size",
-        "4",
-        "--submit",
-        "--json",
-    ]);
-    resume.insert(1, "--resume".into());
-    let resume: Vec<&str> = resume.iter().map(String::as_str).collect();
-    let o = cluster.nlrom(&resume);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let report = json(&o);
+    let report = submit(&out, true);
     assert_eq!(report["array"], "1");
-    let job = report["job_id"].as_str().unwrap().to_string();
-    cluster.wait_job(&job, 300);
-    let o = cluster.nlrom(&["batch", "merge", &o_str, "--json", "-q"]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let merged = json(&o);
+    cluster.wait_job(report["job_id"].as_str().unwrap(), 300);
+    let (code, merged) = merge(&out);
+    assert_eq!(code, Some(0), "{merged}");
     assert!(merged["missing"].as_array().unwrap().is_empty());
-    assert_eq!(numbers(&out.join("summary.csv")), expected);
-    let shard1 = merged["shards"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|s| s["shard"] == "1/4")
-        .unwrap();
-    assert_eq!(shard1["finished"], true);
-    assert_eq!(shard1["cases"].as_array().unwrap().len(), missing.len());
-    assert_eq!(
-        shard1["skipped"].as_array().unwrap().len(),
-        4 - missing.len()
-    );
+    assert_eq!(summary_numbers(&out.join("summary.csv")), expected);
+    let s1 = shard(&merged, "1/4");
+    assert_eq!(s1["finished"], true);
+    assert_eq!(s1["cases"].as_array().unwrap().len(), missing.len());
+    assert_eq!(s1["skipped"].as_array().unwrap().len(), 4 - missing.len());
     eprintln!(
         "cancelled array task 1 with {} of its 4 cases unfinished; --resume ran them",
         missing.len()
