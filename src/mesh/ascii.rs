@@ -289,6 +289,22 @@ fn all_digits(w: u64) -> bool {
         == 0x3333_3333_3333_3333
 }
 
+/// The decimal digits at `i[p..]`, at most `max` of them, appended to `value`: the position
+/// after them and the value.
+#[inline(always)]
+fn digit_run(i: &[u8], mut p: usize, max: usize, mut value: u64) -> (usize, u64) {
+    let start = p;
+    while let Some(&c) = i.get(p) {
+        let d = c.wrapping_sub(b'0');
+        if d > 9 || p - start == max {
+            break;
+        }
+        value = value * 10 + u64::from(d);
+        p += 1;
+    }
+    (p, value)
+}
+
 /// The common short form of a coordinate, `[±]digits[.digits][(e|E)[±]digits]` with at most 19
 /// significant digits ending at white space or the end of input, when its value is exact by
 /// Clinger's fast path (Clinger 1990, "How to read floating point numbers accurately"): the
@@ -299,21 +315,13 @@ fn all_digits(w: u64) -> bool {
 /// general parser.
 #[inline(always)]
 fn float_exact(i: &[u8]) -> Option<(&[u8], f64)> {
-    let (neg, mut p) = match i.first() {
+    let (neg, p) = match i.first() {
         Some(b'-') => (true, 1),
         Some(b'+') => (false, 1),
         _ => (false, 0),
     };
-    let mut m = 0u64;
     let int_start = p;
-    while let Some(&c) = i.get(p) {
-        let d = c.wrapping_sub(b'0');
-        if d > 9 || p - int_start == 19 {
-            break;
-        }
-        m = m * 10 + u64::from(d);
-        p += 1;
-    }
+    let (mut p, mut m) = digit_run(i, p, 19, 0);
     let int_digits = p - int_start;
     let mut frac = 0;
     if i.get(p) == Some(&b'.') {
@@ -332,14 +340,7 @@ fn float_exact(i: &[u8]) -> Option<(&[u8], f64)> {
                 None => break,
             }
         }
-        while let Some(&c) = i.get(p) {
-            let d = c.wrapping_sub(b'0');
-            if d > 9 || int_digits + (p - frac_start) == 19 {
-                break;
-            }
-            m = m * 10 + u64::from(d);
-            p += 1;
-        }
+        (p, m) = digit_run(i, p, 19 - int_digits - (p - frac_start), m);
         frac = p - frac_start;
     }
     if int_digits + frac == 0 {
@@ -353,18 +354,12 @@ fn float_exact(i: &[u8]) -> Option<(&[u8], f64)> {
             p += 1;
         }
         let start = p;
-        let mut x = 0i32;
-        while let Some(&c) = i.get(p) {
-            let d = c.wrapping_sub(b'0');
-            if d > 9 || p - start == 4 {
-                break;
-            }
-            x = x * 10 + i32::from(d);
-            p += 1;
-        }
+        let x;
+        (p, x) = digit_run(i, p, 4, 0);
         if p == start {
             return None;
         }
+        let x = x as i32;
         e += if neg_e { -x } else { x };
     }
     if !ends_token(&i[p..]) || m > 1 << 53 || !(-22..=22).contains(&e) {
