@@ -103,12 +103,8 @@ impl<F: HarmonicForce> HarmonicForce for FromStaticEquilibrium<F> {
         jacobian: Option<MatMut<'_, f64>>,
         d_omega: Option<&mut [f64]>,
     ) -> Result<()> {
-        self.inner
-            .evaluate_at(layout, q, omega, state, force, jacobian, d_omega)?;
-        for (f, r) in force.iter_mut().zip(&self.at_rest) {
-            *f -= r;
-        }
-        Ok(())
+        let jacobian = jacobian.map(JacobianMut::Dense);
+        self.evaluate_into(layout, q, omega, state, force, jacobian, d_omega)
     }
 
     fn evaluate_into(

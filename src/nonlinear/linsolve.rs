@@ -302,6 +302,20 @@ impl LinearSolver {
         self.solve_path(a, b).0
     }
 
+    /// Whether a dense matrix of order `n` is tried on the structured path: its blocks are
+    /// known (up to a border of at most 4 rows) and the choice is structured, or automatic from
+    /// [`AUTO_MIN_UNKNOWNS`] on.
+    fn splits_dense(&self, n: usize) -> bool {
+        let inner: usize = self.blocks.iter().sum();
+        let partitioned = !self.blocks.is_empty() && inner <= n && n - inner <= 4;
+        partitioned
+            && match self.choice {
+                SolverChoice::Dense => false,
+                SolverChoice::Structured => true,
+                SolverChoice::Auto => n >= AUTO_MIN_UNKNOWNS,
+            }
+    }
+
     /// [`LinearSolver::solve_signed`] and the path that solved (or failed), A stored dense.
     pub fn solve_path(
         &self,
@@ -309,15 +323,7 @@ impl LinearSolver {
         b: &[f64],
     ) -> (Option<(Vec<f64>, f64)>, SolvePath) {
         let n = b.len();
-        let inner: usize = self.blocks.iter().sum();
-        let partitioned = !self.blocks.is_empty() && inner <= n && n - inner <= 4;
-        let try_structured = partitioned
-            && match self.choice {
-                SolverChoice::Dense => false,
-                SolverChoice::Structured => true,
-                SolverChoice::Auto => n >= AUTO_MIN_UNKNOWNS,
-            };
-        if try_structured {
+        if self.splits_dense(n) {
             let split = Split::dense(a, &self.blocks);
             match Woodbury::factor(split, self.choice == SolverChoice::Auto) {
                 Decision::Dense => {}
@@ -348,17 +354,9 @@ impl LinearSolver {
         let n = b.len();
         let split = match a {
             Jacobian::Blocks(m) if self.choice != SolverChoice::Dense => Some(Split::blocks(m)),
-            Jacobian::Dense(m) => {
-                let inner: usize = self.blocks.iter().sum();
-                let partitioned = !self.blocks.is_empty() && inner <= n && n - inner <= 4;
-                let try_structured = partitioned
-                    && match self.choice {
-                        SolverChoice::Dense => false,
-                        SolverChoice::Structured => true,
-                        SolverChoice::Auto => n >= AUTO_MIN_UNKNOWNS,
-                    };
-                try_structured.then(|| Split::dense(m.as_ref(), &self.blocks))
-            }
+            Jacobian::Dense(m) => self
+                .splits_dense(n)
+                .then(|| Split::dense(m.as_ref(), &self.blocks)),
             Jacobian::Blocks(_) => None,
         };
         if let Some(split) = split {
@@ -964,7 +962,7 @@ mod tests {
         assert_eq!(path, SolvePath::Dense);
     }
 
-    /// A solve on the factors of a nearby matrix (A with one block entry moved by 1 %) gives
+    /// A solve on the factors of a nearby matrix (A with one block entry moved by 1e-4) gives
     /// the dense solution of A and its determinant sign; from the factors of a matrix whose
     /// determinant has the other sign the refinement does not converge and `None` tells the
     /// caller to factorise.
@@ -978,7 +976,7 @@ mod tests {
         for choice in [SolverChoice::Dense, SolverChoice::Structured] {
             let solver = LinearSolver::new(blocks.clone(), choice);
             let mut near = a.clone();
-            near[(20, 20)] *= 1.01;
+            near[(20, 20)] += 1e-4;
             let (_, f) = solver
                 .factor_solve(&Jacobian::Dense(near.clone()), &b)
                 .unwrap();
