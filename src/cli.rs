@@ -209,20 +209,71 @@ struct RunArgs {
 }
 
 #[derive(Debug, Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 struct BatchArgs {
+    #[command(subcommand)]
+    action: Option<BatchAction>,
     /// Case files, or meshes (.msh) with one template case (--case).
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
     /// Number of cases run at once (threads of the pool).
     #[arg(long, default_value_t = 1)]
     jobs: usize,
-    /// Output directory: <name>.h5 per input, ROM files, summary.csv.
+    /// Output directory: <name>.h5 per input, summary.csv, the batch's records.
     #[arg(long, default_value = "batch_out")]
     out: PathBuf,
     /// Template case for mesh inputs (its [model] mesh is replaced by each mesh).
     #[arg(long = "case", value_name = "TEMPLATE")]
     template: Option<PathBuf>,
+    /// Content-addressed ROM cache directory, shared by the cases (and by the array tasks of a
+    /// cluster job: put it on a shared file system) [default: OUT/rom-cache].
+    #[arg(long, value_name = "DIR")]
+    rom_cache: Option<PathBuf>,
+    /// Run only the I-th of N parts of the batch (case p goes to part p mod N + 1); gather the
+    /// parts with `nlrom batch merge OUT`.
+    #[arg(long, value_name = "I/N", conflicts_with = "slurm")]
+    shard: Option<commands::batch::shard::Shard>,
+    /// Run only the cases whose results are missing or failed (with --slurm: submit only the
+    /// array tasks that have such cases).
+    #[arg(long)]
+    resume: bool,
+    /// Write a Slurm job array script (OUT/slurm/nlrom-batch.sh), one shard per array task.
+    #[arg(long)]
+    slurm: bool,
+    /// Number of array tasks (shards) [default: one per case, at most 100].
+    #[arg(long, value_name = "N", requires = "slurm")]
+    array_size: Option<usize>,
+    /// Slurm partition (#SBATCH --partition).
+    #[arg(long, value_name = "P", requires = "slurm")]
+    partition: Option<String>,
+    /// Slurm time limit per array task (#SBATCH --time), e.g. 2:00:00.
+    #[arg(long, value_name = "T", requires = "slurm")]
+    time: Option<String>,
+    /// CPUs per array task (#SBATCH --cpus-per-task; the task's --jobs) [default: 1].
+    #[arg(long, value_name = "C", requires = "slurm")]
+    cpus: Option<usize>,
+    /// Submit the script with sbatch and print the job id.
+    #[arg(long, requires = "slurm")]
+    submit: bool,
     /// Print one JSON object on stdout instead of the table.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    verbosity: Verbosity,
+}
+
+#[derive(Debug, Subcommand)]
+enum BatchAction {
+    /// Gather the records of a batch's shards into OUT/summary.csv (as a local batch writes it),
+    /// list missing and failed cases, report wall and CPU time per case and per shard.
+    Merge(MergeArgs),
+}
+
+#[derive(Debug, Args)]
+struct MergeArgs {
+    /// The batch's output directory (--out).
+    dir: PathBuf,
+    /// Print one JSON object on stdout.
     #[arg(long)]
     json: bool,
     #[command(flatten)]
@@ -364,16 +415,7 @@ fn run(cli: Cli) -> Result<()> {
             &a.verbosity.reporter(),
             a.json,
         ),
-        Command::Batch(a) => commands::batch::batch_command(
-            &commands::batch::BatchOptions {
-                inputs: a.inputs,
-                jobs: a.jobs,
-                out: a.out,
-                template: a.template,
-            },
-            &a.verbosity.reporter(),
-            a.json,
-        ),
+        Command::Batch(a) => batch(a),
         Command::Demo(a) => commands::demo_command(&a.out, &a.verbosity.reporter(), a.json),
         Command::Law(a) => commands::law::law_command(
             a.input.as_deref(),
@@ -396,4 +438,32 @@ fn run(cli: Cli) -> Result<()> {
             a.json,
         ),
     }
+}
+
+/// `nlrom batch`: a local batch or shard, the Slurm script (`--slurm`), or `merge`.
+fn batch(a: BatchArgs) -> Result<()> {
+    if let Some(BatchAction::Merge(m)) = a.action {
+        return commands::batch::merge::merge_command(&m.dir, &m.verbosity.reporter(), m.json);
+    }
+    let opts = commands::batch::BatchOptions {
+        inputs: a.inputs,
+        jobs: a.jobs,
+        out: a.out,
+        template: a.template,
+        rom_cache: a.rom_cache,
+        shard: a.shard,
+        resume: a.resume,
+    };
+    let rep = a.verbosity.reporter();
+    if a.slurm {
+        let slurm = commands::batch::slurm::SlurmOptions {
+            array_size: a.array_size,
+            partition: a.partition,
+            time: a.time,
+            cpus: a.cpus.unwrap_or(1),
+            submit: a.submit,
+        };
+        return commands::batch::slurm::slurm_command(&opts, &slurm, &rep, a.json);
+    }
+    commands::batch::batch_command(&opts, &rep, a.json)
 }

@@ -1,6 +1,6 @@
 //! `nlrom batch`: three small matrix cases and a broken one (the broken one fails alone, with
 //! its message; the others are written and agree with `nlrom solve`; exit status 1;
-//! summary.csv), and meshes run with a template case.
+//! summary.csv), and meshes run with a template case (sharing one ROM).
 
 mod support;
 
@@ -8,40 +8,22 @@ use std::path::{Path, PathBuf};
 
 use nlrom::output::read_results;
 use serde_json::Value;
+use support::batch::{chain_case, summary_rows};
 use support::cli::{nlrom, root};
 
 /// The chain of `cases/chain3_jenkins.toml` with H = 3, N_t = 64 and slip force n0 of element 1;
 /// `harmonics` replaces H (0 makes the case invalid).
 fn chain(dir: &Path, name: &str, n0: f64, harmonics: usize) -> PathBuf {
-    let text = std::fs::read_to_string(root().join("cases/chain3_jenkins.toml"))
-        .unwrap()
-        .replace(
-            "\"chain3/",
-            &format!("\"{}/cases/chain3/", root().display()),
-        )
-        .replace("harmonics = 7", &format!("harmonics = {harmonics}"))
-        .replace("time_samples = 1024", "time_samples = 64")
-        .replace(
-            "kt = 1.0\nmu = 1.0\nn0 = 0.2\n\n[harmonic_balance]",
-            &format!("kt = 1.0\nmu = 1.0\nn0 = {n0}\n\n[harmonic_balance]"),
-        );
-    let path = dir.join(format!("{name}.toml"));
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
-/// CSV rows (header excluded) as cell lists; no cell here holds a quoted comma except messages,
-/// which are the last column.
-fn csv_rows(path: &Path) -> Vec<Vec<String>> {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    assert!(lines
-        .next()
-        .unwrap()
-        .starts_with("case,input,sweep_point,status,resonance_hz"));
-    lines
-        .map(|l| l.splitn(11, ',').map(str::to_string).collect())
-        .collect()
+    let h = format!("harmonics = {harmonics}");
+    chain_case(
+        dir,
+        name,
+        n0,
+        &[
+            ("harmonics = 7", &h),
+            ("time_samples = 1024", "time_samples = 64"),
+        ],
+    )
 }
 
 #[test]
@@ -80,7 +62,7 @@ fn a_broken_case_fails_alone() {
         "{message}"
     );
     assert!(!out.join("broken.h5").exists());
-    let rows = csv_rows(&out.join("summary.csv"));
+    let rows = summary_rows(&out.join("summary.csv"));
     assert_eq!(rows.len(), 4);
     for (i, name) in ["a", "b", "broken", "c"].iter().enumerate() {
         assert_eq!(rows[i][0], *name);
@@ -159,7 +141,12 @@ fn meshes_run_with_a_template_case() {
     let b = read_results(&out.join("copy.h5")).unwrap();
     assert!(!a.frfs[0].points.is_empty());
     assert_eq!(a.frfs[0].points, b.frfs[0].points);
-    assert!(out.join("sector8.rom.h5").exists() && out.join("copy.rom.h5").exists());
+    // the two meshes have the same bytes: one ROM in the content-addressed cache
+    let roms: Vec<_> = std::fs::read_dir(out.join("rom-cache"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(roms.len(), 1, "{roms:?}");
     let o = nlrom(&[
         "batch",
         "meshes/sector8.msh",

@@ -13,7 +13,8 @@
 //!   says whether the ROM is cached in a file (`run`) or only read (`solve`).
 //! * [`summary`]: resonance frequency, peak amplitude and half-power Q-factor of a curve.
 //! * [`batch`]: `nlrom batch`, many cases (or many meshes with one template case) in a rayon
-//!   pool of `--jobs` threads, one results file each and a summary table (`summary.csv`).
+//!   pool of `--jobs` threads, one results file each and a summary table (`summary.csv`); shards,
+//!   the Slurm job array (`--slurm`), `batch merge`, `--resume` and the shared ROM cache.
 //! * [`demo`]: `nlrom demo`, the bundled demo case end to end, then the plots.
 //! * [`law`]: `nlrom law`, one friction contact point under a prescribed harmonic motion.
 //! * [`progress`]: log lines (`--quiet`, `-v`) and indicatif progress bars on stderr.
@@ -107,6 +108,9 @@ pub fn solve_command(
 pub fn outcome_json(outcome: &SolveOutcome, output: &Path, start: Instant) -> Value {
     let rom = outcome.rom.as_ref().map(|o| match o {
         RomOrigin::Reused(p) => json!({"file": p.display().to_string(), "reused": true}),
+        RomOrigin::Raced(p) => {
+            json!({"file": p.display().to_string(), "reused": false, "raced": true})
+        }
         RomOrigin::Reduced(p) => {
             json!({"file": p.as_ref().map(|p| p.display().to_string()), "reused": false})
         }

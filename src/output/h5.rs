@@ -415,6 +415,66 @@ pub fn temporary_path(path: &Path) -> PathBuf {
     path.with_file_name(name)
 }
 
+/// Whether [`publish_once`] created the file or found one already there.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Published {
+    /// This call created the file.
+    Created,
+    /// The file existed (another writer published first); it was left untouched.
+    Existing,
+}
+
+/// Writes `bytes` to `path` unless `path` exists, so that any number of writers (threads,
+/// processes, machines on a shared file system) publishing the same content leave exactly one
+/// complete file: the bytes go to a temporary file of a name unique to this host, process and call
+/// ([`unique_temporary_path`]), are flushed, and are hard-linked to `path`, which fails, without
+/// touching `path`, when another writer linked first. The temporary file is removed in every case.
+/// On a file system without hard links the temporary file is renamed over `path` instead (still
+/// atomic: readers see one complete file, the last writer's).
+pub fn publish_once(path: &Path, bytes: &[u8]) -> Result<Published> {
+    if path.exists() {
+        return Ok(Published::Existing);
+    }
+    let tmp = unique_temporary_path(path);
+    if let Err(source) = write_and_sync(&tmp, bytes) {
+        let _ = fs::remove_file(&tmp);
+        return Err(Error::io(path, source));
+    }
+    let linked = fs::hard_link(&tmp, path);
+    let outcome = match linked {
+        Ok(()) => Ok(Published::Created),
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(Published::Existing),
+        Err(_) => fs::rename(&tmp, path)
+            .map(|()| Published::Created)
+            .map_err(|source| Error::io(path, source)),
+    };
+    let _ = fs::remove_file(&tmp);
+    outcome
+}
+
+/// `<path>.tmp-<host>-<pid>-<n>`: a temporary name no other writer uses, also across machines
+/// sharing the directory (`n` counts the calls in this process).
+pub fn unique_temporary_path(path: &Path) -> PathBuf {
+    static CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let mut name = path
+        .file_name()
+        .map(|n| n.to_os_string())
+        .unwrap_or_default();
+    name.push(format!(".tmp-{}-{}-{n}", host_name(), std::process::id()));
+    path.with_file_name(name)
+}
+
+/// The machine's host name (`/proc/sys/kernel/hostname`, else `$HOSTNAME`, else `localhost`).
+pub fn host_name() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .ok()
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .map(|h| h.trim().to_string())
+        .filter(|h| !h.is_empty())
+        .unwrap_or_else(|| "localhost".into())
+}
+
 fn write_and_sync(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let mut file = File::create(path)?;
     file.write_all(bytes)?;

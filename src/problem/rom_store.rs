@@ -2,6 +2,13 @@
 //! [`rom_key`] of the case (the mesh or matrix files' bytes and the model, cyclic, reduction and
 //! contact-group settings), else reduced ([`crate::reduction::reduce`]) and, with
 //! [`RomPolicy::Cache`], written there for the next run.
+//!
+//! [`RomPolicy::Shared`] is a content-addressed cache directory, `DIR/<key>.rom.h5`, which many
+//! cases, threads and processes (the array tasks of a cluster job on a shared file system) use at
+//! once: cases with the same key reduce once; when several reduce the same key at the same time,
+//! the first to publish its file wins ([`publish_once`]: a hard link that fails when the file
+//! exists, never a partial file) and the others read the winner's file, so every case solves
+//! with the same ROM.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -12,6 +19,8 @@ use crate::error::{Error, Result};
 use crate::mesh::msh::read_msh;
 use crate::mesh::Mesh;
 use crate::model;
+use crate::output::h5::{publish_once, Published};
+use crate::output::rom_file::rom_file;
 use crate::output::{read_rom, write_rom, FileInfo};
 use crate::reduction::{reduce, rom_key};
 use crate::rom::Rom;
@@ -25,6 +34,9 @@ pub enum RomPolicy {
     /// `nlrom run`, `batch`, `demo`: read this ROM file when its key matches, else reduce and
     /// write it there.
     Cache(PathBuf),
+    /// `nlrom batch`: the content-addressed cache directory; the ROM file is `DIR/<key>.rom.h5`
+    /// (module documentation).
+    Shared(PathBuf),
 }
 
 /// How the ROM of a sector case was obtained.
@@ -34,6 +46,9 @@ pub enum RomOrigin {
     Reused(PathBuf),
     /// Reduced now; written to the file if any.
     Reduced(Option<PathBuf>),
+    /// Reduced now, but another task published the same key's file first: the ROM was read
+    /// from that file.
+    Raced(PathBuf),
 }
 
 /// The ROM of a sector case per `policy`, the sector mesh, and where the ROM came from.
@@ -46,6 +61,7 @@ pub fn sector_rom(
     let (file, cache) = match policy {
         RomPolicy::ReadIfMatching => (case.rom.as_ref().map(|r| r.file.clone()), false),
         RomPolicy::Cache(p) => (Some(p.clone()), true),
+        RomPolicy::Shared(dir) => (Some(shared_rom_file(dir, &key)), true),
     };
     if let Some(path) = &file {
         if path.exists() {
@@ -75,6 +91,8 @@ pub fn sector_rom(
             ));
         }
     }
+    // a file that is there but unusable is replaced below, not raced for
+    let stale = file.as_ref().is_some_and(|p| p.exists());
     let t = Instant::now();
     log.info("reducing the model (Craig–Bampton, cyclic symmetry, interface reduction)");
     let mut model = model::build(case, &mut |l| log.detail(l))?;
@@ -87,19 +105,49 @@ pub fn sector_rom(
             .collect::<Vec<_>>(),
         t.elapsed().as_secs_f64()
     ));
-    let written = if cache { file } else { None };
-    if let Some(path) = &written {
-        create_parent(path)?;
-        write_rom(path, &rom, &file_info(case))?;
-        log.info(&format!("wrote the ROM to {} (key {key})", path.display()));
-    }
     let mesh = model.mesh.take().ok_or_else(|| {
         Error::input(format!(
             "{}: a sector case needs `[model] mesh`",
             case.path.display()
         ))
     })?;
+    if let (RomPolicy::Shared(_), Some(path), false) = (policy, &file, stale) {
+        create_parent(path)?;
+        let bytes = rom_file(&rom, &file_info(case)).to_bytes()?;
+        return match publish_once(path, &bytes)? {
+            Published::Created => {
+                log.info(&format!("wrote the ROM to {} (key {key})", path.display()));
+                Ok((rom, mesh, RomOrigin::Reduced(Some(path.clone()))))
+            }
+            Published::Existing => {
+                let winner = read_rom(path)?;
+                if winner.key != key {
+                    return Err(Error::Compute(format!(
+                        "the ROM cache file {} holds key {} instead of {key}",
+                        path.display(),
+                        winner.key
+                    )));
+                }
+                log.info(&format!(
+                    "another task wrote {} first (key {key}); using its ROM",
+                    path.display()
+                ));
+                Ok((winner, mesh, RomOrigin::Raced(path.clone())))
+            }
+        };
+    }
+    let written = if cache { file } else { None };
+    if let Some(path) = &written {
+        create_parent(path)?;
+        write_rom(path, &rom, &file_info(case))?;
+        log.info(&format!("wrote the ROM to {} (key {key})", path.display()));
+    }
     Ok((rom, mesh, RomOrigin::Reduced(written)))
+}
+
+/// The file of ROM key `key` in the content-addressed cache directory `dir`: `dir/<key>.rom.h5`.
+pub fn shared_rom_file(dir: &Path, key: &str) -> PathBuf {
+    dir.join(format!("{key}.rom.h5"))
 }
 
 /// The title and text of a case for the files it writes.

@@ -1,8 +1,10 @@
-//! Helpers shared by the integration tests (`mod support;` in a test file): the CLI runner,
+//! Helpers shared by the integration tests (`mod support;` in a test file): the CLI runner, the
+//! batch test cases,
 //! Python (h5py) runner, deterministic random generators, the contact-law checks, the cyclic
 //! full-annulus reference, the harmonic balance test nonlinearities and small models.
 #![allow(dead_code)]
 
+pub mod batch;
 pub mod cli;
 pub mod contact;
 pub mod cyclic;

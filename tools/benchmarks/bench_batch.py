@@ -9,9 +9,11 @@ names an existing file is made absolute, so the copies read the same mesh or mat
 `nlrom batch COPIES --jobs J --out DIR -q` for J = 1 and J = 2, alternating, --rounds times each,
 under `/usr/bin/time` (wall, user+sys CPU, peak RSS). Prints one line per run, the median wall time
 per J, the ratio wall(J=1)/wall(J=2), the machine's load average before and after (the ratio is only
-meaningful on an otherwise idle machine), and exits 1 when a batch fails. The ROM of a sector case
-is cached per output directory (`DIR/<name>.rom.h5`), so every run starts with an empty directory:
-each job reduces and solves, as a first batch over new meshes would.
+meaningful on an otherwise idle machine), and exits 1 when a batch fails. `nlrom batch` shares the
+ROM of cases with the same mesh bytes and reduction settings (its content-addressed ROM cache), so
+each copy of a mesh case reads its own copy of the mesh, made distinct by a `$Comments` section
+that the reader skips, and every run starts from an empty output directory: each job reduces and
+solves, as a first batch over new meshes would.
 """
 
 from __future__ import annotations
@@ -77,10 +79,19 @@ def main(argv=None) -> int:
     text = drop_output_table(absolutise(case.read_text(), case.parent))
     work = Path(a.keep) if a.keep else Path(tempfile.mkdtemp(prefix="nlrom_bench_batch_"))
     work.mkdir(parents=True, exist_ok=True)
+    mesh = re.search(r'(?m)^mesh\s*=\s*"([^"]+)"', text)
     cases = []
     for i in range(a.copies):
         c = work / f"{case.stem}_{i + 1}.toml"
-        c.write_text(text)
+        copy_text = text
+        if mesh and Path(mesh.group(1)).is_file():
+            m = work / f"mesh_{i + 1}.msh"
+            data = Path(mesh.group(1)).read_bytes()
+            if not data.endswith(b"\n"):
+                data += b"\n"
+            m.write_bytes(data + f"$Comments\ncopy {i + 1}\n$EndComments\n".encode())
+            copy_text = text.replace(mesh.group(0), f'mesh = "{m}"')
+        c.write_text(copy_text)
         cases.append(c)
     print(f"{a.copies} copies of {case} in {work}; load average before: {load()}")
     walls: dict[int, list[float]] = {1: [], 2: []}
