@@ -71,7 +71,11 @@ fn hbm(c: &mut Criterion) {
             let mut lin = Linearization::zeros(fp.dim());
             fp.evaluate(&mid.x, mid.parameter, &mid.state, &mut lin)
                 .unwrap();
-            solve_dense(&lin.jacobian, &lin.residual).unwrap()
+            solve_dense(
+                lin.jacobian.as_dense().expect("a dense Jacobian"),
+                &lin.residual,
+            )
+            .unwrap()
         })
     });
     group.bench_function("frf", |bench| {

@@ -4,8 +4,9 @@
 //! `synthetic_interface` of `tests/support/hbm.rs`) — at a harmonic-1 state where one pair in
 //! `EVERY` slips and separates and the others stick, solved by the dense LU and by the
 //! structured path of `nlrom::nonlinear::linsolve` (block LUs per harmonic and the exact
-//! Woodbury correction for the pairs that couple harmonics), and by the automatic choice. The
-//! rank of the correction and the ratio of the two times are printed once.
+//! Woodbury correction for the pairs that couple harmonics) on the block-stored Jacobian, and by
+//! the automatic choice; and the evaluation of residual and Jacobian into dense and into block
+//! storage. The rank of the correction and the ratio of the two solve times are printed once.
 //!
 //! Run: `cargo bench --bench hbm_scale` (about a minute).
 
@@ -35,21 +36,24 @@ fn scale(c: &mut Criterion) {
         system: &system,
         level: 1.0,
     };
-    let mut lin = Linearization::zeros(fp.dim());
-    fp.evaluate(&x, 0.8, &fp.initial_state(), &mut lin).unwrap();
-    let a = lin.jacobian.as_ref();
-    let b = lin.residual.clone();
     let dense = LinearSolver::dense();
     let structured = LinearSolver::new(fp.jacobian_blocks(), SolverChoice::Structured);
     let auto = LinearSolver::new(fp.jacobian_blocks(), SolverChoice::Auto);
-    let time = |s: &LinearSolver| {
+    // the same Jacobian stored dense (for the dense LU) and by blocks (for the others)
+    let mut lin = Linearization::zeros(fp.dim());
+    fp.evaluate(&x, 0.8, &fp.initial_state(), &mut lin).unwrap();
+    let mut lin_blocks = structured.linearization(fp.dim());
+    fp.evaluate(&x, 0.8, &fp.initial_state(), &mut lin_blocks)
+        .unwrap();
+    let b = lin.residual.clone();
+    let time = |s: &LinearSolver, a: &Linearization| {
         let t = Instant::now();
-        let (x, path) = s.solve_path(a, &b);
-        (t.elapsed().as_secs_f64(), x.unwrap().0, path)
+        let (x, f) = s.factor_solve(&a.jacobian, &b).unwrap();
+        (t.elapsed().as_secs_f64(), x, f.path())
     };
-    let (td, xd, _) = time(&dense);
-    let (ts, xs, path) = time(&structured);
-    let (_, _, auto_path) = time(&auto);
+    let (td, xd, _) = time(&dense, &lin);
+    let (ts, xs, path) = time(&structured, &lin_blocks);
+    let (_, _, auto_path) = time(&auto, &lin_blocks);
     let diff = xd
         .iter()
         .zip(&xs)
@@ -68,12 +72,23 @@ fn scale(c: &mut Criterion) {
     let mut g = c.benchmark_group("hbm_scale");
     g.sample_size(10).measurement_time(Duration::from_secs(8));
     g.bench_function("dense_lu", |bench| {
-        bench.iter(|| dense.solve(a, &b).unwrap())
+        bench.iter(|| dense.factor_solve(&lin.jacobian, &b).unwrap())
     });
     g.bench_function("structured", |bench| {
-        bench.iter(|| structured.solve(a, &b).unwrap())
+        bench.iter(|| structured.factor_solve(&lin_blocks.jacobian, &b).unwrap())
     });
-    g.bench_function("auto", |bench| bench.iter(|| auto.solve(a, &b).unwrap()));
+    g.bench_function("auto", |bench| {
+        bench.iter(|| auto.factor_solve(&lin_blocks.jacobian, &b).unwrap())
+    });
+    g.bench_function("evaluate_dense", |bench| {
+        bench.iter(|| fp.evaluate(&x, 0.8, &fp.initial_state(), &mut lin).unwrap())
+    });
+    g.bench_function("evaluate_blocks", |bench| {
+        bench.iter(|| {
+            fp.evaluate(&x, 0.8, &fp.initial_state(), &mut lin_blocks)
+                .unwrap()
+        })
+    });
     g.finish();
 }
 

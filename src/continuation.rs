@@ -38,8 +38,8 @@ use faer::Mat;
 
 use crate::error::{Error, Result};
 use crate::nonlinear::{
-    newton_core, norm, solve_fixed, Iterate, LinearSolver, Linearization, NewtonOptions,
-    NewtonSolution, ParameterSystem,
+    newton_core, norm, solve_fixed, Iterate, Jacobian, LinearSolver, Linearization, NewtonOptions,
+    NewtonOutcome, NewtonSolution, ParameterSystem,
 };
 
 /// Continuation settings (parameter values in the parameter's unit, e.g. rad/s).
@@ -179,7 +179,7 @@ pub fn trace<S: ParameterSystem>(
 pub fn trace_from<S: ParameterSystem>(
     system: &S,
     opts: &ContinuationOptions,
-    start: NewtonSolution<S::State>,
+    mut start: NewtonSolution<S::State>,
     on_point: &mut dyn FnMut(&PathPoint<S::State>),
 ) -> Result<Path<S::State>> {
     opts.validate()?;
@@ -201,13 +201,14 @@ pub fn trace_from<S: ParameterSystem>(
         residual: system.residual_scale(),
     };
     let solver = LinearSolver::new(system.jacobian_blocks(), opts.newton.linear_solver);
-    let first =
-        initial_tangent(&start.linearization, &scales, direction, &solver).ok_or_else(|| {
+    let first = initial_tangent(&mut start.linearization, &scales, direction, &solver).ok_or_else(
+        || {
             Error::Compute(format!(
             "the Jacobian at the start point (parameter {}) is singular; try another start value",
             opts.start
         ))
-        })?;
+        },
+    )?;
     let mut orientation = first.orientation;
     let mut tangent = first.t;
     let mut step = opts.initial_step / range / tangent[tangent.len() - 1].abs().max(1e-3);
@@ -391,26 +392,61 @@ fn scaled<T>(p: &PathPoint<T>, s: &Scales) -> Vec<f64> {
     y
 }
 
-/// The scaled Jacobian [∂r/∂u  ∂r/∂μ] / r_s as the first `dim` rows of a (dim+1)² matrix whose
-/// last row is `border`.
-fn bordered(lin: &Linearization, s: &Scales, border: &[f64]) -> Mat<f64> {
-    let n = lin.residual.len();
+/// The scaled Jacobian [∂r/∂u  ∂r/∂μ] / r_s (`jacobian` = ∂r/∂x, `d_parameter` = ∂r/∂λ) as
+/// the first `dim` rows of a (dim+1)² matrix whose last row is `border`, stored as `jacobian`
+/// is (block-stored: scaled in place, with the border).
+fn bordered(jacobian: Jacobian, d_parameter: &[f64], s: &Scales, border: &[f64]) -> Jacobian {
+    let n = d_parameter.len();
     let cx = s.x / s.residual;
     let cl = s.lambda / s.residual;
-    Mat::from_fn(n + 1, n + 1, |i, j| {
-        if i == n {
-            border[j]
-        } else if j == n {
-            lin.d_parameter[i] * cl
-        } else {
-            lin.jacobian[(i, j)] * cx
+    match jacobian {
+        Jacobian::Dense(j) => Jacobian::Dense(Mat::from_fn(n + 1, n + 1, |i, k| {
+            if i == n {
+                border[k]
+            } else if k == n {
+                d_parameter[i] * cl
+            } else {
+                j[(i, k)] * cx
+            }
+        })),
+        Jacobian::Blocks(mut b) => {
+            b.scale(cx);
+            let column = d_parameter
+                .iter()
+                .map(|d| d * cl)
+                .chain(std::iter::once(border[n]))
+                .collect();
+            b.set_border(column, border[..n].to_vec());
+            Jacobian::Blocks(b)
         }
-    })
+    }
 }
 
-/// The unit tangent at the start, oriented so that λ moves towards the end.
+/// A bordered matrix of [`bordered`] with its last row replaced by `border`.
+fn rebordered(matrix: Jacobian, border: &[f64]) -> Jacobian {
+    match matrix {
+        Jacobian::Dense(mut a) => {
+            let n = a.nrows() - 1;
+            for (k, b) in border.iter().enumerate() {
+                a[(n, k)] = *b;
+            }
+            Jacobian::Dense(a)
+        }
+        Jacobian::Blocks(mut b) => {
+            let n = b.inner();
+            if let Some((mut column, _)) = b.take_border() {
+                column[n] = border[n];
+                b.set_border(column, border[..n].to_vec());
+            }
+            Jacobian::Blocks(b)
+        }
+    }
+}
+
+/// The unit tangent at the start, oriented so that λ moves towards the end (the start's
+/// Jacobian is moved out of `lin`).
 fn initial_tangent(
-    lin: &Linearization,
+    lin: &mut Linearization,
     s: &Scales,
     direction: f64,
     solver: &LinearSolver,
@@ -418,7 +454,8 @@ fn initial_tangent(
     let n = lin.residual.len();
     let mut border = vec![0.0; n + 1];
     border[n] = direction;
-    tangent_with(lin, s, &border, solver)
+    let jacobian = std::mem::take(&mut lin.jacobian);
+    tangent_of(&bordered(jacobian, &lin.d_parameter, s, &border), solver)
 }
 
 /// A unit tangent and its orientation: the sign (±1) of det [∂r/∂u ∂r/∂μ; tᵀ].
@@ -451,19 +488,18 @@ impl Tangent {
     }
 }
 
-/// Solves [∂r/∂u ∂r/∂μ; bᵀ] t = [0; 1] and normalises t (so that t·b > 0). det [J; tᵀ] has the
-/// sign of det [J; bᵀ]: with c the cofactor vector of J (J c = 0), det [J; vᵀ] = v · c and
-/// t ∥ c / (b · c).
-fn tangent_with(
-    lin: &Linearization,
-    s: &Scales,
-    border: &[f64],
-    solver: &LinearSolver,
-) -> Option<Tangent> {
-    let a = bordered(lin, s, border);
-    let mut rhs = vec![0.0; border.len()];
-    rhs[border.len() - 1] = 1.0;
-    let (t, orientation) = solver.solve_signed(a.as_ref(), &rhs)?;
+/// Solves [∂r/∂u ∂r/∂μ; bᵀ] t = [0; 1] (`matrix`, from [`bordered`]) and normalises t (so
+/// that t·b > 0). det [J; tᵀ] has the sign of det [J; bᵀ]: with c the cofactor vector of J
+/// (J c = 0), det [J; vᵀ] = v · c and t ∥ c / (b · c).
+fn tangent_of(matrix: &Jacobian, solver: &LinearSolver) -> Option<Tangent> {
+    let mut rhs = vec![0.0; matrix.dim()];
+    rhs[matrix.dim() - 1] = 1.0;
+    let (t, f) = solver.factor_solve(matrix, &rhs)?;
+    unit_tangent(t, f.sign())
+}
+
+/// t / ‖t‖ with its orientation.
+fn unit_tangent(t: Vec<f64>, orientation: f64) -> Option<Tangent> {
     let len = norm(&t);
     (len > 0.0 && len.is_finite()).then(|| Tangent {
         t: t.iter().map(|v| v / len).collect(),
@@ -518,11 +554,24 @@ fn correct_on<S: ParameterSystem>(
     opts: &ContinuationOptions,
 ) -> std::result::Result<(NewtonSolution<S::State>, Option<Tangent>), String> {
     let n = system.dim();
-    let mut eval = |z: &[f64]| -> Result<Iterate<(Linearization, S::State)>> {
+    let solver = LinearSolver::new(system.jacobian_blocks(), opts.newton.linear_solver);
+    let mut eval = |z: &[f64], with_matrix: bool| -> Result<Iterate<(Linearization, S::State)>> {
         let x: Vec<f64> = z[..n].iter().map(|u| u * s.x).collect();
         let lambda = z[n] * s.lambda;
-        let mut lin = Linearization::zeros(n);
-        let end = system.evaluate(&x, lambda, state, &mut lin)?;
+        let (mut lin, end) = if with_matrix {
+            let mut lin = solver.linearization(n);
+            let end = system.evaluate(&x, lambda, state, &mut lin)?;
+            (lin, end)
+        } else {
+            let mut residual = vec![0.0; n];
+            let end = system.evaluate_residual(&x, lambda, state, &mut residual)?;
+            let lin = Linearization {
+                residual,
+                jacobian: Jacobian::default(),
+                d_parameter: Vec::new(),
+            };
+            (lin, end)
+        };
         let mut g: Vec<f64> = lin.residual.iter().map(|r| r / s.residual).collect();
         g.push(dot(
             border,
@@ -531,10 +580,15 @@ fn correct_on<S: ParameterSystem>(
                 .map(|(a, b)| a - b)
                 .collect::<Vec<_>>(),
         ));
+        let matrix = with_matrix.then(|| {
+            let jacobian = std::mem::take(&mut lin.jacobian);
+            bordered(jacobian, &lin.d_parameter, s, border)
+        });
         Ok(Iterate {
             z: z.to_vec(),
             g,
-            matrix: bordered(&lin, s, border),
+            matrix,
+            g_scale: 1.0,
             extra: (lin, end),
         })
     };
@@ -545,13 +599,37 @@ fn correct_on<S: ParameterSystem>(
         max_halvings: opts.newton.max_halvings.min(2),
         ..opts.newton
     };
-    let solver = LinearSolver::new(system.jacobian_blocks(), opts.newton.linear_solver);
-    let (it, iterations) =
-        newton_core(predicted.to_vec(), &mut eval, 1.0, &newton, &solver).map_err(|f| f.message)?;
+    let NewtonOutcome {
+        iterate: it,
+        iterations,
+        factors,
+    } = newton_core(predicted.to_vec(), &mut eval, 1.0, &newton, &solver).map_err(|f| f.message)?;
     let residual = norm(&it.g[..n]);
+    // the tangent system [G; tangentᵀ] at the solution: the corrector's matrix there with its
+    // last row replaced; solved on the factors of the last step's matrix when they are close
+    // enough to it (refined to the backward error of a direct solve), factorised otherwise
+    let matrix = match it.matrix {
+        Some(m) => Some(m),
+        None => eval(&it.z, true).ok().and_then(|e| e.matrix),
+    };
+    let new_tangent = matrix.and_then(|m| {
+        let m = if border == tangent {
+            m
+        } else {
+            rebordered(m, tangent)
+        };
+        let mut rhs = vec![0.0; n + 1];
+        rhs[n] = 1.0;
+        let near = (border == tangent)
+            .then(|| solver.solve_near(&factors, &m, &rhs))
+            .flatten();
+        match near {
+            Some((t, sign)) => unit_tangent(t, sign),
+            None => tangent_of(&m, &solver),
+        }
+    });
     let z = it.z;
     let (lin, end) = it.extra;
-    let new_tangent = tangent_with(&lin, s, tangent, &solver);
     let sol = NewtonSolution {
         x: z[..n].iter().map(|u| u * s.x).collect(),
         parameter: z[n] * s.lambda,
@@ -595,18 +673,20 @@ fn kink_step<S: ParameterSystem>(
         let s_p = factor * min_step;
         let y_p: Vec<f64> = y_c.iter().zip(tangent).map(|(y, t)| y + s_p * t).collect();
         let x: Vec<f64> = y_p[..n].iter().map(|u| u * s.x).collect();
-        let mut lin = Linearization::zeros(n);
+        let mut lin = solver.linearization(n);
         system
             .evaluate(&x, y_p[n] * s.lambda, &current.state, &mut lin)
             .ok()?;
-        let Some(beyond) = tangent_with(&lin, s, tangent, &solver) else {
+        let along = scaled_jacobian_times(&lin, s, tangent);
+        let jacobian = std::mem::take(&mut lin.jacobian);
+        let Some(beyond) = tangent_of(&bordered(jacobian, &lin.d_parameter, s, tangent), &solver)
+        else {
             continue;
         };
         let beyond = beyond.oriented(orientation);
         if dot(&beyond.t, tangent) > 0.99 {
             continue;
         }
-        let along = scaled_jacobian_times(&lin, s, tangent);
         let g_p: Vec<f64> = lin.residual.iter().map(|r| r / s.residual).collect();
         let s_c = (s_p - dot(&g_p, &along) / dot(&along, &along)).clamp(0.0, s_p);
         if !s_c.is_finite() {
@@ -649,11 +729,9 @@ fn scaled_jacobian_times(lin: &Linearization, s: &Scales, v: &[f64]) -> Vec<f64>
     let n = lin.residual.len();
     let cx = s.x / s.residual;
     let cl = s.lambda / s.residual;
+    let jv = lin.jacobian.mul_vec(&v[..n]);
     (0..n)
-        .map(|i| {
-            let row: f64 = (0..n).map(|j| lin.jacobian[(i, j)] * v[j]).sum();
-            row * cx + lin.d_parameter[i] * cl * v[n]
-        })
+        .map(|i| jv[i] * cx + lin.d_parameter[i] * cl * v[n])
         .collect()
 }
 

@@ -9,9 +9,13 @@
 //! This module is the contract between the contact elements (which evaluate forces and Jacobians in
 //! this layout) and the harmonic-balance solver (which assembles and solves in it).
 
-use faer::MatMut;
+use faer::{Mat, MatMut};
 
 use crate::error::{Error, Result};
+
+pub mod jacobian;
+
+pub use jacobian::{BlockJacobian, Jacobian, JacobianMut};
 
 /// Number of harmonics H and time samples N_t per period used by the alternating
 /// frequency/time (AFT) evaluation of nonlinear forces.
@@ -135,6 +139,42 @@ pub trait HarmonicForce: Send + Sync {
     ) -> Result<()> {
         let _ = (omega, d_omega);
         self.evaluate(layout, q, state, force, jacobian)
+    }
+
+    /// As [`HarmonicForce::evaluate_at`] with the Jacobian added into a dense or a block-stored
+    /// matrix ([`JacobianMut`]). The default evaluates a block-stored Jacobian through a dense
+    /// temporary of the force's order; forces with many DOFs add theirs element by element.
+    #[allow(clippy::too_many_arguments)]
+    fn evaluate_into(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        omega: f64,
+        state: &mut Self::State,
+        force: &mut [f64],
+        jacobian: Option<JacobianMut<'_>>,
+        d_omega: Option<&mut [f64]>,
+    ) -> Result<()> {
+        match jacobian {
+            None => self.evaluate_at(layout, q, omega, state, force, None, d_omega),
+            Some(JacobianMut::Dense(j)) => {
+                self.evaluate_at(layout, q, omega, state, force, Some(j), d_omega)
+            }
+            Some(JacobianMut::Blocks(b)) => {
+                let mut dense = Mat::<f64>::zeros(q.len(), q.len());
+                self.evaluate_at(
+                    layout,
+                    q,
+                    omega,
+                    state,
+                    force,
+                    Some(dense.as_mut()),
+                    d_omega,
+                )?;
+                b.add_dense(dense.as_ref());
+                Ok(())
+            }
+        }
     }
 
     /// Adds ∂F_nl/∂p to `out` (length `layout.len(n_dofs())`) for the force's own scalar

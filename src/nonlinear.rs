@@ -1,8 +1,10 @@
 //! Nonlinear systems r(x, λ) = 0 and their Newton solution, independent of harmonic balance:
 //! [`ParameterSystem`] (the residual, its Jacobian ∂r/∂x and parameter derivative ∂r/∂λ at a point,
 //! with memory carried from one converged point to the next), Newton–Raphson with the analytic
-//! Jacobian (Battiato 2021, eqs. 20–21), dense LU (faer, partial pivoting), backtracking step
-//! damping, and convergence on both the scaled residual and the increment.
+//! Jacobian (Battiato 2021, eqs. 20–21), dense LU (faer, partial pivoting) or the structured
+//! solve of [`linsolve`] on a block-stored Jacobian, backtracking step damping (the trials
+//! beyond the full step evaluate the residual alone), and convergence on both the scaled
+//! residual and the increment.
 //!
 //! [`newton_core`] iterates on any square system g(z) = 0 given g and ∂g/∂z; [`solve_fixed`]
 //! applies it to a [`ParameterSystem`] at a fixed parameter. The continuation corrector
@@ -16,7 +18,8 @@ use crate::error::Result;
 
 pub mod linsolve;
 
-pub use linsolve::{LinearSolver, SolverChoice};
+pub use crate::harmonics::{BlockJacobian, Jacobian};
+pub use linsolve::{Factored, LinearSolver, SolverChoice};
 
 /// The residual of a parameter-dependent system at one point, its Jacobian and its parameter
 /// derivative.
@@ -24,18 +27,18 @@ pub use linsolve::{LinearSolver, SolverChoice};
 pub struct Linearization {
     /// r(x, λ), length `dim`.
     pub residual: Vec<f64>,
-    /// ∂r/∂x, `dim` × `dim`.
-    pub jacobian: Mat<f64>,
+    /// ∂r/∂x, `dim` × `dim`, dense or block-stored ([`LinearSolver::linearization`]).
+    pub jacobian: Jacobian,
     /// ∂r/∂λ, length `dim`.
     pub d_parameter: Vec<f64>,
 }
 
 impl Linearization {
-    /// Zeroed storage for a system of `dim` unknowns.
+    /// Zeroed storage for a system of `dim` unknowns (the Jacobian dense).
     pub fn zeros(dim: usize) -> Linearization {
         Linearization {
             residual: vec![0.0; dim],
-            jacobian: Mat::zeros(dim, dim),
+            jacobian: Jacobian::Dense(Mat::zeros(dim, dim)),
             d_parameter: vec![0.0; dim],
         }
     }
@@ -66,6 +69,22 @@ pub trait ParameterSystem: Sync {
         state: &Self::State,
         out: &mut Linearization,
     ) -> Result<Self::State>;
+
+    /// r(x, λ) alone into `residual` (length `dim`), starting from the memory `state`; returns
+    /// the end-of-period memory. The default evaluates everything ([`ParameterSystem::evaluate`]
+    /// with a dense Jacobian); large systems skip the Jacobian.
+    fn evaluate_residual(
+        &self,
+        x: &[f64],
+        lambda: f64,
+        state: &Self::State,
+        residual: &mut [f64],
+    ) -> Result<Self::State> {
+        let mut lin = Linearization::zeros(self.dim());
+        let end = self.evaluate(x, lambda, state, &mut lin)?;
+        residual.copy_from_slice(&lin.residual);
+        Ok(end)
+    }
 
     /// Sizes of the leading diagonal blocks of ∂r/∂x (in order, summing to
     /// [`ParameterSystem::dim`]) outside which ∂r/∂x is sparse and of low rank, for the
@@ -98,7 +117,7 @@ impl Default for NewtonOptions {
             increment_tolerance: 1e-6,
             max_iterations: 20,
             max_halvings: 4,
-            linear_solver: SolverChoice::Dense,
+            linear_solver: SolverChoice::Auto,
         }
     }
 }
@@ -110,8 +129,12 @@ pub struct Iterate<E> {
     pub z: Vec<f64>,
     /// g(z), already scaled so that convergence means ‖g‖₂ ≤ tolerance.
     pub g: Vec<f64>,
-    /// ∂g/∂z.
-    pub matrix: Mat<f64>,
+    /// ∂(`g_scale` · g)/∂z, when the evaluation formed it (the damping trials beyond the full
+    /// step do not).
+    pub matrix: Option<Jacobian>,
+    /// The factor between g and the equations of `matrix`: the Newton step solves
+    /// `matrix` Δ = `g_scale` · g (so that an unscaled Jacobian needs no scaled copy).
+    pub g_scale: f64,
     /// Whatever else the evaluation produced (state, unscaled linearization).
     pub extra: E,
 }
@@ -123,6 +146,18 @@ impl<E> Iterate<E> {
     }
 }
 
+/// A converged [`newton_core`]: the iterate, the steps taken and the factors of the last step's
+/// matrix (at the previous iterate), to solve nearby systems with
+/// ([`LinearSolver::solve_near`]: the continuation tangent).
+pub struct NewtonOutcome<E> {
+    /// The converged iterate.
+    pub iterate: Iterate<E>,
+    /// Newton steps taken.
+    pub iterations: usize,
+    /// Factors of the matrix of the last step.
+    pub factors: Factored,
+}
+
 /// Why Newton stopped without converging.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NewtonFailure {
@@ -132,35 +167,53 @@ pub struct NewtonFailure {
     pub iterations: usize,
 }
 
-/// Newton on g(z) = 0 from `z0`. `eval(z)` returns the iterate at z (an `Err` counts as a failed
-/// iteration, e.g. a singular condensation); `floor` is the smallest ‖z‖ the increment test is
-/// relative to; `solver` solves the steps. Returns the converged iterate and the number of steps.
+/// The evaluation of [`newton_core`]: the iterate at z, with its matrix when the flag is set.
+pub type Evaluate<'a, E> = dyn FnMut(&[f64], bool) -> Result<Iterate<E>> + 'a;
+
+/// Newton on g(z) = 0 from `z0`. `eval(z, matrix)` returns the iterate at z, with ∂g/∂z when
+/// `matrix` (an `Err` counts as a failed iteration, e.g. a singular condensation); `floor` is
+/// the smallest ‖z‖ the increment test is relative to; `solver` solves the steps (each matrix
+/// factorised once, then dropped).
 pub fn newton_core<E>(
     z0: Vec<f64>,
-    eval: &mut dyn FnMut(&[f64]) -> Result<Iterate<E>>,
+    eval: &mut Evaluate<'_, E>,
     floor: f64,
     opts: &NewtonOptions,
     solver: &LinearSolver,
-) -> std::result::Result<(Iterate<E>, usize), NewtonFailure> {
+) -> std::result::Result<NewtonOutcome<E>, NewtonFailure> {
     let fail = |message: String, iterations: usize| NewtonFailure {
         message,
         iterations,
     };
-    let mut current = eval(&z0).map_err(|e| fail(e.to_string(), 0))?;
+    let mut current = eval(&z0, true).map_err(|e| fail(e.to_string(), 0))?;
     if !current.norm().is_finite() {
         return Err(fail("the residual at the start is not finite".into(), 0));
     }
     for it in 1..=opts.max_iterations {
-        let step = solver
-            .solve(current.matrix.as_ref(), &current.g)
+        if current.matrix.is_none() {
+            current =
+                eval(&current.z, true).map_err(|e| fail(format!("iteration {it}: {e}"), it))?;
+        }
+        let matrix = current
+            .matrix
+            .take()
+            .ok_or_else(|| fail(format!("no Jacobian at iteration {it}"), it))?;
+        let rhs: Vec<f64> = current.g.iter().map(|g| g * current.g_scale).collect();
+        let (step, factors) = solver
+            .factor_solve(&matrix, &rhs)
             .ok_or_else(|| fail(format!("singular Jacobian at iteration {it}"), it))?;
+        drop(matrix);
         let (next, taken) = damped_step(&current, &step, eval, opts)
             .map_err(|e| fail(format!("iteration {it}: {e}"), it))?;
         let z_norm = norm(&next.z).max(floor);
         let converged = next.norm() <= opts.tolerance && taken <= opts.increment_tolerance * z_norm;
         current = next;
         if converged {
-            return Ok((current, it));
+            return Ok(NewtonOutcome {
+                iterate: current,
+                iterations: it,
+                factors,
+            });
         }
         if !current.norm().is_finite() || current.norm() > 1e12 {
             return Err(fail(
@@ -184,25 +237,27 @@ pub fn newton_core<E>(
 }
 
 /// z − α Δ with α = 1, ½, ¼, … (at most `max_halvings` halvings) until the residual decreases
-/// or is within the tolerance; the best trial when none does. Returns the iterate and ‖α Δ‖.
+/// or is within the tolerance; the best trial when none does. The full step is evaluated with
+/// its matrix (it is accepted almost always), the halved ones without. Returns the iterate and
+/// ‖α Δ‖.
 fn damped_step<E>(
     current: &Iterate<E>,
     step: &[f64],
-    eval: &mut dyn FnMut(&[f64]) -> Result<Iterate<E>>,
+    eval: &mut Evaluate<'_, E>,
     opts: &NewtonOptions,
 ) -> Result<(Iterate<E>, f64)> {
     let max_halvings = opts.max_halvings;
     let r0 = current.norm();
     let mut alpha = 1.0;
     let mut best: Option<(Iterate<E>, f64)> = None;
-    for _ in 0..=max_halvings {
+    for k in 0..=max_halvings {
         let z: Vec<f64> = current
             .z
             .iter()
             .zip(step)
             .map(|(z, d)| z - alpha * d)
             .collect();
-        let trial = eval(&z)?;
+        let trial = eval(&z, k == 0)?;
         let taken = alpha * norm(step);
         let better = trial.norm() < r0 || trial.norm() <= opts.tolerance;
         let best_so_far = best.as_ref().is_none_or(|(b, _)| trial.norm() < b.norm());
@@ -281,11 +336,14 @@ pub struct NewtonSolution<S> {
     pub iterations: usize,
     /// ‖r‖₂ / residual scale at the solution.
     pub residual: f64,
-    /// r, ∂r/∂x, ∂r/∂λ at the solution (unscaled).
+    /// r, ∂r/∂x, ∂r/∂λ at the solution (unscaled; from the continuation corrector the
+    /// Jacobian is left empty, of order 0).
     pub linearization: Linearization,
 }
 
 /// Newton at the fixed parameter λ from `x0`, every evaluation starting from the memory `state`.
+/// The solution's linearization is complete (the Jacobian stored as the solver chooses,
+/// [`LinearSolver::linearization`]).
 pub fn solve_fixed<S: ParameterSystem>(
     system: &S,
     x0: &[f64],
@@ -294,21 +352,46 @@ pub fn solve_fixed<S: ParameterSystem>(
     opts: &NewtonOptions,
 ) -> std::result::Result<NewtonSolution<S::State>, NewtonFailure> {
     let scale = system.residual_scale();
-    let mut eval = |z: &[f64]| -> Result<Iterate<(Linearization, S::State)>> {
-        let mut lin = Linearization::zeros(system.dim());
-        let end = system.evaluate(z, lambda, state, &mut lin)?;
+    let n = system.dim();
+    let solver = LinearSolver::new(system.jacobian_blocks(), opts.linear_solver);
+    let mut eval = |z: &[f64], with_matrix: bool| -> Result<Iterate<(Linearization, S::State)>> {
+        let (mut lin, end) = if with_matrix {
+            let mut lin = solver.linearization(n);
+            let end = system.evaluate(z, lambda, state, &mut lin)?;
+            (lin, end)
+        } else {
+            let mut residual = vec![0.0; n];
+            let end = system.evaluate_residual(z, lambda, state, &mut residual)?;
+            let lin = Linearization {
+                residual,
+                jacobian: Jacobian::default(),
+                d_parameter: Vec::new(),
+            };
+            (lin, end)
+        };
+        let matrix = with_matrix.then(|| std::mem::take(&mut lin.jacobian));
         Ok(Iterate {
             z: z.to_vec(),
             g: lin.residual.iter().map(|r| r / scale).collect(),
-            matrix: &lin.jacobian * (1.0 / scale),
+            matrix,
+            g_scale: scale,
             extra: (lin, end),
         })
     };
     let floor = norm(x0).max(f64::MIN_POSITIVE);
-    let solver = LinearSolver::new(system.jacobian_blocks(), opts.linear_solver);
-    let (it, iterations) = newton_core(x0.to_vec(), &mut eval, floor, opts, &solver)?;
+    let outcome = newton_core(x0.to_vec(), &mut eval, floor, opts, &solver)?;
+    let iterations = outcome.iterations;
+    let mut it = outcome.iterate;
+    if it.matrix.is_none() {
+        // converged on a halved step: the Jacobian at the solution
+        it = eval(&it.z, true).map_err(|e| NewtonFailure {
+            message: e.to_string(),
+            iterations,
+        })?;
+    }
     let residual = it.norm();
-    let (linearization, end) = it.extra;
+    let (mut linearization, end) = it.extra;
+    linearization.jacobian = it.matrix.unwrap_or_default();
     Ok(NewtonSolution {
         x: it.z,
         parameter: lambda,
@@ -375,5 +458,61 @@ mod tests {
         assert_eq!(permutation_sign(&[1, 0, 2, 3]), -1.0);
         assert_eq!(permutation_sign(&[1, 2, 0, 3]), 1.0);
         assert_eq!(permutation_sign(&[1, 2, 3, 0]), -1.0);
+    }
+
+    /// r(x) = atan(x): Newton from x = 3 overshoots (the full step lands at −9.49, where |r|
+    /// grows), so the step is halved twice (−3.25, then −0.12 where |r| has decreased).
+    struct Atan {
+        calls: std::sync::Mutex<Vec<(char, f64)>>,
+    }
+
+    impl ParameterSystem for Atan {
+        type State = ();
+        fn dim(&self) -> usize {
+            1
+        }
+        fn residual_scale(&self) -> f64 {
+            1.0
+        }
+        fn initial_state(&self) {}
+        fn evaluate(&self, x: &[f64], _: f64, _: &(), out: &mut Linearization) -> Result<()> {
+            self.calls.lock().unwrap().push(('J', x[0]));
+            out.residual[0] = x[0].atan();
+            out.jacobian[(0, 0)] = 1.0 / (1.0 + x[0] * x[0]);
+            Ok(())
+        }
+        fn evaluate_residual(&self, x: &[f64], _: f64, _: &(), r: &mut [f64]) -> Result<()> {
+            self.calls.lock().unwrap().push(('r', x[0]));
+            r[0] = x[0].atan();
+            Ok(())
+        }
+    }
+
+    /// The damping trials beyond the full step evaluate the residual alone; the Jacobian is
+    /// evaluated at the accepted halved step before the next step, and the solution is the root
+    /// x = 0 (to the tolerance, |atan x| ≤ 1e-8).
+    #[test]
+    fn damping_trials_evaluate_the_residual_alone() {
+        let system = Atan {
+            calls: std::sync::Mutex::new(Vec::new()),
+        };
+        let sol = solve_fixed(&system, &[3.0], 0.0, &(), &NewtonOptions::default()).unwrap();
+        assert!(sol.x[0].abs() <= 1e-8, "{}", sol.x[0]);
+        let calls = system.calls.lock().unwrap().clone();
+        let kinds: String = calls.iter().map(|c| c.0).collect();
+        assert!(kinds.starts_with("JJrrJ"), "{calls:?}");
+        let x1 = 3.0 - 3.0_f64.atan() * 10.0;
+        assert!(
+            (calls[1].1 - x1).abs() <= 1e-12
+                && (calls[3].1 - (3.0 + 0.25 * (x1 - 3.0))).abs() <= 1e-12
+        );
+        assert_eq!(calls[4].1, calls[3].1);
+        // every residual-only evaluation is a halved trial: the full step of each iteration
+        // (the evaluation after a Jacobian one, or the first) carries the Jacobian
+        assert_eq!(kinds.matches('r').count(), 2, "{kinds}");
+        assert_eq!(
+            sol.linearization.jacobian[(0, 0)],
+            1.0 / (1.0 + sol.x[0] * sol.x[0])
+        );
     }
 }

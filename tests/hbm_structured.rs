@@ -40,6 +40,7 @@ fn delta(a: SolverStats, b: SolverStats) -> SolverStats {
         fallbacks: b.fallbacks - a.fallbacks,
         rank_sum: b.rank_sum - a.rank_sum,
         size_sum: b.size_sum - a.size_sum,
+        factorizations: b.factorizations - a.factorizations,
     }
 }
 

@@ -718,10 +718,11 @@ pub struct HarmonicBalance {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LinearSolverKey {
-    /// The cheaper of `dense` and `structured` by their flop counts, per solve.
-    Auto,
-    /// Dense LU of the whole Jacobian (the default).
+    /// The cheaper of `dense` and `structured` by their flop counts, per solve, with the
+    /// Jacobian stored by harmonic blocks from 400 unknowns on (the default).
     #[default]
+    Auto,
+    /// Dense LU of the whole Jacobian, stored dense.
     Dense,
     /// Block LUs per harmonic plus an exact low-rank (Woodbury) correction for the contact
     /// elements that couple harmonics.
@@ -733,7 +734,7 @@ impl Default for HarmonicBalance {
         HarmonicBalance {
             harmonics: 1,
             time_samples: None,
-            linear_solver: LinearSolverKey::Dense,
+            linear_solver: LinearSolverKey::Auto,
         }
     }
 }

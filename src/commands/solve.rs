@@ -36,6 +36,7 @@ use crate::hbm::{HbmSystem, ResponseOptions};
 use crate::interface::{build_interfaces, ContactInterface};
 use crate::mesh::Mesh;
 use crate::model::{self, StructuralModel};
+use crate::nonlinear::{linsolve, SolverChoice};
 use crate::output::{
     write_results, ContactCurveDetail, ContactData, FileInfo, FrfData, FrfRecord, PointLoops,
     ResponseDof, ResultsFile,
@@ -458,10 +459,15 @@ fn trace_curve<F: HarmonicForce>(
         stability,
         ..ResponseOptions::default()
     };
+    let solves_before = linsolve::stats();
     let traced = frequency_response(system, &opts, &response, &mut |p| {
         bar.point(p.parameter, p.iterations)
     });
     bar.finish();
+    rep.info(&format!(
+        "{label}: {}",
+        solves_line(opts.newton.linear_solver, solves_before, linsolve::stats())
+    ));
     let mut frf = FrfData {
         sweep: params.clone(),
         harmonics: system.layout().harmonics,
@@ -547,6 +553,36 @@ fn trace_curve<F: HarmonicForce>(
         report,
         details,
     })
+}
+
+/// The linear solves between two counts of [`linsolve::stats`], for the log: which path the
+/// `harmonic_balance.linear_solver` choice took.
+fn solves_line(
+    choice: SolverChoice,
+    before: linsolve::SolverStats,
+    after: linsolve::SolverStats,
+) -> String {
+    let structured = after.structured - before.structured;
+    let rank = after.rank_sum - before.rank_sum;
+    let size = after.size_sum - before.size_sum;
+    let mut line = format!(
+        "linear solver {choice:?}: {} solves by the dense LU, {structured} structured",
+        after.dense - before.dense
+    );
+    if structured > 0 {
+        line += &format!(
+            " (block LUs per harmonic, low-rank correction of mean rank {:.1} % of the unknowns)",
+            100.0 * rank as f64 / size.max(1) as f64
+        );
+    }
+    let fallbacks = after.fallbacks - before.fallbacks;
+    if fallbacks > 0 {
+        line += &format!(", {fallbacks} structured attempts fell back to the dense LU");
+    }
+    line + &format!(
+        "; {} factorisations",
+        after.factorizations - before.factorizations
+    )
 }
 
 /// The frequencies (Hz) of a curve's points and the first-harmonic amplitudes abs(Q⁽¹⁾) of its

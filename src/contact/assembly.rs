@@ -1,6 +1,6 @@
 //! Parallel evaluation of many contact elements and the summation of their node-space results
 //! (force coefficients, ∂F/∂n0, Jacobian blocks; SAMA paper eq. 26 with each element's kinematic
-//! map) into harmonic-major vectors and a dense Jacobian — the loop shared by
+//! map) into harmonic-major vectors and a dense or block-stored Jacobian — the loop shared by
 //! [`super::pairs::PairSet`] and [`super::grounded::DofElements`].
 //!
 //! Elements are processed in blocks (bounded memory for the per-element Jacobians):
@@ -18,6 +18,7 @@ use faer::MatMut;
 use rayon::prelude::*;
 
 use crate::error::Result;
+use crate::harmonics::{BlockJacobian, JacobianMut};
 
 /// Most f64 entries of per-element Jacobians held at once (16 MB).
 const JACOBIAN_BUDGET: usize = 1 << 21;
@@ -32,8 +33,8 @@ pub struct Outputs<'a> {
     pub force: Option<&'a mut [f64]>,
     /// ∂F/∂p vector.
     pub dn0: Option<&'a mut [f64]>,
-    /// Dense Jacobian (square, the length of the harmonic vector).
-    pub jacobian: Option<MatMut<'a, f64>>,
+    /// Jacobian (square, the length of the harmonic vector), dense or block-stored.
+    pub jacobian: Option<JacobianMut<'a>>,
 }
 
 /// Where one element writes its node-space results. `len` entries are used; the element sets
@@ -206,8 +207,12 @@ where
         if let Some(d) = dn0.as_deref_mut() {
             slots.add_vector(&st.dn0, dn0_cap, d, threads);
         }
-        if let Some(j) = jacobian.as_mut() {
-            slots.add_matrix(&st.jacobian, jac_cap, j.rb_mut(), threads);
+        match jacobian.as_mut() {
+            Some(JacobianMut::Dense(j)) => {
+                slots.add_matrix(&st.jacobian, jac_cap, j.rb_mut(), threads)
+            }
+            Some(JacobianMut::Blocks(j)) => slots.add_patches(&st.jacobian, jac_cap, j),
+            None => {}
         }
     }
     Ok(())
@@ -253,6 +258,17 @@ impl Slots<'_> {
             add((0, out));
         } else {
             out.par_chunks_mut(part).enumerate().for_each(add);
+        }
+    }
+
+    /// Adds every slot's column-major block into the block-stored `out`, element by element
+    /// (the entries of each position summed in the order of the elements, as
+    /// [`Slots::add_matrix`]).
+    fn add_patches(&self, values: &[f64], stride: usize, out: &mut BlockJacobian) {
+        for e in 0..self.count {
+            let idx = self.indices(e);
+            let l = idx.len();
+            out.add_patch(idx, &values[e * stride..e * stride + l * l]);
         }
     }
 

@@ -27,7 +27,7 @@ use crate::contact::element::{
 use crate::contact::law::{ContactParams, Variant};
 use crate::contact::memoryless::{self, Law, LocalOutputs};
 use crate::error::{Error, Result};
-use crate::harmonics::{HarmonicForce, HarmonicLayout};
+use crate::harmonics::{HarmonicForce, HarmonicLayout, JacobianMut};
 
 /// One element: tangential and optional normal DOF combinations and the law's parameters.
 #[derive(Clone, Debug, PartialEq)]
@@ -429,7 +429,7 @@ impl DofElements {
         q: &[f64],
         omega: f64,
         force: &mut [f64],
-        mut jacobian: Option<MatMut<'_, f64>>,
+        mut jacobian: Option<JacobianMut<'_>>,
         mut d_omega: Option<&mut [f64]>,
     ) -> Result<()> {
         if self.memoryless.is_empty() {
@@ -481,7 +481,7 @@ impl DofElements {
                     for (&dc, &wc) in c.dofs.iter().zip(&c.weights) {
                         for k in 0..m {
                             for l in 0..m {
-                                j[(index(dr, k), index(dc, l))] += wr * wc * jac[k * m + l];
+                                j.add(index(dr, k), index(dc, l), wr * wc * jac[k * m + l]);
                             }
                         }
                     }
@@ -560,13 +560,28 @@ impl HarmonicForce for DofElements {
         omega: f64,
         state: &mut Vec<f64>,
         force: &mut [f64],
-        mut jacobian: Option<MatMut<'_, f64>>,
+        jacobian: Option<MatMut<'_, f64>>,
+        d_omega: Option<&mut [f64]>,
+    ) -> Result<()> {
+        let jacobian = jacobian.map(JacobianMut::Dense);
+        self.evaluate_into(layout, q, omega, state, force, jacobian, d_omega)
+    }
+
+    /// The elements' Jacobians are added element by element (no dense temporary).
+    fn evaluate_into(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        omega: f64,
+        state: &mut Vec<f64>,
+        force: &mut [f64],
+        mut jacobian: Option<JacobianMut<'_>>,
         d_omega: Option<&mut [f64]>,
     ) -> Result<()> {
         let outputs = Outputs {
             force: Some(&mut *force),
             dn0: None,
-            jacobian: jacobian.as_mut().map(|j| j.as_mut()),
+            jacobian: jacobian.as_mut().map(|j| j.rb_mut()),
         };
         self.run(layout, q, state, outputs)?;
         self.add_memoryless(layout, q, omega, force, jacobian, d_omega)

@@ -28,7 +28,7 @@ use crate::contact::kinematics::{
 use crate::contact::law::{ContactParams, Variant};
 use crate::contact::mapped::{element_to_outer, LinearMap};
 use crate::error::{Error, Result};
-use crate::harmonics::{HarmonicForce, HarmonicLayout};
+use crate::harmonics::{HarmonicForce, HarmonicLayout, JacobianMut};
 use crate::vec3::{mat_mul, transpose, Mat3};
 
 /// One contact pair.
@@ -573,6 +573,25 @@ impl HarmonicForce for PairSet {
         state: &mut PairState,
         force: &mut [f64],
         jacobian: Option<MatMut<'_, f64>>,
+    ) -> Result<()> {
+        let outputs = Outputs {
+            force: Some(force),
+            dn0: None,
+            jacobian: jacobian.map(JacobianMut::Dense),
+        };
+        self.run(layout, q, state, outputs)
+    }
+
+    /// The pairs' Jacobians are added pair by pair (no dense temporary).
+    fn evaluate_into(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        _omega: f64,
+        state: &mut PairState,
+        force: &mut [f64],
+        jacobian: Option<JacobianMut<'_>>,
+        _d_omega: Option<&mut [f64]>,
     ) -> Result<()> {
         let outputs = Outputs {
             force: Some(force),

@@ -22,7 +22,7 @@
 use faer::MatMut;
 
 use crate::error::Result;
-use crate::harmonics::{HarmonicForce, HarmonicLayout};
+use crate::harmonics::{HarmonicForce, HarmonicLayout, JacobianMut};
 
 /// A nonlinear force measured from its value at rest: F̃(Q) = F(Q) − F(0) (module documentation).
 #[derive(Clone, Debug)]
@@ -103,8 +103,22 @@ impl<F: HarmonicForce> HarmonicForce for FromStaticEquilibrium<F> {
         jacobian: Option<MatMut<'_, f64>>,
         d_omega: Option<&mut [f64]>,
     ) -> Result<()> {
+        let jacobian = jacobian.map(JacobianMut::Dense);
+        self.evaluate_into(layout, q, omega, state, force, jacobian, d_omega)
+    }
+
+    fn evaluate_into(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        omega: f64,
+        state: &mut Self::State,
+        force: &mut [f64],
+        jacobian: Option<JacobianMut<'_>>,
+        d_omega: Option<&mut [f64]>,
+    ) -> Result<()> {
         self.inner
-            .evaluate_at(layout, q, omega, state, force, jacobian, d_omega)?;
+            .evaluate_into(layout, q, omega, state, force, jacobian, d_omega)?;
         for (f, r) in force.iter_mut().zip(&self.at_rest) {
             *f -= r;
         }

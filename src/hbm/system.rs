@@ -3,12 +3,12 @@
 //! sign convention of [`HarmonicForce`]) and its derivative with respect to the continuation
 //! parameter (ω, the excitation level λ, or the force's own parameter such as the preload n0).
 
-use faer::c64;
+use faer::{c64, MatMut};
 use rayon::prelude::*;
 
 use super::linear::{Condensed, CondensedApplied, LinearModel};
 use crate::error::{Error, Result};
-use crate::harmonics::{HarmonicForce, HarmonicLayout};
+use crate::harmonics::{HarmonicForce, HarmonicLayout, Jacobian};
 use crate::nonlinear::{Linearization, ParameterSystem};
 
 /// The harmonic balance of a linear model and a nonlinear force on its condensed DOFs.
@@ -101,7 +101,8 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
     }
 
     /// Evaluates at (Q, ω) with excitation factor `level`: `out.residual` = r,
-    /// `out.jacobian` = ∂r/∂Q, `out.d_parameter` = ∂r/∂ω (with ∂F_nl/∂ω of a force that reads
+    /// `out.jacobian` = ∂r/∂Q (dense or block-stored as `out` is; block-stored, its off-block
+    /// entries are coalesced), `out.d_parameter` = ∂r/∂ω (with ∂F_nl/∂ω of a force that reads
     /// velocities, [`HarmonicForce::evaluate_at`]); and `level_derivative` (if given) =
     /// ∂r/∂level = −F̄_e. Returns the end-of-period force state.
     pub fn evaluate(
@@ -113,55 +114,111 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         out: &mut Linearization,
         level_derivative: Option<&mut [f64]>,
     ) -> Result<F::State> {
+        let parts = Parts {
+            residual: &mut out.residual,
+            jacobian: Some(&mut out.jacobian),
+            d_omega: Some(&mut out.d_parameter),
+            d_level: level_derivative,
+        };
+        self.evaluate_parts(q, omega, level, state, parts)
+    }
+
+    /// The residual r alone at (Q, ω) with excitation factor `level` (no Jacobian, no
+    /// derivatives). Returns the end-of-period force state.
+    pub fn evaluate_residual(
+        &self,
+        q: &[f64],
+        omega: f64,
+        level: f64,
+        state: &F::State,
+        residual: &mut [f64],
+    ) -> Result<F::State> {
+        let parts = Parts {
+            residual,
+            jacobian: None,
+            d_omega: None,
+            d_level: None,
+        };
+        self.evaluate_parts(q, omega, level, state, parts)
+    }
+
+    /// Fills the parts that are given (see [`HbmSystem::evaluate`]).
+    fn evaluate_parts(
+        &self,
+        q: &[f64],
+        omega: f64,
+        level: f64,
+        state: &F::State,
+        mut out: Parts<'_>,
+    ) -> Result<F::State> {
         let condensed = self.condense_all_applied(q, omega)?;
         out.residual.iter_mut().for_each(|v| *v = 0.0);
-        out.d_parameter.iter_mut().for_each(|v| *v = 0.0);
-        out.jacobian.fill(0.0);
+        if let Some(d) = out.d_omega.as_deref_mut() {
+            d.iter_mut().for_each(|v| *v = 0.0);
+        }
+        if let Some(j) = out.jacobian.as_deref_mut() {
+            j.clear();
+        }
         let mut end_state = state.clone();
-        self.force.evaluate_at(
+        self.force.evaluate_into(
             &self.layout,
             q,
             omega,
             &mut end_state,
-            &mut out.residual,
-            Some(out.jacobian.as_mut()),
-            Some(&mut out.d_parameter),
+            out.residual,
+            out.jacobian.as_deref_mut().map(|j| j.target()),
+            out.d_omega.as_deref_mut(),
         )?;
-        let mut level_derivative = level_derivative;
-        if let Some(d) = level_derivative.as_deref_mut() {
+        if let Some(d) = out.d_level.as_deref_mut() {
             d.iter_mut().for_each(|v| *v = 0.0);
         }
         for (n, c) in condensed.iter().enumerate() {
-            self.add_harmonic(n, c, q, level, out, level_derivative.as_deref_mut());
+            self.add_harmonic(n, c, q, level, &mut out);
+        }
+        if let Some(Jacobian::Blocks(b)) = out.jacobian {
+            b.coalesce();
         }
         Ok(end_state)
     }
 
     /// Adds harmonic n's linear terms: D̄ Q − level·F̄ to the residual, D̄ to the Jacobian,
-    /// D̄' Q − level·F̄' to ∂r/∂ω (real 2×2 blocks of eq. 24).
+    /// D̄' Q − level·F̄' to ∂r/∂ω (real 2×2 blocks of eq. 24), −F̄ to ∂r/∂level.
     fn add_harmonic(
         &self,
         n: usize,
         c: &CondensedApplied,
         q: &[f64],
         level: f64,
-        out: &mut Linearization,
-        level_derivative: Option<&mut [f64]>,
+        out: &mut Parts<'_>,
     ) {
         let nd = self.linear.n_condensed();
+        // D̄ is written into its harmonic's diagonal block: `jac` and the offset of its rows
+        let (mut jac, offset): (Option<MatMut<'_, f64>>, usize) = match out.jacobian.as_deref_mut()
+        {
+            None => (None, 0),
+            Some(Jacobian::Dense(a)) => (Some(a.as_mut()), 0),
+            Some(Jacobian::Blocks(b)) => {
+                let offset = b.starts()[n];
+                (Some(b.block_mut(n)), offset)
+            }
+        };
         if n == 0 {
             for i in 0..nd {
                 let ri = self.layout.static_index(i);
                 for j in 0..nd {
                     let cj = self.layout.static_index(j);
-                    out.jacobian[(ri, cj)] += c.stiffness[(i, j)].re;
+                    if let Some(a) = jac.as_mut() {
+                        a[(ri - offset, cj - offset)] += c.stiffness[(i, j)].re;
+                    }
                     out.residual[ri] += c.stiffness[(i, j)].re * q[cj];
                 }
-                out.d_parameter[ri] += c.stiffness_derivative_q[i].re;
+                if let Some(d) = out.d_omega.as_deref_mut() {
+                    d[ri] += c.stiffness_derivative_q[i].re;
+                    d[ri] -= level * c.force_derivative[i].re;
+                }
                 out.residual[ri] -= level * c.force[i].re;
-                out.d_parameter[ri] -= level * c.force_derivative[i].re;
             }
-            if let Some(d) = level_derivative {
+            if let Some(d) = out.d_level.as_deref_mut() {
                 for i in 0..nd {
                     d[self.layout.static_index(i)] -= c.force[i].re;
                 }
@@ -175,10 +232,13 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
             for j in 0..nd {
                 let cj = self.layout.cos_index(n, j, nd);
                 let d = c.stiffness[(i, j)];
-                out.jacobian[(ri, cj)] += d.re;
-                out.jacobian[(ri, cj + 1)] -= d.im;
-                out.jacobian[(ri + 1, cj)] += d.im;
-                out.jacobian[(ri + 1, cj + 1)] += d.re;
+                if let Some(a) = jac.as_mut() {
+                    let (r, k) = (ri - offset, cj - offset);
+                    a[(r, k)] += d.re;
+                    a[(r, k + 1)] -= d.im;
+                    a[(r + 1, k)] += d.im;
+                    a[(r + 1, k + 1)] += d.re;
+                }
                 let qj = c64::new(q[cj], q[cj + 1]);
                 dq += d * qj;
             }
@@ -186,10 +246,12 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
             let df = c.force_derivative[i] * level;
             out.residual[ri] += dq.re - f.re;
             out.residual[ri + 1] += dq.im - f.im;
-            out.d_parameter[ri] += ddq.re - df.re;
-            out.d_parameter[ri + 1] += ddq.im - df.im;
+            if let Some(d) = out.d_omega.as_deref_mut() {
+                d[ri] += ddq.re - df.re;
+                d[ri + 1] += ddq.im - df.im;
+            }
         }
-        if let Some(d) = level_derivative {
+        if let Some(d) = out.d_level.as_deref_mut() {
             for i in 0..nd {
                 let ri = self.layout.cos_index(n, i, nd);
                 d[ri] -= c.force[i].re;
@@ -197,6 +259,14 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
             }
         }
     }
+}
+
+/// The outputs of one evaluation of [`HbmSystem`] (each but the residual optional).
+struct Parts<'o> {
+    residual: &'o mut [f64],
+    jacobian: Option<&'o mut Jacobian>,
+    d_omega: Option<&'o mut [f64]>,
+    d_level: Option<&'o mut [f64]>,
 }
 
 /// Frequency response: the unknowns are Q, the parameter is ω (rad/s), the excitation level is
@@ -235,6 +305,17 @@ impl<F: HarmonicForce> ParameterSystem for FrequencyPath<'_, '_, F> {
         out: &mut Linearization,
     ) -> Result<F::State> {
         self.system.evaluate(x, omega, self.level, state, out, None)
+    }
+
+    fn evaluate_residual(
+        &self,
+        x: &[f64],
+        omega: f64,
+        state: &F::State,
+        residual: &mut [f64],
+    ) -> Result<F::State> {
+        self.system
+            .evaluate_residual(x, omega, self.level, state, residual)
     }
 }
 
@@ -278,6 +359,17 @@ impl<F: HarmonicForce> ParameterSystem for LevelPath<'_, '_, F> {
             .evaluate(x, self.omega, level, state, out, Some(&mut d_level))?;
         out.d_parameter = d_level;
         Ok(end)
+    }
+
+    fn evaluate_residual(
+        &self,
+        x: &[f64],
+        level: f64,
+        state: &F::State,
+        residual: &mut [f64],
+    ) -> Result<F::State> {
+        self.system
+            .evaluate_residual(x, self.omega, level, state, residual)
     }
 }
 
@@ -346,5 +438,17 @@ impl<F: HarmonicForce, B: Fn(f64) -> Result<F> + Sync> ParameterSystem for Prelo
         out.d_parameter.iter_mut().for_each(|v| *v = 0.0);
         force.parameter_derivative(&self.layout, x, state, &mut out.d_parameter)?;
         Ok(end)
+    }
+
+    fn evaluate_residual(
+        &self,
+        x: &[f64],
+        p: f64,
+        state: &F::State,
+        residual: &mut [f64],
+    ) -> Result<F::State> {
+        let force = (self.build)(p)?;
+        let system = HbmSystem::new(self.layout, self.linear, &force)?;
+        system.evaluate_residual(x, self.omega, self.level, state, residual)
     }
 }

@@ -26,31 +26,42 @@
 //! ‖b − A x‖∞ / (‖A‖∞ ‖x‖∞ + ‖b‖∞) and refined; a solve that stays above
 //! [`BACKWARD_ERROR`] goes to the dense LU.
 //!
+//! The matrix is either dense or block-stored ([`crate::harmonics::BlockJacobian`]: the
+//! diagonal blocks, the off-block entries as a list, the border as a row and a column); the
+//! structured path reads the blocks and E's entries directly from the block storage, so that
+//! no n × n matrix is formed (the dense LU of a block-stored matrix works on a dense copy).
+//! [`LinearSolver::factor_solve`] returns the factors, and [`LinearSolver::solve_near`] solves
+//! a nearby matrix on them by iterative refinement (the continuation tangent at a converged
+//! point on the factors of the last Newton step).
+//!
 //! Cost for n unknowns, blocks s_b, rank r (flops): dense LU (2/3)n³; structured
 //! Σ_b (2/3)s_b³ + 2 Σ_b s_b² r + 2 r Σ_k r_k |C_k| + (2/3) r³, plus the QRs (Σ_k 2|R_k||C_k|²).
 //! At n_c = 690, H = 3 (n = 4830) in microslip (r ≈ 13 % of n) that is about 5× fewer; fully stuck
 //! (E = 0) it is the blocks alone, (8H + 1) / (2H + 1)³ of the dense LU. [`SolverChoice::Auto`]
 //! takes the cheaper path by this flop count for every matrix it sees.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::cell::Cell;
 
 use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::{Accum, Mat, MatRef};
 use rayon::prelude::*;
 
-use super::{permutation_sign, solve_dense_signed_ref};
+use super::{permutation_sign, solve_dense_signed_ref, Linearization};
+use crate::harmonics::{BlockJacobian, Jacobian};
 
 /// Which linear solver the Newton steps and tangents use (`harmonic_balance.linear_solver`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SolverChoice {
-    /// The dense LU always.
-    #[default]
+    /// The dense LU always, on a dense Jacobian.
     Dense,
     /// The cheaper of the dense LU and the block Woodbury solve by the flop model of the module
-    /// documentation, per matrix (the dense LU for systems below [`AUTO_MIN_UNKNOWNS`]).
+    /// documentation, per matrix; systems of at least [`AUTO_MIN_UNKNOWNS`] unknowns with a
+    /// block partition store their Jacobian by blocks ([`BlockJacobian`]), smaller ones dense
+    /// (and are solved by the dense LU).
+    #[default]
     Auto,
-    /// The block Woodbury solve whenever a block partition is known (the dense LU when a block
-    /// is singular or the backward error is too large).
+    /// The block Woodbury solve whenever a block partition is known, on a block-stored Jacobian
+    /// (the dense LU when a block is singular or the backward error is too large).
     Structured,
 }
 
@@ -58,18 +69,22 @@ pub enum SolverChoice {
 /// millisecond.
 pub const AUTO_MIN_UNKNOWNS: usize = 400;
 
-/// Largest backward error ‖b − A x‖∞ / (‖A‖∞ ‖x‖∞ + ‖b‖∞) of an accepted structured solve
-/// (after at most [`REFINEMENTS`] steps of iterative refinement on the same factors).
+/// Largest backward error ‖b − A x‖∞ / (‖A‖₁ ‖x‖∞ + ‖b‖∞) of an accepted structured solve
+/// (after at most [`REFINEMENTS`] steps of iterative refinement on the same factors), and of a
+/// solve on the factors of a nearby matrix ([`LinearSolver::solve_near`]).
 pub const BACKWARD_ERROR: f64 = 1e-12;
 
 /// Most steps of iterative refinement of a structured solve.
 pub const REFINEMENTS: usize = 2;
 
+/// Most steps of iterative refinement of a solve on the factors of a nearby matrix.
+pub const NEAR_REFINEMENTS: usize = 4;
+
 /// Relative threshold of the rank of a component of E (|r_ii| of its column-pivoted QR against
 /// the largest).
 const RANK_TOLERANCE: f64 = 1e-13;
 
-/// Counts of the solves of the process (all [`LinearSolver`]s), for reports and benchmarks.
+/// Counts of the solves of a thread (all [`LinearSolver`]s), for reports and benchmarks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SolverStats {
     /// Solves by the dense LU (including fallbacks).
@@ -83,23 +98,48 @@ pub struct SolverStats {
     pub rank_sum: usize,
     /// Sum of the sizes of the structured systems (to compare with `rank_sum`).
     pub size_sum: usize,
+    /// Factorisations (dense LUs and block factorisations with their capacitance matrix);
+    /// the solves beyond them reused factors ([`LinearSolver::solve_near`]).
+    pub factorizations: usize,
 }
 
-static DENSE: AtomicUsize = AtomicUsize::new(0);
-static STRUCTURED: AtomicUsize = AtomicUsize::new(0);
-static FALLBACKS: AtomicUsize = AtomicUsize::new(0);
-static RANK_SUM: AtomicUsize = AtomicUsize::new(0);
-static SIZE_SUM: AtomicUsize = AtomicUsize::new(0);
+thread_local! {
+    static STATS: Cell<SolverStats> = const { Cell::new(SolverStats {
+        dense: 0,
+        structured: 0,
+        fallbacks: 0,
+        rank_sum: 0,
+        size_sum: 0,
+        factorizations: 0,
+    }) };
+}
 
-/// The counts of every solve of this process so far.
+/// The counts of the solves run on this thread so far (a Newton iteration solves on the thread
+/// that runs it; a curve traced beside others in a rayon pool may include theirs when its
+/// thread helps with them while waiting).
 pub fn stats() -> SolverStats {
-    SolverStats {
-        dense: DENSE.load(Ordering::Relaxed),
-        structured: STRUCTURED.load(Ordering::Relaxed),
-        fallbacks: FALLBACKS.load(Ordering::Relaxed),
-        rank_sum: RANK_SUM.load(Ordering::Relaxed),
-        size_sum: SIZE_SUM.load(Ordering::Relaxed),
-    }
+    STATS.with(Cell::get)
+}
+
+/// Changes this thread's counts.
+fn record(f: impl FnOnce(&mut SolverStats)) {
+    STATS.with(|s| {
+        let mut v = s.get();
+        f(&mut v);
+        s.set(v);
+    });
+}
+
+/// Counts one solve on `path` of a system of `n` unknowns.
+fn count(path: SolvePath, n: usize) {
+    record(|s| match path {
+        SolvePath::Dense => s.dense += 1,
+        SolvePath::Structured { rank } => {
+            s.structured += 1;
+            s.rank_sum += rank;
+            s.size_sum += n;
+        }
+    });
 }
 
 /// The linear solver of Newton steps and tangents: the block partition of the matrices it will
@@ -110,10 +150,112 @@ pub struct LinearSolver {
     choice: SolverChoice,
 }
 
+/// Factors of a matrix from [`LinearSolver::factor_solve`], to solve further right-hand sides
+/// with ([`Factored::solve`], [`LinearSolver::solve_near`]).
+pub struct Factored {
+    kind: FactorKind,
+    n: usize,
+}
+
+enum FactorKind {
+    Dense { lu: PartialPivLu<f64>, sign: f64 },
+    Structured(Box<Woodbury>),
+}
+
+impl Factored {
+    /// sign det A (±1).
+    pub fn sign(&self) -> f64 {
+        match &self.kind {
+            FactorKind::Dense { sign, .. } => *sign,
+            FactorKind::Structured(w) => w.sign,
+        }
+    }
+
+    /// The path of these factors.
+    pub fn path(&self) -> SolvePath {
+        match &self.kind {
+            FactorKind::Dense { .. } => SolvePath::Dense,
+            FactorKind::Structured(w) => SolvePath::Structured { rank: w.rank() },
+        }
+    }
+
+    /// x = A⁻¹ b on the factors (no refinement); `None` if x is not finite.
+    pub fn solve(&self, b: &[f64]) -> Option<Vec<f64>> {
+        let x = match &self.kind {
+            FactorKind::Dense { lu, .. } => {
+                let mut x = faer::Col::from_fn(b.len(), |i| b[i]);
+                lu.solve_in_place(x.as_mut());
+                x.iter().copied().collect::<Vec<f64>>()
+            }
+            FactorKind::Structured(w) => w.apply(b),
+        };
+        x.iter().all(|v| v.is_finite()).then_some(x)
+    }
+}
+
+/// A matrix as the checks read it.
+#[derive(Clone, Copy)]
+enum View<'a> {
+    Dense(MatRef<'a, f64>),
+    Blocks(&'a BlockJacobian),
+}
+
+impl<'a> View<'a> {
+    fn of(a: &'a Jacobian) -> View<'a> {
+        match a {
+            Jacobian::Dense(m) => View::Dense(m.as_ref()),
+            Jacobian::Blocks(b) => View::Blocks(b),
+        }
+    }
+
+    /// A x.
+    fn mul_vec(self, x: &[f64]) -> Vec<f64> {
+        match self {
+            View::Dense(m) => {
+                let mut y = faer::Col::<f64>::zeros(m.nrows());
+                faer::linalg::matmul::matmul(
+                    y.as_mut(),
+                    Accum::Replace,
+                    m,
+                    faer::ColRef::from_slice(x),
+                    1.0,
+                    faer::get_global_parallelism(),
+                );
+                y.iter().copied().collect()
+            }
+            View::Blocks(b) => b.mul_vec(x),
+        }
+    }
+
+    /// ‖A‖₁ (max column sum).
+    fn norm_1(self) -> f64 {
+        match self {
+            View::Dense(m) => (0..m.ncols())
+                .into_par_iter()
+                .map(|j| m.col(j).iter().map(|v| v.abs()).sum::<f64>())
+                .reduce(|| 0.0, f64::max),
+            View::Blocks(b) => b.norm_1(),
+        }
+    }
+}
+
+/// ‖b − A x‖∞ / (‖A‖ ‖x‖∞ + ‖b‖∞) and b − A x.
+fn backward_error(a: View<'_>, norm_a: f64, x: &[f64], b: &[f64]) -> (f64, Vec<f64>) {
+    let inf = |v: &[f64]| v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let ax = a.mul_vec(x);
+    let r: Vec<f64> = b.iter().zip(&ax).map(|(b, a)| b - a).collect();
+    let scale = norm_a * inf(x) + inf(b);
+    let eta = if scale > 0.0 { inf(&r) / scale } else { 0.0 };
+    (eta, r)
+}
+
 impl LinearSolver {
     /// A solver that always uses the dense LU.
     pub fn dense() -> LinearSolver {
-        LinearSolver::default()
+        LinearSolver {
+            blocks: Vec::new(),
+            choice: SolverChoice::Dense,
+        }
     }
 
     /// A solver for matrices whose leading diagonal blocks have the sizes `blocks` (in order;
@@ -121,6 +263,33 @@ impl LinearSolver {
     /// no partition, dense LU).
     pub fn new(blocks: Vec<usize>, choice: SolverChoice) -> LinearSolver {
         LinearSolver { blocks, choice }
+    }
+
+    /// Whether the Jacobians of `dim` unknowns are stored by blocks: a partition of `dim` is
+    /// known and the choice is [`SolverChoice::Structured`], or [`SolverChoice::Auto`] at
+    /// [`AUTO_MIN_UNKNOWNS`] unknowns or more.
+    pub fn stores_blocks(&self, dim: usize) -> bool {
+        let known = !self.blocks.is_empty() && self.blocks.iter().sum::<usize>() == dim;
+        known
+            && match self.choice {
+                SolverChoice::Dense => false,
+                SolverChoice::Structured => true,
+                SolverChoice::Auto => dim >= AUTO_MIN_UNKNOWNS,
+            }
+    }
+
+    /// Zeroed storage for the linearization of a system of `dim` unknowns: the Jacobian
+    /// block-stored when [`LinearSolver::stores_blocks`], dense otherwise.
+    pub fn linearization(&self, dim: usize) -> Linearization {
+        if self.stores_blocks(dim) {
+            Linearization {
+                residual: vec![0.0; dim],
+                jacobian: Jacobian::Blocks(BlockJacobian::new(&self.blocks)),
+                d_parameter: vec![0.0; dim],
+            }
+        } else {
+            Linearization::zeros(dim)
+        }
     }
 
     /// Solves A x = b; `None` when A is (numerically) singular or x is not finite.
@@ -133,40 +302,127 @@ impl LinearSolver {
         self.solve_path(a, b).0
     }
 
-    /// [`LinearSolver::solve_signed`] and the path that solved (or failed).
+    /// Whether a dense matrix of order `n` is tried on the structured path: its blocks are
+    /// known (up to a border of at most 4 rows) and the choice is structured, or automatic from
+    /// [`AUTO_MIN_UNKNOWNS`] on.
+    fn splits_dense(&self, n: usize) -> bool {
+        let inner: usize = self.blocks.iter().sum();
+        let partitioned = !self.blocks.is_empty() && inner <= n && n - inner <= 4;
+        partitioned
+            && match self.choice {
+                SolverChoice::Dense => false,
+                SolverChoice::Structured => true,
+                SolverChoice::Auto => n >= AUTO_MIN_UNKNOWNS,
+            }
+    }
+
+    /// [`LinearSolver::solve_signed`] and the path that solved (or failed), A stored dense.
     pub fn solve_path(
         &self,
         a: MatRef<'_, f64>,
         b: &[f64],
     ) -> (Option<(Vec<f64>, f64)>, SolvePath) {
         let n = b.len();
-        let inner: usize = self.blocks.iter().sum();
-        let partitioned = !self.blocks.is_empty() && inner <= n && n - inner <= 4;
-        let try_structured = partitioned
-            && match self.choice {
-                SolverChoice::Dense => false,
-                SolverChoice::Structured => true,
-                SolverChoice::Auto => n >= AUTO_MIN_UNKNOWNS,
-            };
-        if try_structured {
-            match Woodbury::factor(a, &self.blocks, self.choice == SolverChoice::Auto) {
+        if self.splits_dense(n) {
+            let split = Split::dense(a, &self.blocks);
+            match Woodbury::factor(split, self.choice == SolverChoice::Auto) {
                 Decision::Dense => {}
                 Decision::Failed => {
-                    FALLBACKS.fetch_add(1, Ordering::Relaxed);
+                    record(|s| s.fallbacks += 1);
                 }
                 Decision::Structured(w) => {
-                    if let Some(x) = w.solve_checked(a, b) {
-                        STRUCTURED.fetch_add(1, Ordering::Relaxed);
-                        RANK_SUM.fetch_add(w.rank(), Ordering::Relaxed);
-                        SIZE_SUM.fetch_add(n, Ordering::Relaxed);
-                        return (Some((x, w.sign)), SolvePath::Structured { rank: w.rank() });
+                    let a = View::Dense(a);
+                    if let Some(x) = w.solve_checked(a, a.norm_1(), b) {
+                        let path = SolvePath::Structured { rank: w.rank() };
+                        count(path, n);
+                        return (Some((x, w.sign)), path);
                     }
-                    FALLBACKS.fetch_add(1, Ordering::Relaxed);
+                    record(|s| s.fallbacks += 1);
                 }
             }
         }
-        DENSE.fetch_add(1, Ordering::Relaxed);
+        record(|s| s.factorizations += 1);
+        count(SolvePath::Dense, n);
         (solve_dense_signed_ref(a, b), SolvePath::Dense)
+    }
+
+    /// Factorises A (dense or block-stored) by the chosen path and solves A x = b (a structured
+    /// solve checked by its backward error, [`BACKWARD_ERROR`], and refined; the dense LU when
+    /// that fails). Returns x and the factors; `None` when A is (numerically) singular or x is
+    /// not finite.
+    pub fn factor_solve(&self, a: &Jacobian, b: &[f64]) -> Option<(Vec<f64>, Factored)> {
+        let n = b.len();
+        let split = match a {
+            Jacobian::Blocks(m) if self.choice != SolverChoice::Dense => Some(Split::blocks(m)),
+            Jacobian::Dense(m) => self
+                .splits_dense(n)
+                .then(|| Split::dense(m.as_ref(), &self.blocks)),
+            Jacobian::Blocks(_) => None,
+        };
+        if let Some(split) = split {
+            match Woodbury::factor(split, self.choice == SolverChoice::Auto) {
+                Decision::Dense => {}
+                Decision::Failed => {
+                    record(|s| s.fallbacks += 1);
+                }
+                Decision::Structured(w) => {
+                    record(|s| s.factorizations += 1);
+                    let view = View::of(a);
+                    if let Some(x) = w.solve_checked(view, view.norm_1(), b) {
+                        let f = Factored {
+                            kind: FactorKind::Structured(w),
+                            n,
+                        };
+                        count(f.path(), n);
+                        return Some((x, f));
+                    }
+                    record(|s| s.fallbacks += 1);
+                }
+            }
+        }
+        record(|s| s.factorizations += 1);
+        count(SolvePath::Dense, n);
+        let lu = match a {
+            Jacobian::Dense(m) => m.partial_piv_lu(),
+            Jacobian::Blocks(m) => m.to_dense().partial_piv_lu(),
+        };
+        let sign = lu_sign(&lu)?;
+        let f = Factored {
+            kind: FactorKind::Dense { lu, sign },
+            n,
+        };
+        let x = f.solve(b)?;
+        Some((x, f))
+    }
+
+    /// Solves A x = b with the factors `near` of a nearby matrix of the same order (e.g. the
+    /// Jacobian of the previous Newton iterate), refined on A by at most [`NEAR_REFINEMENTS`]
+    /// steps until the backward error is at most [`BACKWARD_ERROR`]; then sign det A = sign det
+    /// of the nearby matrix, returned as well (the refinement contracts: I − F⁻¹A has norm
+    /// below 1 on the iterates, so F⁻¹A has no eigenvalue on the negative real axis). `None`
+    /// when the refinement does not reach the threshold (factorise A instead).
+    pub fn solve_near(&self, near: &Factored, a: &Jacobian, b: &[f64]) -> Option<(Vec<f64>, f64)> {
+        if near.n != a.dim() || b.len() != a.dim() {
+            return None;
+        }
+        let a = View::of(a);
+        let norm_a = a.norm_1();
+        let mut x = near.solve(b)?;
+        let mut previous = f64::INFINITY;
+        for _ in 0..=NEAR_REFINEMENTS {
+            let (eta, r) = backward_error(a, norm_a, &x, b);
+            if !eta.is_finite() || eta > 0.5 * previous {
+                return None;
+            }
+            if eta <= BACKWARD_ERROR {
+                count(near.path(), b.len());
+                return Some((x, near.sign()));
+            }
+            previous = eta;
+            let dx = near.solve(&r)?;
+            x.iter_mut().zip(dx).for_each(|(xi, d)| *xi += d);
+        }
+        None
     }
 }
 
@@ -190,6 +446,117 @@ enum Decision {
     Failed,
     /// The factors.
     Structured(Box<Woodbury>),
+}
+
+/// A matrix split into the parts of the Woodbury solve.
+struct Split<'a> {
+    n: usize,
+    /// First row of each diagonal block, then the number of block rows.
+    starts: Vec<usize>,
+    /// The diagonal blocks.
+    blocks: Vec<MatRef<'a, f64>>,
+    /// The off-block entries of each block column (row, value).
+    entries: Vec<Vec<(usize, f64)>>,
+    /// The border's columns (all n rows) and rows (the block columns).
+    border_cols: Vec<Vec<f64>>,
+    border_rows: Vec<Vec<f64>>,
+}
+
+impl<'a> Split<'a> {
+    /// A dense matrix over the blocks `blocks` (the rows and columns after them a border).
+    fn dense(a: MatRef<'a, f64>, blocks: &[usize]) -> Split<'a> {
+        let n = a.nrows();
+        let starts = starts_of(blocks);
+        let inner = starts[starts.len() - 1];
+        let block_of = {
+            let mut b = vec![0usize; inner];
+            for (k, w) in starts.windows(2).enumerate() {
+                b[w[0]..w[1]].iter_mut().for_each(|v| *v = k);
+            }
+            b
+        };
+        // off-block entries of the inner part, column by column (in parallel)
+        let entries: Vec<Vec<(usize, f64)>> = (0..inner)
+            .into_par_iter()
+            .map(|j| {
+                let col = a.col(j);
+                let (s, e) = (starts[block_of[j]], starts[block_of[j] + 1]);
+                (0..s)
+                    .chain(e..inner)
+                    .filter_map(|i| (col[i] != 0.0).then_some((i, col[i])))
+                    .collect()
+            })
+            .collect();
+        let blocks = starts
+            .windows(2)
+            .map(|w| a.submatrix(w[0], w[0], w[1] - w[0], w[1] - w[0]))
+            .collect();
+        let border_cols = (inner..n)
+            .map(|c| (0..n).map(|i| a[(i, c)]).collect())
+            .collect();
+        let border_rows = (inner..n)
+            .map(|r| (0..inner).map(|j| a[(r, j)]).collect())
+            .collect();
+        Split {
+            n,
+            starts,
+            blocks,
+            entries,
+            border_cols,
+            border_rows,
+        }
+    }
+
+    /// A block-stored matrix.
+    fn blocks(m: &'a BlockJacobian) -> Split<'a> {
+        let starts = m.starts().to_vec();
+        let inner = m.inner();
+        let mut entries: Vec<Vec<(usize, f64)>> = vec![Vec::new(); inner];
+        let (off, coalesced) = m.off_block_stored();
+        for &(i, j, v) in off {
+            entries[j].push((i, v));
+        }
+        if !coalesced {
+            for col in &mut entries {
+                col.sort_by_key(|e| e.0);
+                let mut merged: Vec<(usize, f64)> = Vec::with_capacity(col.len());
+                for &(i, v) in col.iter() {
+                    match merged.last_mut() {
+                        Some(last) if last.0 == i => last.1 += v,
+                        _ => merged.push((i, v)),
+                    }
+                }
+                merged.retain(|e| e.1 != 0.0);
+                *col = merged;
+            }
+        }
+        let (border_cols, border_rows) = match m.border() {
+            Some((c, r)) => (vec![c.to_vec()], vec![r.to_vec()]),
+            None => (Vec::new(), Vec::new()),
+        };
+        Split {
+            n: m.dim(),
+            starts,
+            blocks: (0..m.block_sizes().len()).map(|b| m.block(b)).collect(),
+            entries,
+            border_cols,
+            border_rows,
+        }
+    }
+}
+
+/// First row of each block of sizes `blocks`, then their sum.
+fn starts_of(blocks: &[usize]) -> Vec<usize> {
+    let mut starts: Vec<usize> = blocks
+        .iter()
+        .scan(0, |s, &len| {
+            let start = *s;
+            *s += len;
+            Some(start)
+        })
+        .collect();
+    starts.push(blocks.iter().sum());
+    starts
 }
 
 /// One component of E: rows, columns, and E_k = U_k V_kᵀ.
@@ -250,40 +617,18 @@ pub(crate) fn lu_sign(lu: &PartialPivLu<f64>) -> Option<f64> {
 }
 
 impl Woodbury {
-    /// Splits `a` over `blocks` (and the border after them), compresses E and factorises; with
-    /// `auto`, returns [`Decision::Dense`] as soon as the flop model says the dense LU is
-    /// cheaper.
-    fn factor(a: MatRef<'_, f64>, blocks: &[usize], auto: bool) -> Decision {
-        let n = a.nrows();
-        let inner: usize = blocks.iter().sum();
-        let mut starts: Vec<usize> = blocks
-            .iter()
-            .scan(0, |s, &len| {
-                let start = *s;
-                *s += len;
-                Some(start)
-            })
-            .collect();
-        starts.push(inner);
-        let block_of = {
-            let mut b = vec![0usize; inner];
-            for (k, w) in starts.windows(2).enumerate() {
-                b[w[0]..w[1]].iter_mut().for_each(|v| *v = k);
-            }
-            b
-        };
-        // off-block entries of the inner part, column by column (in parallel)
-        let entries: Vec<Vec<(usize, f64)>> = (0..inner)
-            .into_par_iter()
-            .map(|j| {
-                let col = a.col(j);
-                let (s, e) = (starts[block_of[j]], starts[block_of[j] + 1]);
-                (0..s)
-                    .chain(e..inner)
-                    .filter_map(|i| (col[i] != 0.0).then_some((i, col[i])))
-                    .collect()
-            })
-            .collect();
+    /// Compresses E of `split` and factorises; with `auto`, returns [`Decision::Dense`] as soon
+    /// as the flop model says the dense LU is cheaper.
+    fn factor(split: Split<'_>, auto: bool) -> Decision {
+        let Split {
+            n,
+            starts,
+            blocks,
+            entries,
+            border_cols,
+            border_rows,
+        } = split;
+        let inner = starts[starts.len() - 1];
         // connected components: rows are nodes 0..inner, columns inner..2 inner
         let mut parent: Vec<usize> = (0..2 * inner).collect();
         fn find(p: &mut [usize], mut i: usize) -> usize {
@@ -323,10 +668,9 @@ impl Woodbury {
                 g.1.push(node - inner);
             }
         }
-        let border = n - inner;
         let dense_flops = lu_flops(n);
-        let blocks_flops: f64 = blocks.iter().map(|&s| lu_flops(s)).sum();
-        let sq: f64 = blocks.iter().map(|&s| (s * s) as f64).sum();
+        let blocks_flops: f64 = blocks.iter().map(|b| lu_flops(b.nrows())).sum();
+        let sq: f64 = blocks.iter().map(|b| (b.nrows() * b.nrows()) as f64).sum();
         let qr_flops: f64 = groups
             .iter()
             .map(|(r, c)| 2.0 * r.len() as f64 * (c.len().min(r.len()) as f64).powi(2))
@@ -360,12 +704,9 @@ impl Woodbury {
             })
             .collect();
         // the border: columns inner.. (minus the identity block) and rows inner.. (inner columns)
-        for t in 0..border {
+        for (t, (col, row)) in border_cols.iter().zip(&border_rows).enumerate() {
             let c = inner + t;
-            let mut u = Mat::<f64>::zeros(n, 1);
-            for i in 0..n {
-                u[(i, 0)] = a[(i, c)];
-            }
+            let mut u = Mat::<f64>::from_fn(n, 1, |i, _| col[i]);
             u[(c, 0)] -= 1.0;
             pieces.push(Piece {
                 rows: (0..n).collect(),
@@ -377,7 +718,7 @@ impl Woodbury {
                 rows: vec![c],
                 cols: (0..inner).collect(),
                 u: Mat::from_fn(1, 1, |_, _| 1.0),
-                vt: Mat::from_fn(1, inner, |_, j| a[(c, j)]),
+                vt: Mat::from_fn(1, inner, |_, j| row[j]),
             });
         }
         let offsets: Vec<usize> = pieces
@@ -397,13 +738,11 @@ impl Woodbury {
         if auto && structured_flops > 0.5 * dense_flops {
             return Decision::Dense;
         }
-        // block factors
-        let lus: Vec<Option<PartialPivLu<f64>>> = starts
-            .windows(2)
-            .map(|w| {
-                let lu = a
-                    .submatrix(w[0], w[0], w[1] - w[0], w[1] - w[0])
-                    .partial_piv_lu();
+        // block factors (in parallel over the blocks)
+        let lus: Vec<Option<PartialPivLu<f64>>> = blocks
+            .par_iter()
+            .map(|b| {
+                let lu = b.partial_piv_lu();
                 lu_sign(&lu).is_some().then_some(lu)
             })
             .collect();
@@ -488,13 +827,9 @@ impl Woodbury {
     }
 
     /// x = A⁻¹ b refined until its backward error is at most [`BACKWARD_ERROR`]; `None` if it
-    /// is not within [`REFINEMENTS`] steps or x is not finite.
-    fn solve_checked(&self, a: MatRef<'_, f64>, b: &[f64]) -> Option<Vec<f64>> {
-        // ‖A‖₁ (A is read by columns) in place of ‖A‖∞: a threshold, not a bound
-        let norm_a = (0..self.n)
-            .into_par_iter()
-            .map(|j| a.col(j).iter().map(|v| v.abs()).sum::<f64>())
-            .reduce(|| 0.0, f64::max);
+    /// is not within [`REFINEMENTS`] steps or x is not finite. `norm_a` is ‖A‖₁ (in place of
+    /// ‖A‖∞: a threshold, not a bound).
+    fn solve_checked(&self, a: View<'_>, norm_a: f64, b: &[f64]) -> Option<Vec<f64>> {
         let inf = |v: &[f64]| v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
         let norm_b = inf(b);
         let mut x = self.apply(b);
@@ -502,18 +837,7 @@ impl Woodbury {
             if !x.iter().all(|v| v.is_finite()) {
                 return None;
             }
-            let xm = faer::ColRef::from_slice(&x);
-            let mut r = faer::Col::from_fn(self.n, |i| b[i]);
-            faer::linalg::matmul::matmul(
-                r.as_mut(),
-                Accum::Add,
-                a,
-                xm,
-                -1.0,
-                faer::get_global_parallelism(),
-            );
-            let r: Vec<f64> = r.iter().copied().collect();
-            let eta = inf(&r) / (norm_a * inf(&x) + norm_b);
+            let (eta, r) = backward_error(a, norm_a, &x, b);
             if eta <= BACKWARD_ERROR || norm_b == 0.0 {
                 return Some(x);
             }
@@ -636,5 +960,51 @@ mod tests {
             LinearSolver::new(blocks, SolverChoice::Auto).solve_path(a.as_ref(), &b);
         assert!(solved.is_some());
         assert_eq!(path, SolvePath::Dense);
+    }
+
+    /// A solve on the factors of a nearby matrix (A with one block entry moved by 1e-4) gives
+    /// the dense solution of A and its determinant sign; from the factors of a matrix whose
+    /// determinant has the other sign the refinement does not converge and `None` tells the
+    /// caller to factorise.
+    #[test]
+    fn solve_near_refines_on_nearby_factors() {
+        let (a, blocks) = example(true, 0.5);
+        let n = a.nrows();
+        let b: Vec<f64> = (0..n).map(|i| noise(3000 + i)).collect();
+        let (xd, sd) = solve_dense_signed_ref(a.as_ref(), &b).unwrap();
+        let scale = xd.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        for choice in [SolverChoice::Dense, SolverChoice::Structured] {
+            let solver = LinearSolver::new(blocks.clone(), choice);
+            let mut near = a.clone();
+            near[(20, 20)] += 1e-4;
+            let (_, f) = solver
+                .factor_solve(&Jacobian::Dense(near.clone()), &b)
+                .unwrap();
+            let (x, sign) = solver
+                .solve_near(&f, &Jacobian::Dense(a.clone()), &b)
+                .unwrap();
+            let err = x
+                .iter()
+                .zip(&xd)
+                .map(|(p, q)| (p - q).abs())
+                .fold(0.0, f64::max);
+            assert!(err <= 1e-11 * scale, "{choice:?}: {err:e}");
+            assert_eq!(sign, sd, "{choice:?}");
+            // far: the diagonal entry moved across the sign change of det A (det is linear in
+            // it; `sign_and_auto` finds both signs between −5 and 7)
+            let far = [-20.0, -5.0, -1.0, 7.0, 20.0]
+                .iter()
+                .map(|&v| {
+                    let mut m = a.clone();
+                    m[(20, 20)] = v;
+                    m
+                })
+                .find(|m| solve_dense_signed_ref(m.as_ref(), &b).unwrap().1 != sd)
+                .expect("a matrix with the other determinant sign");
+            let (_, f) = solver.factor_solve(&Jacobian::Dense(far), &b).unwrap();
+            assert!(solver
+                .solve_near(&f, &Jacobian::Dense(a.clone()), &b)
+                .is_none());
+        }
     }
 }

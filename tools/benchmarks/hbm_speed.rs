@@ -12,7 +12,7 @@
 //! iterations; the predictor's tangent solves are included in the per-point time), the linear
 //! solves by path (dense LU or structured, with the mean rank of the low-rank correction), then
 //! the split of one Newton iteration at the last point. KEY=VALUE overrides the case:
-//! `solver=dense|auto|structured` (`harmonic_balance.linear_solver`), `n0=N` (every contact's
+//! `solver=dense|auto|structured[,...]` (`harmonic_balance.linear_solver`), `n0=N` (every contact's
 //! preload), `start=F` (`continuation.start`, in the case's unit).
 //!
 //! `synthetic`: CONTACT_DOFS / 6 node-to-node pairs (frames along x, y, z; k_t = k_n = 1 N/m,
@@ -24,10 +24,16 @@
 //!
 //! The split (best of `REPEAT` runs, wall clock, `faer::get_global_parallelism` threads):
 //! condensation of the linear part at ω; AFT = contact forces alone (inverse DFT, contact law
-//! march, DFT); contact Jacobian = forces with the analytic Jacobian minus forces alone;
-//! linear assembly = the whole residual + Jacobian evaluation minus the contact part; dense LU
-//! = faer's partial-pivoting LU and solve of the Jacobian (`nonlinear::solve_dense`); structured
-//! solve = the block LUs and low-rank correction of `nonlinear::linsolve` on the same Jacobian.
+//! march, DFT); contact Jacobian = forces with the analytic Jacobian minus forces alone, into a
+//! dense matrix and into the block storage of `harmonics::BlockJacobian`; linear assembly = the
+//! whole residual + Jacobian evaluation minus the contact part; the residual alone (what a
+//! damping trial evaluates); dense LU = faer's partial-pivoting LU and solve of the Jacobian
+//! (`nonlinear::solve_dense`); structured solve = the block LUs and low-rank correction of
+//! `nonlinear::linsolve` on the block-stored Jacobian; and the path the automatic choice takes.
+//!
+//! `solver=` takes a comma-separated list (e.g. `solver=auto,dense`): the continuation is traced
+//! once per solver in the same process, each with its own peak memory (the peak is reset before
+//! each, `/proc/self/clear_refs`), and the points are compared with the previous solver's.
 
 #[path = "../../tests/support/hbm.rs"]
 mod hbm_support;
@@ -125,16 +131,22 @@ fn best<T>(mut f: impl FnMut() -> T) -> (f64, f64) {
 fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<()> {
     let mut case = Case::load(path)?;
     case.harmonic_balance.harmonics = h;
+    let mut solvers = vec![case.harmonic_balance.linear_solver];
     for o in overrides {
         let (key, value) = o.split_once('=').expect("KEY=VALUE");
         match key {
             "solver" => {
-                case.harmonic_balance.linear_solver = match value {
-                    "dense" => LinearSolverKey::Dense,
-                    "auto" => LinearSolverKey::Auto,
-                    "structured" => LinearSolverKey::Structured,
-                    other => panic!("solver={other}: dense, auto or structured"),
-                }
+                solvers = value
+                    .split(',')
+                    .map(|v| match v {
+                        "dense" => LinearSolverKey::Dense,
+                        "auto" => LinearSolverKey::Auto,
+                        "structured" => LinearSolverKey::Structured,
+                        other => {
+                            panic!("solver={other}: dense, auto or structured (comma-separated)")
+                        }
+                    })
+                    .collect()
             }
             "n0" => {
                 let n0: f64 = value.parse().expect("n0=NUMBER");
@@ -154,6 +166,7 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
     let interfaces = build_interfaces(&case, mesh, rom.cyclic.as_ref())?;
     let problem = SectorProblem::build(&case, &rom, mesh, &interfaces)?;
     let system = problem.system()?;
+    drop((sm, rom, interfaces));
     eprintln!(
         "setup (model, reduction, interfaces) {:.1} s, peak RSS {:.2} GB; H = {h}, N_t = {}, {} contact DOF, {} unknowns",
         t.elapsed().as_secs_f64(),
@@ -166,38 +179,85 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
         system: &system,
         level: 1.0,
     };
-    let mut opts = case_continuation(&case)?;
-    opts.max_points = points;
-    let (t, c) = (Instant::now(), cpu_seconds());
-    let before = linsolve::stats();
-    let path = trace(&fp, &opts, &mut |_| {})?;
-    let (wall, cpu) = (t.elapsed().as_secs_f64(), cpu_seconds() - c);
-    let after = linsolve::stats();
-    let iterations: usize = path.points.iter().map(|p| p.iterations).sum();
-    let n = path.points.len();
+    let mut last: Option<Vec<(f64, Vec<f64>)>> = None;
+    for solver in solvers {
+        case.harmonic_balance.linear_solver = solver;
+        let mut opts = case_continuation(&case)?;
+        opts.max_points = points;
+        let rss_before = reset_peak_rss();
+        let (t, c) = (Instant::now(), cpu_seconds());
+        let before = linsolve::stats();
+        let path = trace(&fp, &opts, &mut |_| {})?;
+        let (wall, cpu) = (t.elapsed().as_secs_f64(), cpu_seconds() - c);
+        let after = linsolve::stats();
+        let iterations: usize = path.points.iter().map(|p| p.iterations).sum();
+        let n = path.points.len();
+        println!(
+            "sector, {:?}: {n} points ({:.2} → {:.2} Hz, {} retries), {iterations} Newton iterations, {:.3} s per point, {:.4} s per iteration (whole continuation {wall:.2} s, CPU {cpu:.2} s: {:.2} s per point, {:.2} s per iteration)",
+            opts.newton.linear_solver,
+            path.points[0].parameter / (2.0 * PI),
+            path.points[n - 1].parameter / (2.0 * PI),
+            path.retries,
+            wall / n as f64,
+            wall / iterations.max(1) as f64,
+            cpu / n as f64,
+            cpu / iterations.max(1) as f64
+        );
+        let structured = after.structured - before.structured;
+        println!(
+            "  linear solves: {} dense LU, {structured} structured (mean rank {:.0} = {:.1} % of the unknowns), {} fallbacks to the dense LU, {} factorisations; peak RSS of the continuation {:.2} GB (resident before it {rss_before:.2} GB)",
+            after.dense - before.dense,
+            (after.rank_sum - before.rank_sum) as f64 / structured.max(1) as f64,
+            100.0 * (after.rank_sum - before.rank_sum) as f64
+                / (after.size_sum - before.size_sum).max(1) as f64,
+            after.fallbacks - before.fallbacks,
+            after.factorizations - before.factorizations,
+            peak_rss_gb()
+        );
+        let points: Vec<(f64, Vec<f64>)> = path
+            .points
+            .iter()
+            .map(|p| (p.parameter, p.x.clone()))
+            .collect();
+        if let Some(previous) = &last {
+            print_difference(previous, &points);
+        }
+        last = Some(points);
+        if let Some(p) = path.points.last() {
+            split(&fp, &system, &p.x, p.parameter, &p.state)?;
+        }
+    }
+    Ok(())
+}
+
+/// The largest relative difference of two paths' points (unknowns and parameter).
+fn print_difference(a: &[(f64, Vec<f64>)], b: &[(f64, Vec<f64>)]) {
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let worst = a
+        .iter()
+        .zip(b)
+        .map(|((pa, xa), (pb, xb))| {
+            let dx: Vec<f64> = xa.iter().zip(xb).map(|(p, q)| p - q).collect();
+            (norm(&dx) / norm(xa)).max((pa - pb).abs() / pa.abs())
+        })
+        .fold(0.0, f64::max);
     println!(
-        "sector: {n} points ({:.2} → {:.2} Hz, {} retries), {iterations} Newton iterations, {:.3} s per point, {:.4} s per iteration (whole continuation {wall:.2} s, CPU {cpu:.2} s: {:.2} s per point, {:.2} s per iteration)",
-        path.points[0].parameter / (2.0 * PI),
-        path.points[n - 1].parameter / (2.0 * PI),
-        path.retries,
-        wall / n as f64,
-        wall / iterations.max(1) as f64,
-        cpu / n as f64,
-        cpu / iterations.max(1) as f64
+        "  same points as the previous solver: {} and {} points, largest relative difference {worst:.1e}",
+        a.len(),
+        b.len()
     );
-    let structured = after.structured - before.structured;
-    println!(
-        "linear solves ({:?}): {} dense LU, {structured} structured (mean rank {:.0} = {:.1} % of the unknowns), {} fallbacks to the dense LU; peak RSS {:.2} GB",
-        opts.newton.linear_solver,
-        after.dense - before.dense,
-        (after.rank_sum - before.rank_sum) as f64 / structured.max(1) as f64,
-        100.0 * (after.rank_sum - before.rank_sum) as f64
-            / (after.size_sum - before.size_sum).max(1) as f64,
-        after.fallbacks - before.fallbacks,
-        peak_rss_gb()
-    );
-    let last = &path.points[n - 1];
-    split(&fp, &system, &last.x, last.parameter, &last.state)
+}
+
+/// Resets the peak resident memory of this process to the current one (Linux: `5` to
+/// /proc/self/clear_refs) and returns the current one (GB).
+fn reset_peak_rss() -> f64 {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmRSS:"))
+        .and_then(|v| v.split_whitespace().next()?.parse::<f64>().ok())
+        .map_or(0.0, |kb| kb / 1024.0 / 1024.0)
 }
 
 /// Times the parts of one Newton iteration at (x, ω) and prints them.
@@ -217,6 +277,49 @@ fn split<F: HarmonicForce>(
         let mut f = vec![0.0; nf];
         force.evaluate(&layout, x, &mut s, &mut f, None).unwrap();
     });
+    let structured = LinearSolver::new(fp.jacobian_blocks(), SolverChoice::Structured);
+    let auto = LinearSolver::new(fp.jacobian_blocks(), SolverChoice::Auto);
+    let mut blocks = structured.linearization(nf).jacobian;
+    let aft_blocks = best(|| {
+        let mut s = state.clone();
+        let mut f = vec![0.0; nf];
+        blocks.clear();
+        force
+            .evaluate_into(
+                &layout,
+                x,
+                omega,
+                &mut s,
+                &mut f,
+                Some(blocks.target()),
+                None,
+            )
+            .unwrap();
+    });
+    let mut lin_blocks = structured.linearization(nf);
+    let whole_blocks = best(|| fp.evaluate(x, omega, state, &mut lin_blocks).unwrap());
+    let residual = best(|| {
+        let mut r = vec![0.0; nf];
+        fp.evaluate_residual(x, omega, state, &mut r).unwrap();
+    });
+    let mut path = None;
+    let structured_solve = best(|| {
+        let (x, f) = structured
+            .factor_solve(&lin_blocks.jacobian, &lin_blocks.residual)
+            .unwrap();
+        path = Some(f.path());
+        x
+    });
+    let mut auto_path = None;
+    let auto_solve = best(|| {
+        let (x, f) = auto
+            .factor_solve(&lin_blocks.jacobian, &lin_blocks.residual)
+            .unwrap();
+        auto_path = Some(f.path());
+        x
+    });
+    drop(lin_blocks);
+    drop(blocks);
     let mut jac = Mat::<f64>::zeros(nf, nf);
     let aft_jac = best(|| {
         let mut s = state.clone();
@@ -229,48 +332,46 @@ fn split<F: HarmonicForce>(
     drop(jac);
     let mut lin = Linearization::zeros(fp.dim());
     let whole = best(|| fp.evaluate(x, omega, state, &mut lin).unwrap());
-    let lu = best(|| solve_dense(&lin.jacobian, &lin.residual).unwrap());
-    let par = faer::get_global_parallelism();
-    faer::set_global_parallelism(faer::Par::Seq);
-    let lu_seq = best(|| solve_dense(&lin.jacobian, &lin.residual).unwrap());
-    faer::set_global_parallelism(par);
-    let solver = LinearSolver::new(fp.jacobian_blocks(), SolverChoice::Structured);
-    let mut rank = None;
-    let structured = best(|| {
-        let (x, path) = solver.solve_path(lin.jacobian.as_ref(), &lin.residual);
-        rank = Some(path);
-        x.unwrap()
-    });
+    let dense = lin.jacobian.as_dense().expect("a dense Jacobian");
+    let lu = best(|| solve_dense(dense, &lin.residual).unwrap());
     let total = whole.0 + lu.0;
     let row = |what: &str, t: (f64, f64)| {
         println!(
-            "  {what:<48} {:>9.4} s {:>5.1} %  (CPU {:.2} s)",
+            "  {what:<52} {:>9.4} s {:>5.1} %  (CPU {:.2} s)",
             t.0,
             100.0 * t.0 / total,
             t.1
         )
     };
     let minus = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0, a.1 - b.1);
-    println!("one Newton iteration, {nf} unknowns (best of {REPEAT}, wall): {total:.4} s");
+    println!("one Newton iteration, {nf} unknowns (best of {REPEAT}, wall; % of the dense iteration {total:.4} s):");
     row("condensation of the linear part", condense);
     row("AFT: contact forces", aft);
     row(
-        "contact Jacobian (forces + Jacobian − forces)",
+        "contact Jacobian, dense (forces + Jacobian − forces)",
         minus(aft_jac, aft),
     );
+    row("contact Jacobian, block-stored", minus(aft_blocks, aft));
     row(
-        "linear assembly (evaluation − contact − cond.)",
+        "linear assembly, dense (evaluation − contact − cond.)",
         minus(minus(whole, aft_jac), condense),
     );
+    row(
+        "linear assembly, block-stored",
+        minus(minus(whole_blocks, aft_blocks), condense),
+    );
+    row("residual alone (a damping trial)", residual);
     row("dense LU + solve", lu);
-    row("structured solve (in place of the dense LU)", structured);
-    println!("  structured path: {rank:?}");
+    row(
+        "structured factorisation + solve (block-stored)",
+        structured_solve,
+    );
+    row("automatic choice: factorisation + solve", auto_solve);
+    println!("  structured path: {path:?}; automatic choice: {auto_path:?}");
+    let structured_iteration = whole_blocks.0 + structured_solve.0;
     println!(
-        "  dense LU + solve on 1 thread: {:.4} s (CPU {:.2} s; wall {:.2}× the parallel one); {:.1} GFLOP/s parallel",
-        lu_seq.0,
-        lu_seq.1,
-        lu_seq.0 / lu.0,
-        2.0 / 3.0 * (nf as f64).powi(3) / lu.0 / 1e9
+        "  iteration: dense {total:.4} s, block-stored + structured {structured_iteration:.4} s ({:.1}×)",
+        total / structured_iteration
     );
     Ok(())
 }
