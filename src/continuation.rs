@@ -28,10 +28,14 @@
 //!   the minimum step, the corner step (see `corner_step`) fixes one coordinate at a time,
 //!   ahead along the secant of the last two points;
 //! - step: s ← s · clamp(n_target / n_iter, ½, 2) after a converged point; on a failed
-//!   corrector, or a tangent turning by more than 60°, the step is halved and the point retried
-//!   (never skipped) — below the minimum step the corner step is tried, and when it fails too
-//!   the path stops with a reported failure and the points converged so far, each with its
-//!   accepted residual;
+//!   corrector, a tangent turning by more than 60°, or an orientation σ that changed within the
+//!   step, the step is halved and the point retried (never skipped). A change of σ above the
+//!   minimum step means the angle rule was fooled: the path folded back within the step (the
+//!   corrected point lies on the returning segment, its tangent oriented by angle points the
+//!   wrong way) — left alone, the path runs back over itself. At the minimum step a change of σ
+//!   is a branch point of the path, passed straight on. Below the minimum step the kink and
+//!   corner steps are tried, and when they fail too the path stops with a reported failure and
+//!   the points converged so far, each with its accepted residual;
 //! - end: the first point beyond λ_end is replaced by the solution at exactly λ_end.
 
 use faer::Mat;
@@ -249,7 +253,13 @@ pub fn trace_from<S: ParameterSystem>(
             opts,
         );
         let (sol, new_tangent, length) = match outcome {
-            Ok((sol, Some(t))) if dot(&t.t, &tangent) >= 0.5 => (sol, t, step),
+            // a forward turn by less than 60° that keeps the orientation σ; at the minimum
+            // step σ may change (a branch point, passed straight on)
+            Ok((sol, Some(t)))
+                if dot(&t.t, &tangent) >= 0.5 && (t.orientation == orientation || at_min) =>
+            {
+                (sol, t, step)
+            }
             // a sharp turn at the minimum step: a corner of the piecewise-linear path, the
             // forward direction from the orientation (at a fold of more than 90° the new
             // tangent points back against the old one)
@@ -258,6 +268,9 @@ pub fn trace_from<S: ParameterSystem>(
                 let why = match other {
                     Err(f) => f,
                     Ok((_, None)) => "singular bordered Jacobian at the corrected point".into(),
+                    Ok((_, Some(t))) if dot(&t.t, &tangent) >= 0.5 => {
+                        "the orientation of the path changed within the step".into()
+                    }
                     Ok(_) => "the tangent turned by more than 60°".into(),
                 };
                 step *= 0.5;
