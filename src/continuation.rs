@@ -20,7 +20,10 @@
 //!   at the minimum step, where up to one initial step is accepted: the offset of the corrected
 //!   point is step · tan θ at a corner turning by θ, independent of the step, so smaller steps
 //!   cannot help there (a non-smooth point of contact: stick, slip or separation setting in
-//!   within one AFT sample), and a segment shorter than the initial step is not skipped;
+//!   within one AFT sample), and a segment shorter than the initial step is not skipped; above
+//!   the minimum step, so is a point whose parameter lies behind the current one while the
+//!   tangents at both ends point forward in it (a jump back to an earlier part of the path,
+//!   which passes within one step of the later part past a resonance of high amplitude);
 //! - corners: the sampled friction law is piecewise linear in the harmonics, so the path is a
 //!   chain of straight segments. Where it turns by more than 60° (only accepted at the minimum
 //!   step) the new tangent takes the orientation σ rather than the angle to the old one, so a
@@ -36,7 +39,9 @@
 //!   is a branch point of the path, passed straight on. Below the minimum step the kink and
 //!   corner steps are tried, and when they fail too the path stops with a reported failure and
 //!   the points converged so far, each with its accepted residual;
-//! - end: the first point beyond λ_end is replaced by the solution at exactly λ_end.
+//! - end: the first point beyond λ_end is replaced by the solution at exactly λ_end; a path that
+//!   turns back by more than half the range, or reaches [`ContinuationOptions::floor`] (ω = 0
+//!   for a frequency response), has left the range.
 
 use faer::Mat;
 
@@ -66,6 +71,10 @@ pub struct ContinuationOptions {
     pub target_iterations: usize,
     /// Newton settings of the start point and the corrector.
     pub newton: NewtonOptions,
+    /// A bound the parameter cannot reach: a point at or beyond it ends the path with
+    /// [`PathEnd::LeftRange`] (a frequency response stops at ω ≤ 0, where the harmonic balance
+    /// has no physical meaning). `None`: no bound besides the range rule.
+    pub floor: Option<f64>,
 }
 
 impl ContinuationOptions {
@@ -80,6 +89,7 @@ impl ContinuationOptions {
             max_points: 20_000,
             target_iterations: 4,
             newton: NewtonOptions::default(),
+            floor: None,
         }
     }
 
@@ -130,7 +140,8 @@ pub enum PathEnd {
     ReachedEnd,
     /// `max_points` points were computed first.
     MaxPoints,
-    /// The path turned back and left the range on the start side.
+    /// The path turned back and left the range on the start side (or reached the parameter's
+    /// bound, [`ContinuationOptions::floor`]).
     LeftRange,
     /// The corrector failed at the minimum step; the message says where and why.
     Failed(String),
@@ -320,6 +331,11 @@ pub fn trace_from<S: ParameterSystem>(
             on_point(&next);
             path.points.push(next);
             path.end = PathEnd::ReachedEnd;
+            return Ok(path);
+        }
+        if opts.floor.is_some_and(|f| next.parameter <= f) {
+            // the point beyond the bound is not kept
+            path.end = PathEnd::LeftRange;
             return Ok(path);
         }
         if direction * (opts.start - next.parameter) > 0.5 * range {
@@ -528,7 +544,11 @@ fn unit_tangent(t: Vec<f64>, orientation: f64) -> Option<Tangent> {
 /// t · (y − y_pred) = 0 reaches arbitrarily far, and near a sharp fold (e.g. where contact
 /// separation sets in within a few AFT samples) Newton can converge on it to a point of another
 /// branch — a jump that would skip the segment in between. Such a point is rejected like a failed
-/// corrector (the step is halved).
+/// corrector (the step is halved). Above the minimum step, so is a point whose parameter lies
+/// behind the current one although the tangents at both ends point forward in it: between them
+/// the parameter would have to turn twice within one step. This is the jump back to an earlier
+/// part of the same path across a resonance of high amplitude, where the unknowns' scale x_s is
+/// the peak and the path before and after the resonance pass close to each other in (u, μ).
 #[allow(clippy::type_complexity)]
 fn correct<S: ParameterSystem>(
     system: &S,
@@ -543,7 +563,15 @@ fn correct<S: ParameterSystem>(
     let mut y: Vec<f64> = done.0.x.iter().map(|x| x / s.x).collect();
     y.push(done.0.parameter / s.lambda);
     let off: Vec<f64> = y.iter().zip(predicted).map(|(a, b)| a - b).collect();
-    if norm(&off) <= allowance * step {
+    let last = y.len() - 1;
+    let went_back = (y[last] - (predicted[last] - step * tangent[last])) * tangent[last] < 0.0;
+    let kept_direction = done
+        .1
+        .as_ref()
+        .is_some_and(|t| t.t[last] * tangent[last] > 0.0);
+    if allowance <= 1.0 && went_back && kept_direction {
+        Err("the parameter went back within the step although the path's direction in it did not change (a jump to an earlier part of the path)".into())
+    } else if norm(&off) <= allowance * step {
         Ok(done)
     } else {
         Err(format!(

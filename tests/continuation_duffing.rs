@@ -323,3 +323,42 @@ fn failed_corrector_is_reported_with_the_points_kept() {
     .unwrap();
     assert!(e.to_string().contains("start point"), "{e}");
 }
+
+/// The unit circle (x − 1)² + λ² = 1 traced from λ = 0.6 upwards: it turns at λ = 1 and comes back.
+/// With a floor at λ = 0.3 the path ends (left the range) before reaching it, every point kept
+/// above it; without it, the path runs on until the range rule (start − ½ range = 0.1).
+struct Circle;
+
+impl ParameterSystem for Circle {
+    type State = ();
+    fn dim(&self) -> usize {
+        1
+    }
+    fn residual_scale(&self) -> f64 {
+        1.0
+    }
+    fn initial_state(&self) {}
+    fn evaluate(&self, x: &[f64], lambda: f64, _: &(), out: &mut Linearization) -> Result<()> {
+        out.residual[0] = (x[0] - 1.0).powi(2) + lambda * lambda - 1.0;
+        out.jacobian[(0, 0)] = 2.0 * (x[0] - 1.0);
+        out.d_parameter[0] = 2.0 * lambda;
+        Ok(())
+    }
+}
+
+#[test]
+fn a_path_that_reaches_the_parameter_floor_ends_there() {
+    let mut opts = ContinuationOptions::new(0.6, 1.6, 0.02);
+    let free = trace(&Circle, &opts, &mut |_| {}).unwrap();
+    assert_eq!(free.end, PathEnd::LeftRange);
+    let lowest = free.points.last().unwrap().parameter;
+    assert!(lowest < 0.1, "without a floor the path ends at {lowest}");
+    opts.floor = Some(0.3);
+    let bounded = trace(&Circle, &opts, &mut |_| {}).unwrap();
+    assert_eq!(bounded.end, PathEnd::LeftRange);
+    let last = bounded.points.last().unwrap();
+    assert!(bounded.points.iter().all(|p| p.parameter > 0.3));
+    assert!(last.parameter < 0.35, "last point at {}", last.parameter);
+    // the turning point at λ = 1 was passed: x − 1 changed sign
+    assert!((last.x[0] - 1.0) * (bounded.points[0].x[0] - 1.0) < 0.0);
+}

@@ -65,7 +65,11 @@ pub fn frequency_response<F: HarmonicForce>(
     opts.validate()?;
     let fp = FrequencyPath { system, level: 1.0 };
     let (start, start_level) = start_point(&fp, opts)?;
-    let path = trace_from(&fp, opts, start, on_point)?;
+    let frequency_opts = ContinuationOptions {
+        floor: Some(0.0),
+        ..opts.clone()
+    };
+    let path = trace_from(&fp, &frequency_opts, start, on_point)?;
     let points = path
         .points
         .into_iter()
