@@ -151,6 +151,9 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         state: &F::State,
         mut out: Parts<'_>,
     ) -> Result<F::State> {
+        if out.jacobian.is_none() && out.d_omega.is_none() && out.d_level.is_none() {
+            return self.residual_alone(q, omega, level, state, out.residual);
+        }
         let condensed = self.condense_all_applied(q, omega)?;
         out.residual.iter_mut().for_each(|v| *v = 0.0);
         if let Some(d) = out.d_omega.as_deref_mut() {
@@ -177,6 +180,52 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         }
         if let Some(Jacobian::Blocks(b)) = out.jacobian {
             b.coalesce();
+        }
+        Ok(end_state)
+    }
+
+    /// The residual alone: the linear part by [`LinearModel::condensed_residual`] (no condensed
+    /// matrix), in parallel over the harmonics, plus the nonlinear force.
+    fn residual_alone(
+        &self,
+        q: &[f64],
+        omega: f64,
+        level: f64,
+        state: &F::State,
+        residual: &mut [f64],
+    ) -> Result<F::State> {
+        let nd = self.linear.n_condensed();
+        let layout = self.layout;
+        let linear: Vec<Vec<c64>> = (0..=layout.harmonics)
+            .into_par_iter()
+            .map(|n| {
+                let q_n: Vec<c64> = (0..nd)
+                    .map(|i| {
+                        if n == 0 {
+                            c64::new(q[layout.static_index(i)], 0.0)
+                        } else {
+                            let c = layout.cos_index(n, i, nd);
+                            c64::new(q[c], q[c + 1])
+                        }
+                    })
+                    .collect();
+                self.linear.condensed_residual(n, omega, &q_n, level)
+            })
+            .collect::<Result<_>>()?;
+        residual.iter_mut().for_each(|v| *v = 0.0);
+        let mut end_state = state.clone();
+        self.force
+            .evaluate_into(&layout, q, omega, &mut end_state, residual, None, None)?;
+        for (n, r) in linear.iter().enumerate() {
+            for (i, v) in r.iter().enumerate() {
+                if n == 0 {
+                    residual[layout.static_index(i)] += v.re;
+                } else {
+                    let ri = layout.cos_index(n, i, nd);
+                    residual[ri] += v.re;
+                    residual[ri + 1] += v.im;
+                }
+            }
         }
         Ok(end_state)
     }
