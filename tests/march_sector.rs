@@ -6,7 +6,7 @@
 //! - micro-slip: the steady first-harmonic amplitude equals the harmonic balance of
 //!   `nlrom::problem::sector::SectorProblem` (PairSet kinematics, AFT, H = 5) within 1 %;
 //!
-//! A travelling wave (k ≠ 0, N/2) is an input error naming `engine_order` (tests/march_damper.rs).
+//! Travelling waves (k ≠ 0, N/2): tests/march_travelling.rs.
 
 mod support;
 
