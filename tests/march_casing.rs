@@ -657,3 +657,64 @@ fn nlrom_march_writes_temperatures_and_plot_nonsmooth_compares_two_steps() {
     assert!(dir.join("plot.png").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+// ---------------------------------------------------------------------------------------------
+// Craig–Bampton reduced mechanics
+// ---------------------------------------------------------------------------------------------
+
+/// The bundled surrogate `cases/blade_casing.toml` with `extra` appended.
+fn surrogate(extra: &str) -> nlrom::problem::nonsmooth_case::NonsmoothCase {
+    let path = root().join("cases/blade_casing.toml");
+    let text = std::fs::read_to_string(&path).unwrap() + extra;
+    let case = Case::from_str(&text, &path).unwrap();
+    let sm = nlrom::model::build(&case, &mut |_| {}).unwrap();
+    nonsmooth_case(&case, &sm).unwrap()
+}
+
+#[test]
+fn craig_bampton_reduced_blade_follows_the_full_thermoelastic_march() {
+    // The surrogate (1476 displacement and 492 temperature DOF) over 5 ms at h = 1e-5 s against
+    // its Craig–Bampton model (the 7 contact nodes as masters, 21 DOF, plus fixed-interface
+    // modes; the heat rows in contact temperatures and every conduction mode): the middle
+    // contact node's circumferential displacement, temperature and contact force.
+    let full = surrogate("");
+    let steps = 500;
+    let settings = |nc: &nlrom::problem::nonsmooth_case::NonsmoothCase| NonsmoothSettings {
+        steps,
+        ..nc.settings.clone()
+    };
+    let reference = moreau_jean(&full.system, &settings(&full)).unwrap();
+    let middle = 3;
+    let (uy, theta) = (3 * middle + 1, full.response.len() + middle);
+    let errors = |modes: usize| -> (f64, f64, f64, usize) {
+        let rom = surrogate(&format!("\n[reduction]\ninterface_modes = {modes}\n"));
+        assert_eq!(rom.response, full.response);
+        assert_eq!(rom.temperature_nodes, full.temperature_nodes);
+        let h = moreau_jean(&rom.system, &settings(&rom)).unwrap();
+        let (_, t1, f1) = on_grid(&h, 1, 1e-5, middle, theta);
+        let (_, t0, f0) = on_grid(&reference, 1, 1e-5, middle, theta);
+        let (_, u1, _) = on_grid(&h, 1, 1e-5, middle, uy);
+        let (_, u0, _) = on_grid(&reference, 1, 1e-5, middle, uy);
+        let last = h.heat.last().unwrap();
+        assert!(last.residual.abs() < 1e-9 * last.frictional, "{last:?}");
+        (eta(&u1, &u0), eta(&t1, &t0), eta(&f1, &f0), rom.system.n)
+    };
+    let (eu5, et5, ef5, n5) = errors(5);
+    let (eu, et, ef, n) = errors(20);
+    eprintln!("CB 5 modes ({n5} DOF): η u_y {eu5:.2e}, θ {et5:.2e}, λ/h {ef5:.2e}");
+    eprintln!("CB 20 modes ({n} DOF): η u_y {eu:.2e}, θ {et:.2e}, λ/h {ef:.2e}");
+    assert_eq!(n, 21 + 20 + full.system.n - full.system.n_mech);
+    assert!(eu < 2e-4 && et < 1e-6 && ef < 1e-6, "{eu} {et} {ef}");
+    assert!(eu < eu5 && ef < ef5, "{eu} {eu5} {ef} {ef5}");
+}
+
+#[test]
+fn a_casing_case_refuses_an_interface_reduction() {
+    let path = root().join("cases/blade_casing.toml");
+    let text = std::fs::read_to_string(&path).unwrap()
+        + "\n[reduction]\ninterface_modes = 5\ngsi_modes = 3\n";
+    let case = Case::from_str(&text, &path).unwrap();
+    let sm = nlrom::model::build(&case, &mut |_| {}).unwrap();
+    let err = nonsmooth_case(&case, &sm).err().unwrap().to_string();
+    assert!(err.contains("reduction.gsi_modes"), "{err}");
+}

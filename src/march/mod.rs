@@ -22,6 +22,7 @@
 //! | [`lcp`] | the per-step linear complementarity problem: Lemke, enumeration |
 //! | [`moreau_jean`] | the Moreau–Jean θ-method (Thorin et al. 2018, eqs 12–18) |
 //! | [`carpenter`] | Carpenter's explicit forward-increment Lagrange multiplier scheme (Carpenter et al. 1991) |
+//! | [`reduced`] | the nonsmooth model projected on a (Craig–Bampton) basis |
 //!
 //! The march of a case file (a `[damper]`, a model on matrix rows, a reduced sector) is built by
 //! [`crate::problem::march_case`].
@@ -36,6 +37,7 @@ pub mod lowrank;
 pub mod moreau_jean;
 pub mod obstacle;
 pub mod periodic;
+pub mod reduced;
 pub mod schemes;
 pub mod signal;
 pub mod system;

@@ -18,7 +18,7 @@
 //! 4. v_{n+1} = ṽ + M̂⁻¹Hλ (eq. 18, heat rows included), then the position update.
 //!
 //! λ is an impulse (N·s); λ/h is the mean contact force over the step. M̂, M̂⁻¹H and W are formed
-//! once per step size. Without contact and thermal DOF and with γ = 1/2 the scheme is Newmark's
+//! once per step size (by blocks when the heat rows have no mechanical column). Without contact and thermal DOF and with γ = 1/2 the scheme is Newmark's
 //! average acceleration. The mechanical energy balance ([`super::obstacle::EnergyTerms`]) and the
 //! heat balance ([`super::obstacle::HeatTerms`]) are accumulated every step.
 
@@ -49,7 +49,7 @@ pub fn moreau_jean(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsm
                 + h * h * gamma[i] * gamma[j] * sys.stiffness[ij]
         })
         .collect();
-    let lu = StepLu::new(&mhat, n, "the Moreau–Jean iteration matrix M + hγC + h²γ²K")?;
+    let lu = StepSolver::new(&mhat, n, nm)?;
     let b = Blocks::new(sys);
     let m = sys.obstacles.len();
     let columns: Vec<Vec<f64>> = sys.obstacles.iter().map(|o| o.column(n)).collect();
@@ -89,12 +89,14 @@ pub fn moreau_jean(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsm
         let fg: Vec<f64> = (0..n)
             .map(|r| gamma[r] * f1[r] + (1.0 - gamma[r]) * f0[r])
             .collect();
-        let kx = b.k.mul(&x);
-        let kv = b.k.mul(&v);
+        // K x_n + hΓK v_n row block by row block: K_u(x_n + hγ v_n), K_θ(x_n + hγ_θ v_n).
+        let mut ky = Vec::with_capacity(n);
+        for (rows, g) in [(&b.k_u, s.gamma), (&b.k_t, s.gamma_thermal)] {
+            let y: Vec<f64> = x.iter().zip(&v).map(|(a, b)| a + h * g * b).collect();
+            ky.extend(rows.mul(&y));
+        }
         let cv = b.c.mul(&v);
-        let rhs: Vec<f64> = (0..n)
-            .map(|r| -h * (cv[r] + kx[r] - fg[r]) - h * h * gamma[r] * kv[r])
-            .collect();
+        let rhs: Vec<f64> = (0..n).map(|r| -h * (cv[r] + ky[r] - fg[r])).collect();
         let dv = lu.solve(&rhs);
         let mut v1: Vec<f64> = v.iter().zip(&dv).map(|(a, b)| a + b).collect();
         // Active set from the predicted gap g(u_n + h u̇_n / 2).
@@ -183,10 +185,65 @@ pub fn moreau_jean(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsm
     Ok(hist)
 }
 
+/// The Moreau–Jean iteration matrix M̂ factorised once: whole, or, when its thermal rows have
+/// no mechanical column (M^θ· = 0, C^θu = 0, K^θu = 0 as in the thermoelastic model), by blocks,
+/// M̂ = [[A, B], [0, D]]: D Δv_θ = r_θ, then A Δv_u = r_u − B Δv_θ (two smaller factors).
+enum StepSolver {
+    Whole(Box<StepLu>),
+    Blocks(Box<BlockLu>),
+}
+
+/// The factors of [`StepSolver::Blocks`].
+struct BlockLu {
+    a: StepLu,
+    d: StepLu,
+    b: SparseRows,
+    nm: usize,
+}
+
+impl StepSolver {
+    fn new(mhat: &[f64], n: usize, nm: usize) -> Result<Self> {
+        let what = "the Moreau–Jean iteration matrix M + hγC + h²γ²K";
+        let lower_zero = (nm..n).all(|i| (0..nm).all(|j| mhat[i * n + j] == 0.0));
+        if nm == n || nm == 0 || !lower_zero {
+            return Ok(StepSolver::Whole(Box::new(StepLu::new(mhat, n, what)?)));
+        }
+        let sub = |r: std::ops::Range<usize>| -> Vec<f64> {
+            let k = r.len();
+            (0..k * k)
+                .map(|ij| mhat[(r.start + ij / k) * n + r.start + ij % k])
+                .collect()
+        };
+        Ok(StepSolver::Blocks(Box::new(BlockLu {
+            a: StepLu::new(&sub(0..nm), nm, &format!("{what} (mechanical rows)"))?,
+            d: StepLu::new(&sub(nm..n), n - nm, &format!("{what} (heat rows)"))?,
+            b: SparseRows::new(mhat, n, 0..nm, nm..n),
+            nm,
+        })))
+    }
+
+    /// M̂⁻¹ r.
+    fn solve(&self, r: &[f64]) -> Vec<f64> {
+        match self {
+            StepSolver::Whole(lu) => lu.solve(r),
+            StepSolver::Blocks(blocks) => {
+                let BlockLu { a, d, b, nm } = blocks.as_ref();
+                let mut x = vec![0.0; r.len()];
+                let xt = d.solve(&r[*nm..]);
+                x[*nm..].copy_from_slice(&xt);
+                let ru: Vec<f64> = (0..*nm).map(|i| r[i] - b.row_dot(i, &x)).collect();
+                x[..*nm].copy_from_slice(&a.solve(&ru));
+                x
+            }
+        }
+    }
+}
+
 /// The blocks of M, C and K the time loop multiplies by, as sparse rows.
 struct Blocks {
-    /// K and C (all rows and columns).
-    k: SparseRows,
+    /// The mechanical and the thermal rows of K (all columns), and C.
+    k_u: SparseRows,
+    k_t: SparseRows,
     c: SparseRows,
     /// M^uu, C^uu, K^uu.
     m_uu: SparseRows,
@@ -194,23 +251,29 @@ struct Blocks {
     k_uu: SparseRows,
     /// K^uθ (mechanical rows, thermal columns).
     k_ut: SparseRows,
-    /// The thermal rows of C and K.
-    c_th: SparseRows,
-    k_th: SparseRows,
+    /// The sums of the thermal rows of C and K (1ᵀC_θ·, 1ᵀK_θ·), length n.
+    c_th: Vec<f64>,
+    k_th: Vec<f64>,
 }
 
 impl Blocks {
     fn new(sys: &NonsmoothSystem) -> Self {
         let (n, nm) = (sys.n, sys.n_mech);
+        let column_sums = |a: &[f64]| -> Vec<f64> {
+            (0..n)
+                .map(|c| (nm..n).map(|r| a[r * n + c]).sum())
+                .collect()
+        };
         Blocks {
-            k: SparseRows::new(&sys.stiffness, n, 0..n, 0..n),
+            k_u: SparseRows::new(&sys.stiffness, n, 0..nm, 0..n),
+            k_t: SparseRows::new(&sys.stiffness, n, nm..n, 0..n),
             c: SparseRows::new(&sys.damping, n, 0..n, 0..n),
             m_uu: SparseRows::new(&sys.mass, n, 0..nm, 0..nm),
             c_uu: SparseRows::new(&sys.damping, n, 0..nm, 0..nm),
             k_uu: SparseRows::new(&sys.stiffness, n, 0..nm, 0..nm),
             k_ut: SparseRows::new(&sys.stiffness, n, 0..nm, nm..n),
-            c_th: SparseRows::new(&sys.damping, n, nm..n, 0..n),
-            k_th: SparseRows::new(&sys.stiffness, n, nm..n, 0..n),
+            c_th: column_sums(&sys.damping),
+            k_th: column_sums(&sys.stiffness),
         }
     }
 }
@@ -240,7 +303,9 @@ fn accumulate_energy(
     let du: Vec<f64> = (0..nm).map(|r| x1[r] - x0[r]).collect();
     let (kin, strain) = (0.5 * b.m_uu.quad(v1), 0.5 * b.k_uu.quad(x1));
     e.damping += h * b.c_uu.quad(&vg);
-    e.numerical += (gamma - 0.5) * (b.m_uu.quad(&dv) + b.k_uu.quad(&du));
+    if gamma != 0.5 {
+        e.numerical += (gamma - 0.5) * (b.m_uu.quad(&dv) + b.k_uu.quad(&du));
+    }
     e.external += h * (0..nm).map(|r| vg[r] * fg[r]).sum::<f64>();
     let theta_g: Vec<f64> = (0..n).map(|c| x0[c] + gamma * (x1[c] - x0[c])).collect();
     let coupling: f64 = (0..nm).map(|r| vg[r] * b.k_ut.row_dot(r, &theta_g)).sum();
@@ -270,11 +335,13 @@ fn accumulate_heat(
     q: &mut HeatTerms,
 ) {
     let (n, nm) = (sys.n, sys.n_mech);
-    let dx: Vec<f64> = (0..n).map(|c| x1[c] - x0[c]).collect();
-    let xg: Vec<f64> = (0..n).map(|c| x0[c] + gamma_thermal * dx[c]).collect();
-    for (a, r) in (nm..n).enumerate() {
-        q.stored += b.c_th.row_dot(a, &dx);
-        q.exchanged += h * (fg[r] - b.k_th.row_dot(a, &xg));
+    for c in 0..n {
+        let dx = x1[c] - x0[c];
+        q.stored += b.c_th[c] * dx;
+        q.exchanged -= h * b.k_th[c] * (x0[c] + gamma_thermal * dx);
+    }
+    for r in nm..n {
+        q.exchanged += h * fg[r];
         q.frictional += columns
             .iter()
             .zip(lambda)

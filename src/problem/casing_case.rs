@@ -20,7 +20,8 @@
 //! - heat α λ_i into the node's temperature row (W for a force, J for an impulse).
 //!
 //! The load is `[excitation]`'s force per node of its group times cos ωt. The model is dense
-//! (n ≤ [`MAX_DENSE_DOF`]).
+//! (n ≤ [`MAX_DENSE_DOF`]). With `[reduction]` it is then projected on a Craig–Bampton basis
+//! ([`super::casing_rom`]).
 
 use std::collections::HashMap;
 
@@ -274,13 +275,17 @@ pub fn casing_case(case: &Case, sm: &StructuralModel) -> Result<NonsmoothCase> {
             temperature_nodes.push(mesh.node_tags[i]);
         }
     }
-    Ok(NonsmoothCase {
+    let full = NonsmoothCase {
         system: sys,
         settings: march_settings(case, record)?,
         response,
         temperature_nodes,
         reference_temperature: case.thermal.as_ref().map(|t| t.reference_temperature),
-    })
+    };
+    match &case.reduction {
+        Some(red) => super::casing_rom::reduce_casing(case, sm, red, full),
+        None => Ok(full),
+    }
 }
 
 /// The thermal matrices restricted to the free temperature rows, as sparse rows.

@@ -12,6 +12,7 @@
 //! | [`damper`] | the underplatform damper of a `[damper]` table as a time-marching model |
 //! | [`nonsmooth_case`] | a matrix case with `[[obstacle]]` contacts as the model of the nonsmooth schemes |
 //! | [`casing_case`] | a mesh case with `[[casing]]` (and `[thermal]`) as the thermoelastic model of the nonsmooth schemes |
+//! | [`casing_rom`] | the Craig–Bampton reduced casing model (`[reduction]`) |
 //! | [`march_case`] | any case as a time-marching model, by [`crate::case::Case::kind`] |
 //! | [`settings`] | the solver settings of a case's `[continuation]` table |
 //!
@@ -19,6 +20,7 @@
 //! (no mesh, or `[[element]]`), or a reduced sector.
 
 pub mod casing_case;
+pub mod casing_rom;
 pub mod damper;
 pub mod march_case;
 pub mod matrix_case;

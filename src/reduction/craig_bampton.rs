@@ -59,6 +59,9 @@ pub struct CbOptions {
     /// Options of the fixed-interface eigensolver (σ must stay 0: K_ii is factorised once).
     /// Default: [`EigenOptions::default`] with block size [`CB_EIGEN_BLOCK`].
     pub eigen: EigenOptions,
+    /// Also return the basis Ψ, Φ ([`CraigBampton::basis`]) for projecting further matrices
+    /// and loads of the same DOF (memory: n_i × (n_b + n_m) values). Default false.
+    pub keep_basis: bool,
 }
 
 /// Block size of the fixed-interface eigensolver in [`CbOptions::default`]: 16 columns per
@@ -76,6 +79,7 @@ impl Default for CbOptions {
                 block_size: CB_EIGEN_BLOCK,
                 ..EigenOptions::default()
             },
+            keep_basis: false,
         }
     }
 }
@@ -95,6 +99,19 @@ pub struct CraigBampton {
     pub interface_residuals: Vec<f64>,
     /// Wall time of the phases of the reduction.
     pub timings: CbTimings,
+    /// The basis T_CB, with [`CbOptions::keep_basis`].
+    pub basis: Option<CbBasis>,
+}
+
+/// The interior rows of the Craig–Bampton basis T_CB = [[I, 0], [Ψ, Φ]]: the physical
+/// displacement is u_b = q_b on the masters and u_i = Ψ q_b + Φ η on the interior DOF, rows in
+/// the order of [`Partition::interior`], columns in reduced-coordinate order.
+#[derive(Clone, Debug)]
+pub struct CbBasis {
+    /// Static constraint modes Ψ = −K_ii⁻¹ K_ib (n_i × n_b, dimensionless).
+    pub psi: Mat<f64>,
+    /// Fixed-interface modes Φ (n_i × n_m), mass-normalised (Φᵀ M_ii Φ = I).
+    pub phi: Mat<f64>,
 }
 
 /// Wall time and CPU time (s) of the phases of [`craig_bampton`]. CPU time is the process's
@@ -208,6 +225,22 @@ pub fn craig_bampton(
     };
     let modes_s = t0.elapsed().as_secs_f64() - factor_s;
     let cpu2 = process_cpu_s();
+    let basis = if opts.keep_basis {
+        // Ψ = −K_ii⁻¹ K_ib, all master columns in one solve.
+        let mut psi = Mat::<f64>::zeros(n_i, n_b);
+        for j in 0..n_b {
+            for (i, &v) in k_ib.row_idx_of_col(j).zip(k_ib.val_of_col(j)) {
+                psi[(i, j)] = -v;
+            }
+        }
+        factor.solve_in_place(psi.as_mut())?;
+        Some(CbBasis {
+            psi,
+            phi: phi.clone(),
+        })
+    } else {
+        None
+    };
 
     // K_ii is not needed any more: release it before the static-mode blocks are allocated.
     let factor = factor.into_factor();
@@ -238,6 +271,7 @@ pub fn craig_bampton(
             modes_cpu_s: cpu2 - cpu1,
             static_cpu_s: process_cpu_s() - cpu2,
         },
+        basis,
     })
 }
 

@@ -52,7 +52,9 @@ use crate::error::{Error, Result};
 use crate::model::{self, StructuralModel};
 use crate::rom::{HarmonicRom, MasterNode, MasterRole, ReducedDof, Rom};
 
-pub use craig_bampton::{craig_bampton, CbOptions, CbTimings, CraigBampton, CB_EIGEN_BLOCK};
+pub use craig_bampton::{
+    craig_bampton, CbBasis, CbOptions, CbTimings, CraigBampton, CB_EIGEN_BLOCK,
+};
 pub use masters::{case_master_groups, partition, MasterDof, Partition};
 
 /// Number of eigenfrequencies stored per harmonic index in the ROM.
