@@ -42,7 +42,7 @@ const N: usize = 8;
 
 /// The sector8 case: engine order `m`, shroud contact (kt, kn, μ, n0), the excitation `FORCE`
 /// times `scale` per node, H harmonics, a march at `hz` with `steps` per period.
-fn case_text(
+pub fn case_text(
     m: usize,
     contact: [f64; 4],
     scale: f64,
@@ -107,7 +107,7 @@ steady_tolerance = 1e-4
 }
 
 /// max_i |a_i − b_i| / max_i |b_i|.
-fn rel_err(a: &[c64], b: &[c64]) -> f64 {
+pub fn rel_err(a: &[c64], b: &[c64]) -> f64 {
     let scale = b.iter().map(|z| z.norm()).fold(0.0, f64::max);
     let diff = a
         .iter()
