@@ -718,3 +718,66 @@ fn a_casing_case_refuses_an_interface_reduction() {
     let err = nonsmooth_case(&case, &sm).err().unwrap().to_string();
     assert!(err.contains("reduction.gsi_modes"), "{err}");
 }
+
+// ---------------------------------------------------------------------------------------------
+// Step-size study (Thorin et al. 2018, Figs 4–5)
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn step_study_errors_fall_at_first_order_with_the_step() {
+    // tools/validation/step_study.py on the Craig–Bampton surrogate (20 modes), one revolution
+    // (30 ms) from rest in contact (g0 = 0): h = 4e-5, 2e-5, 1e-5 s against h = 2.5e-6 s.
+    let out = std::process::Command::new("python3")
+        .current_dir(root())
+        .arg("tools/validation/step_study.py")
+        .args(["--steps", "4e-5", "2e-5", "1e-5", "--reference", "2.5e-6"])
+        .args(["--modes", "20", "--nlrom", env!("CARGO_BIN_EXE_nlrom")])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    eprintln!("{r}");
+    for key in ["gap", "temperature", "force"] {
+        let e: Vec<f64> = r["errors"][key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert!(e[0] > e[1] && e[1] > e[2], "{key}: {e:?}");
+        let p = r["order"][key].as_f64().unwrap();
+        assert!(p > 0.8, "{key}: order {p} ({e:?})");
+        // The paper's accuracy at h = 1e-5 s: within a few per cent.
+        assert!(e[2] < 0.02, "{key}: {e:?}");
+    }
+}
+
+#[test]
+fn residual_penetration_of_a_first_impact_falls_with_the_step() {
+    // The Craig–Bampton surrogate from a 1 µm gap, 10 ms: the largest penetration after the
+    // first impact, bounded by h·|ẏ|, shrinks with h (Thorin et al. 2018, Fig. 4).
+    let rom = surrogate("\n[reduction]\ninterface_modes = 20\n");
+    let mut sys = rom.system.clone();
+    for o in &mut sys.obstacles {
+        o.gap = 1e-6;
+    }
+    let pen: Vec<f64> = [4e-5, 2e-5, 1e-5, 5e-6]
+        .iter()
+        .map(|&h| {
+            let s = NonsmoothSettings {
+                step: h,
+                steps: (0.01 / h).round() as usize,
+                record: Some(Vec::new()),
+                ..rom.settings.clone()
+            };
+            moreau_jean(&sys, &s).unwrap().max_penetration()
+        })
+        .collect();
+    eprintln!("max penetration at h = 4e-5, 2e-5, 1e-5, 5e-6 s: {pen:?}");
+    assert!(pen.windows(2).all(|w| w[1] < w[0]), "{pen:?}");
+    assert!(pen[0] > 1e-7 && pen[3] < 0.8 * pen[0], "{pen:?}");
+}
