@@ -354,7 +354,7 @@ fn jacobian_and_preload_derivative_match_central_differences() {
         let r = microslip::evaluate(&p, u, v, 0.0, true).unwrap();
         let slider = r.slider;
         let r = microslip::evaluate(&p, u, v, slider, true).unwrap();
-        for ph in &r.cycle.phases {
+        for ph in r.cycle.phases() {
             if let PhaseKind::Stick { origin, .. } = ph.kind {
                 regimes.insert(format!("{origin:?}").split('(').next().unwrap().to_string());
             }

@@ -151,16 +151,25 @@ pub struct Workspace {
     analytic: Option<AnalyticPeriod>,
 }
 
-/// The last analytic evaluation of an element ([`microslip`]): the input and the cycle of each
-/// tangential direction.
+/// The last analytic evaluation of an element ([`microslip`]): its input (the cycles are rebuilt
+/// from it when a report or a loop is asked for, which keeps the evaluation free of copies).
 #[derive(Clone, Debug)]
 pub(crate) struct AnalyticPeriod {
     pub(crate) params: ContactParams,
     pub(crate) tangential: usize,
     pub(crate) u: [[f64; 3]; 2],
     pub(crate) v: [f64; 3],
-    pub(crate) cycles: Vec<microslip::Cycle>,
+    /// The slider state of each direction before the evaluation (m).
+    pub(crate) slider: [f64; 2],
     pub(crate) energy: f64,
+}
+
+impl AnalyticPeriod {
+    /// The periodic cycle of direction `d`.
+    fn cycle(&self, d: usize) -> microslip::Cycle {
+        microslip::cycle(&self.params, self.u[d], self.v, self.slider[d])
+            .expect("the cycle of an evaluation that succeeded")
+    }
 }
 
 impl Workspace {
@@ -192,18 +201,17 @@ impl Workspace {
         }
     }
 
-    /// Stores the results of an analytic evaluation: the local Jacobian (row-major, `cols`
-    /// columns) and the cycles.
-    pub(crate) fn set_analytic(
-        &mut self,
-        jacobian: Option<(&[f64], usize)>,
-        period: AnalyticPeriod,
-    ) {
-        if let Some((j, cols)) = jacobian {
-            self.jacobian.clear();
-            self.jacobian.extend_from_slice(j);
-            self.jacobian_cols = cols;
-        }
+    /// The local Jacobian buffer of an analytic evaluation, `rows` × `cols` (row-major), zeroed.
+    pub(crate) fn analytic_jacobian(&mut self, rows: usize, cols: usize) -> &mut [f64] {
+        self.jacobian.clear();
+        self.jacobian.resize(rows * cols, 0.0);
+        self.jacobian_cols = cols;
+        &mut self.jacobian
+    }
+
+    /// Records an analytic evaluation (its Jacobian, if any, is already in
+    /// [`Workspace::analytic_jacobian`]).
+    pub(crate) fn set_analytic(&mut self, period: AnalyticPeriod) {
         self.marching = Marching {
             periods: 1,
             converged: true,
@@ -224,14 +232,15 @@ impl Workspace {
             w: [zeros(), zeros()],
             regime: vec![[Regime::Stick; 2]; n_t],
         };
+        let cycles: Vec<microslip::Cycle> = (0..a.tangential).map(|d| a.cycle(d)).collect();
         for j in 0..n_t {
             let t = std::f64::consts::TAU * j as f64 / n_t as f64;
             let (s, c) = t.sin_cos();
             out.v[j] = a.v[0] + a.v[1] * c - a.v[2] * s;
-            for d in 0..a.tangential {
+            for (d, cycle) in cycles.iter().enumerate().take(a.tangential) {
                 let u = a.u[d];
                 out.u[d][j] = u[0] + u[1] * c - u[2] * s;
-                let (f, n, w, kind) = microslip::state_at(&a.params, u, a.v, &a.cycles[d], t);
+                let (f, n, w, kind) = microslip::state_at(&a.params, u, a.v, cycle, t);
                 out.ft[d][j] = f;
                 out.fnormal[j] = n;
                 out.w[d][j] = w;
@@ -272,7 +281,7 @@ impl Workspace {
     pub fn report(&self) -> ElementReport {
         if let Some(a) = &self.analytic {
             // Exact fractions for one direction; for two, the fractions of the samples.
-            let [stick, plus, minus, separation] = a.cycles[0].fractions();
+            let [stick, plus, minus, separation] = a.cycle(0).fractions();
             let (stick, slip, separation) = if a.tangential == 1 {
                 (stick, plus + minus, separation)
             } else {

@@ -41,7 +41,7 @@
 //! over the phases of the derivative of the phase's force (the moving limits cancel); the stick
 //! phase after a re-contact depends on the re-contact instant, which enters through the slider.
 
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::{FRAC_1_PI, PI, TAU};
 
 use crate::contact::law::ContactParams;
 use crate::error::{Error, Result};
@@ -126,6 +126,24 @@ pub struct Phase {
     pub start: f64,
     /// End τ (rad), ≥ start.
     pub end: f64,
+    /// sin and cos of `start`, then of `end` (computed once per event, in closed form).
+    sc: [f64; 4],
+}
+
+impl Phase {
+    fn new(kind: PhaseKind, start: At, end: At) -> Self {
+        Phase {
+            kind,
+            start: start.t,
+            end: end.t,
+            sc: [start.s, start.c, end.s, end.c],
+        }
+    }
+
+    /// A phase over [start, start + 2π] from τ = `start` given with its sine and cosine.
+    fn whole(kind: PhaseKind, start: At) -> Self {
+        Phase::new(kind, start, start.labelled(start.t + TAU))
+    }
 }
 
 /// Which of the paper's regimes (§2.2) the cycle is in.
@@ -153,6 +171,176 @@ impl CycleRegime {
     }
 }
 
+/// Most phases of one periodic cycle: a cycle has at most about eight; more is a degenerate
+/// input and an error.
+const MAX_PHASES: usize = 16;
+
+/// An instant τ (rad) with its sine and cosine, computed once per event (in closed form from
+/// the sinusoid it is an event of, not by evaluating sin and cos of τ).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct At {
+    t: f64,
+    s: f64,
+    c: f64,
+}
+
+impl At {
+    const ZERO: At = At {
+        t: 0.0,
+        s: 0.0,
+        c: 1.0,
+    };
+
+    /// The same instant labelled τ + 2πk (the caller's `t` differs from `self.t` by whole
+    /// periods, up to rounding).
+    #[inline]
+    fn labelled(self, t: f64) -> At {
+        At { t, ..self }
+    }
+
+    /// e(τ) = (1, cos τ, −sin τ).
+    #[inline]
+    fn basis(self) -> [f64; 3] {
+        [1.0, self.c, -self.s]
+    }
+
+    /// de/dτ = (0, −sin τ, −cos τ).
+    #[inline]
+    fn basis_rate(self) -> [f64; 3] {
+        [0.0, -self.s, -self.c]
+    }
+}
+
+/// atan2(x2, x1) for amp = |(x1, x2)| > 0, by arcsin or arccos on the side where it is well
+/// conditioned (|argument| ≤ 1/√2): the same to a few ulp and several times cheaper than atan2.
+#[inline]
+fn angle(x1: f64, x2: f64, amp: f64) -> f64 {
+    if x1.abs() >= x2.abs() {
+        let a = (x2 / amp).asin();
+        if x1 >= 0.0 {
+            a
+        } else if x2 >= 0.0 {
+            PI - a
+        } else {
+            -PI - a
+        }
+    } else {
+        let a = (x1 / amp).acos();
+        if x2 >= 0.0 {
+            a
+        } else {
+            -a
+        }
+    }
+}
+
+/// A sinusoid X1 cos τ − X2 sin τ = A cos(τ + α) with its amplitude A = |X| and phase α.
+#[derive(Clone, Copy, Debug)]
+struct Wave {
+    x1: f64,
+    x2: f64,
+    amp: f64,
+    alpha: f64,
+    /// cos α and sin α (1 and 0 for A = 0).
+    ca: f64,
+    sa: f64,
+}
+
+impl Wave {
+    fn new(x1: f64, x2: f64) -> Self {
+        let mut w = Wave::unphased(x1, x2);
+        if w.amp > 0.0 {
+            w.alpha = angle(x1, x2, w.amp);
+        }
+        w
+    }
+
+    /// The sinusoid without its phase α (set to 0; `ca`, `sa` are set).
+    fn unphased(x1: f64, x2: f64) -> Self {
+        let amp = (x1 * x1 + x2 * x2).sqrt();
+        let (ca, sa) = if amp > 0.0 {
+            (x1 / amp, x2 / amp)
+        } else {
+            (1.0, 0.0)
+        };
+        Wave {
+            x1,
+            x2,
+            amp,
+            alpha: 0.0,
+            ca,
+            sa,
+        }
+    }
+
+    /// The value at τ.
+    #[inline]
+    fn at(&self, a: At) -> f64 {
+        self.x1 * a.c - self.x2 * a.s
+    }
+
+    /// The rate d/dτ at τ.
+    #[inline]
+    fn rate(&self, a: At) -> f64 {
+        -self.x1 * a.s - self.x2 * a.c
+    }
+
+    /// The maximum, τ = −α.
+    fn maximum(&self) -> At {
+        At {
+            t: -self.alpha,
+            s: -self.sa,
+            c: self.ca,
+        }
+    }
+
+    /// The minimum, τ = π − α.
+    fn minimum(&self) -> At {
+        At {
+            t: PI - self.alpha,
+            s: self.sa,
+            c: -self.ca,
+        }
+    }
+
+    /// Where the sinusoid equals A·r (r in [−1, 1]), rising (τ = −α − arccos r) or falling
+    /// (τ = −α + arccos r); sin τ and cos τ by the addition theorems.
+    fn crossing(&self, r: f64, rising: bool) -> At {
+        let r = r.clamp(-1.0, 1.0);
+        let b = r.acos();
+        let sb = ((1.0 - r) * (1.0 + r)).sqrt();
+        if rising {
+            At {
+                t: -self.alpha - b,
+                s: -(self.sa * r + self.ca * sb),
+                c: self.ca * r - self.sa * sb,
+            }
+        } else {
+            At {
+                t: b - self.alpha,
+                s: sb * self.ca - r * self.sa,
+                c: r * self.ca + sb * self.sa,
+            }
+        }
+    }
+}
+
+/// When the point is in contact over a cycle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Window {
+    /// In contact over the whole cycle.
+    Always,
+    /// Out of contact over the whole cycle (max n ≤ 0).
+    Never,
+    /// In contact from the re-contact instant τ_Sp2 (in [0, 2π)) to the start of separation
+    /// τ_Sp1 = τ_Sp2 + `len`.
+    Part {
+        recontact: At,
+        separation: At,
+        len: f64,
+    },
+}
+
 /// The harmonic motion of a point and its law's parameters, with the derived sinusoids.
 #[derive(Clone, Copy, Debug)]
 struct Motion {
@@ -161,40 +349,34 @@ struct Motion {
     v: [f64; 3],
     /// n0e = n0 + k_n V0 (N).
     n0e: f64,
-    /// |G|, α_G of g = k_t u1 − μ k_n v1.
-    g: (f64, f64),
-    /// |H|, α_H of h = k_t u1 + μ k_n v1.
-    h: (f64, f64),
-    /// Contact window: None if in contact over the whole cycle; Some((τ_Sp2, length)) with the
-    /// re-contact instant and the length of the contact window (0 when always separated).
-    window: Option<(f64, f64)>,
+    /// g = k_t u1 − μ k_n v1.
+    g: Wave,
+    /// h = k_t u1 + μ k_n v1.
+    h: Wave,
+    /// k_n v1.
+    nv: Wave,
+    window: Window,
 }
 
-/// e(τ) = (1, cos τ, −sin τ).
+/// x reduced to [0, 2π) (cheaply for the few periods the construction spans).
 #[inline]
-fn basis(t: f64) -> [f64; 3] {
-    let (s, c) = t.sin_cos();
-    [1.0, c, -s]
-}
-
-/// de/dτ = (0, −sin τ, −cos τ).
-#[inline]
-fn basis_rate(t: f64) -> [f64; 3] {
-    let (s, c) = t.sin_cos();
-    [0.0, -s, -c]
-}
-
-/// Amplitude and phase (A, α) of X1 cos τ − X2 sin τ = A cos(τ + α).
-#[inline]
-fn polar(x1: f64, x2: f64) -> (f64, f64) {
-    (x1.hypot(x2), x2.atan2(x1))
+fn wrap(x: f64) -> f64 {
+    if (0.0..TAU).contains(&x) {
+        x
+    } else if (-TAU..0.0).contains(&x) {
+        x + TAU
+    } else if (TAU..2.0 * TAU).contains(&x) {
+        x - TAU
+    } else {
+        x.rem_euclid(TAU)
+    }
 }
 
 /// How far ahead of `from` the angle `target` (mod 2π) lies, in [0, 2π); an angle less than
 /// [`BEHIND`] behind counts as 0.
 #[inline]
 fn ahead(target: f64, from: f64) -> f64 {
-    let d = (target - from).rem_euclid(TAU);
+    let d = wrap(target - from);
     if d > TAU - BEHIND {
         0.0
     } else {
@@ -206,23 +388,34 @@ impl Motion {
     fn new(p: &ContactParams, u: [f64; 3], v: [f64; 3]) -> Self {
         let (kt, kn, mu) = (p.kt, p.kn, p.mu);
         let n0e = p.n0 + kn * v[0];
-        let g = polar(kt * u[1] - mu * kn * v[1], kt * u[2] - mu * kn * v[2]);
-        let h = polar(kt * u[1] + mu * kn * v[1], kt * u[2] + mu * kn * v[2]);
-        let (vamp, valpha) = polar(kn * v[1], kn * v[2]);
+        let g = Wave::new(kt * u[1] - mu * kn * v[1], kt * u[2] - mu * kn * v[2]);
+        let h = Wave::new(kt * u[1] + mu * kn * v[1], kt * u[2] + mu * kn * v[2]);
+        // The phase of k_n v1 only when the point separates.
+        let mut nv = Wave::unphased(kn * v[1], kn * v[2]);
+        let vamp = nv.amp;
         let window = if n0e + vamp <= 1e-14 * (n0e.abs() + vamp) {
-            Some((0.0, 0.0))
+            Window::Never
         } else if vamp > 0.0 {
-            // n = n0e + vamp cos(τ + α_V) < 0 where cos(τ + α_V) < ρ.
+            // n = n0e + |V| cos(τ + α_V) < 0 where cos(τ + α_V) < ρ.
             let rho = -n0e / vamp;
             if rho > -1.0 + TANGENCY {
-                let a = rho.min(1.0).acos();
-                // Re-contact (n rising through 0): τ + α_V = −arccos ρ; contact length 2 arccos ρ.
-                Some(((-valpha - a).rem_euclid(TAU), 2.0 * a))
+                nv.alpha = angle(nv.x1, nv.x2, vamp);
+                // Re-contact (n rising through 0) at τ + α_V = −arccos ρ; contact length
+                // 2 arccos ρ.
+                let recontact = nv.crossing(rho, true);
+                let recontact = recontact.labelled(wrap(recontact.t));
+                let len = 2.0 * rho.min(1.0).acos();
+                let separation = nv.crossing(rho, false).labelled(recontact.t + len);
+                Window::Part {
+                    recontact,
+                    separation,
+                    len,
+                }
             } else {
-                None
+                Window::Always
             }
         } else {
-            None
+            Window::Always
         };
         Motion {
             p: *p,
@@ -231,57 +424,48 @@ impl Motion {
             n0e,
             g,
             h,
+            nv,
             window,
         }
     }
 
-    fn u_at(&self, t: f64) -> f64 {
-        dot(self.u, basis(t))
+    #[inline]
+    fn u_at(&self, a: At) -> f64 {
+        self.u[0] + self.u[1] * a.c - self.u[2] * a.s
     }
 
     /// n0e + k_n v1(τ) (the normal force in contact).
-    fn n_at(&self, t: f64) -> f64 {
-        let e = basis(t);
-        self.n0e + self.p.kn * (self.v[1] * e[1] + self.v[2] * e[2])
+    #[inline]
+    fn n_at(&self, a: At) -> f64 {
+        self.n0e + self.nv.at(a)
     }
 
-    /// g′(τ) = −|G| sin(τ + α_G), h′(τ).
-    fn rates(&self, t: f64) -> (f64, f64) {
-        (
-            -self.g.0 * (t + self.g.1).sin(),
-            -self.h.0 * (t + self.h.1).sin(),
-        )
-    }
-
-    /// The start of separation (n falling through 0) and the end.
-    fn separation_start(&self) -> Option<f64> {
-        self.window.map(|(t2, len)| t2 + len)
-    }
-
-    /// The state at a re-contact instant τ (eqs 15–17).
-    fn recontact_state(&self, t: f64) -> PhaseKind {
-        let (dg, dh) = self.rates(t);
-        if dg > 0.0 {
+    /// The state at a re-contact instant (eqs 15–17).
+    fn recontact_state(&self, a: At) -> PhaseKind {
+        if self.g.rate(a) > 0.0 {
             PhaseKind::PositiveSlip
-        } else if dh < 0.0 {
+        } else if self.h.rate(a) < 0.0 {
             PhaseKind::NegativeSlip
         } else {
             PhaseKind::Stick {
-                slider: self.u_at(t),
-                origin: SliderOrigin::Recontact(t),
+                slider: self.u_at(a),
+                origin: SliderOrigin::Recontact(a.t),
             }
         }
     }
 
     /// The state at τ = 0 from the slider w (the first sample of the time-discrete law).
     fn initial_state(&self, w: f64) -> PhaseKind {
-        if let Some((t2, len)) = self.window {
-            if len <= 0.0 || ahead(0.0, t2) >= len {
-                return PhaseKind::Separation;
+        match self.window {
+            Window::Never => return PhaseKind::Separation,
+            Window::Part { recontact, len, .. } if ahead(0.0, recontact.t) >= len => {
+                return PhaseKind::Separation
             }
+            _ => {}
         }
-        let n = self.n_at(0.0).max(0.0);
-        let u0 = self.u_at(0.0);
+        let z = At::ZERO;
+        let n = self.n_at(z).max(0.0);
+        let u0 = self.u_at(z);
         let trial = self.p.kt * (u0 - w);
         let limit = self.p.mu * n;
         if trial.abs() <= limit * (1.0 + super::law::STICK_MARGIN) {
@@ -291,10 +475,9 @@ impl Motion {
             };
         }
         let s = trial.signum();
-        let (dg, dh) = self.rates(0.0);
-        if s > 0.0 && dg > 0.0 {
+        if s > 0.0 && self.g.rate(z) > 0.0 {
             PhaseKind::PositiveSlip
-        } else if s < 0.0 && dh < 0.0 {
+        } else if s < 0.0 && self.h.rate(z) < 0.0 {
             PhaseKind::NegativeSlip
         } else {
             PhaseKind::Stick {
@@ -304,96 +487,91 @@ impl Motion {
         }
     }
 
-    /// The next event after τ = `t` in state `kind`: (how far ahead, the state after it).
-    fn next_event(&self, t: f64, kind: PhaseKind) -> (f64, PhaseKind) {
-        let mut best = (f64::INFINITY, kind);
-        let mut consider = |d: f64, next: PhaseKind| {
+    /// The next event after τ = `t` in state `kind`: (how far ahead, the state after it, the
+    /// event's instant).
+    fn next_event(&self, t: f64, kind: PhaseKind) -> (f64, PhaseKind, At) {
+        let mut best = (f64::INFINITY, kind, At::ZERO);
+        #[inline(always)]
+        fn consider(best: &mut (f64, PhaseKind, At), t: f64, a: At, next: PhaseKind) {
+            let d = ahead(a.t, t);
             if d < best.0 {
-                best = (d, next);
+                *best = (d, next, a);
             }
-        };
-        let separation = |consider: &mut dyn FnMut(f64, PhaseKind)| {
-            if let Some(ts1) = self.separation_start() {
-                consider(ahead(ts1, t), PhaseKind::Separation);
-            }
-        };
+        }
+        let unset = f64::NAN;
         match kind {
             PhaseKind::Separation => {
-                if let Some((t2, len)) = self.window {
-                    if len > 0.0 {
-                        consider(ahead(t2, t), self.recontact_state(t2));
-                    }
+                if let Window::Part { recontact, .. } = self.window {
+                    consider(&mut best, t, recontact, self.recontact_state(recontact));
                 }
             }
             PhaseKind::PositiveSlip => {
-                if self.g.0 > 0.0 {
-                    let tp = -self.g.1;
-                    consider(
-                        ahead(tp, t),
-                        PhaseKind::Stick {
-                            slider: f64::NAN,
-                            origin: SliderOrigin::AfterPositiveSlip(tp),
-                        },
-                    );
+                if self.g.amp > 0.0 {
+                    let tp = self.g.maximum();
+                    let next = PhaseKind::Stick {
+                        slider: unset,
+                        origin: SliderOrigin::AfterPositiveSlip(tp.t),
+                    };
+                    consider(&mut best, t, tp, next);
                 }
-                separation(&mut consider);
             }
             PhaseKind::NegativeSlip => {
-                if self.h.0 > 0.0 {
-                    let tn = PI - self.h.1;
-                    consider(
-                        ahead(tn, t),
-                        PhaseKind::Stick {
-                            slider: f64::NAN,
-                            origin: SliderOrigin::AfterNegativeSlip(tn),
-                        },
-                    );
+                if self.h.amp > 0.0 {
+                    let tn = self.h.minimum();
+                    let next = PhaseKind::Stick {
+                        slider: unset,
+                        origin: SliderOrigin::AfterNegativeSlip(tn.t),
+                    };
+                    consider(&mut best, t, tn, next);
                 }
-                separation(&mut consider);
             }
             PhaseKind::Stick { slider, .. } => {
                 let offset = self.p.kt * (self.u[0] - slider);
                 let mun = self.p.mu * self.n0e;
                 // g rises through c_P.
-                let (ga, gal) = self.g;
-                if ga > 0.0 {
-                    let r = (mun - offset) / ga;
+                if self.g.amp > 0.0 {
+                    let r = (mun - offset) / self.g.amp;
                     if r < 1.0 - TANGENCY {
-                        let tc = -gal - r.max(-1.0).acos();
-                        consider(ahead(tc, t), PhaseKind::PositiveSlip);
+                        let a = self.g.crossing(r, true);
+                        consider(&mut best, t, a, PhaseKind::PositiveSlip);
                     }
                 }
                 // h falls through c_N.
-                let (ha, hal) = self.h;
-                if ha > 0.0 {
-                    let r = (-mun - offset) / ha;
+                if self.h.amp > 0.0 {
+                    let r = (-mun - offset) / self.h.amp;
                     if r > -1.0 + TANGENCY {
-                        let tc = -hal + r.min(1.0).acos();
-                        consider(ahead(tc, t), PhaseKind::NegativeSlip);
+                        let a = self.h.crossing(r, false);
+                        consider(&mut best, t, a, PhaseKind::NegativeSlip);
                     }
                 }
-                separation(&mut consider);
             }
         }
+        // Every contact phase also ends at the start of separation.
+        if let (Window::Part { separation, .. }, false) =
+            (self.window, matches!(kind, PhaseKind::Separation))
+        {
+            consider(&mut best, t, separation, PhaseKind::Separation);
+        }
         // Fill in the slider of a stick that follows a slip.
-        let next = match best.1 {
+        let (d, next, a) = best;
+        let next = match next {
             PhaseKind::Stick {
-                origin: SliderOrigin::AfterPositiveSlip(tp),
+                origin: origin @ SliderOrigin::AfterPositiveSlip(_),
                 ..
             } => PhaseKind::Stick {
-                slider: self.u_at(tp) - self.p.mu * self.n_at(tp) / self.p.kt,
-                origin: SliderOrigin::AfterPositiveSlip(tp),
+                slider: self.u_at(a) - self.p.mu * self.n_at(a) / self.p.kt,
+                origin,
             },
             PhaseKind::Stick {
-                origin: SliderOrigin::AfterNegativeSlip(tn),
+                origin: origin @ SliderOrigin::AfterNegativeSlip(_),
                 ..
             } => PhaseKind::Stick {
-                slider: self.u_at(tn) + self.p.mu * self.n_at(tn) / self.p.kt,
-                origin: SliderOrigin::AfterNegativeSlip(tn),
+                slider: self.u_at(a) + self.p.mu * self.n_at(a) / self.p.kt,
+                origin,
             },
             other => other,
         };
-        (best.0, next)
+        (d, next, a)
     }
 }
 
@@ -406,20 +584,74 @@ fn history_free(from: PhaseKind, to: PhaseKind) -> bool {
         )
 }
 
-/// The periodic cycle of one point (see the module documentation).
-#[derive(Clone, Debug, PartialEq)]
+/// An unused entry of a cycle's phase list.
+const NO_PHASE: Phase = Phase {
+    kind: PhaseKind::Separation,
+    start: 0.0,
+    end: 0.0,
+    sc: [0.0, 1.0, 0.0, 1.0],
+};
+
+/// The periodic cycle of one point (see the module documentation), held inline (no heap).
+#[derive(Clone, Copy)]
 pub struct Cycle {
-    /// The phases, contiguous over one period [phases\[0\].start, phases\[0\].start + 2π].
-    pub phases: Vec<Phase>,
+    phases: [Phase; MAX_PHASES],
+    len: usize,
     /// The regime of the cycle.
     pub regime: CycleRegime,
 }
 
+impl PartialEq for Cycle {
+    fn eq(&self, other: &Self) -> bool {
+        self.phases() == other.phases() && self.regime == other.regime
+    }
+}
+
+impl std::fmt::Debug for Cycle {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Cycle")
+            .field("phases", &self.phases())
+            .field("regime", &self.regime)
+            .finish()
+    }
+}
+
 impl Cycle {
+    fn empty() -> Self {
+        Cycle {
+            phases: [NO_PHASE; MAX_PHASES],
+            len: 0,
+            regime: CycleRegime::CompleteStick,
+        }
+    }
+
+    /// Appends a phase, merged with the last one when the state is the same; false when full.
+    fn push(&mut self, ph: Phase) -> bool {
+        if let Some(last) = self.len.checked_sub(1).map(|i| &mut self.phases[i]) {
+            if same_state(&last.kind, &ph.kind) {
+                last.end = ph.end;
+                last.sc[2] = ph.sc[2];
+                last.sc[3] = ph.sc[3];
+                return true;
+            }
+        }
+        if self.len == MAX_PHASES {
+            return false;
+        }
+        self.phases[self.len] = ph;
+        self.len += 1;
+        true
+    }
+
+    /// The phases, contiguous over one period [phases()\[0\].start, phases()\[0\].start + 2π].
+    pub fn phases(&self) -> &[Phase] {
+        &self.phases[..self.len]
+    }
+
     /// Fraction of the period in each state: (stick, positive slip, negative slip, separation).
     pub fn fractions(&self) -> [f64; 4] {
         let mut out = [0.0; 4];
-        for ph in &self.phases {
+        for ph in self.phases() {
             let i = match ph.kind {
                 PhaseKind::Stick { .. } => 0,
                 PhaseKind::PositiveSlip => 1,
@@ -433,25 +665,27 @@ impl Cycle {
 
     /// The phase at τ (any real; taken mod 2π).
     pub fn phase_at(&self, t: f64) -> &Phase {
-        let t0 = self.phases[0].start;
-        let t = t0 + (t - t0).rem_euclid(TAU);
-        self.phases
+        let phases = self.phases();
+        let t0 = phases[0].start;
+        let t = t0 + wrap(t - t0);
+        phases
             .iter()
             .find(|ph| t <= ph.end)
-            .unwrap_or(&self.phases[self.phases.len() - 1])
+            .unwrap_or(&phases[phases.len() - 1])
     }
 
     /// The transitions of the cycle: (τ in [0, 2π), name) with the names of the paper's angles:
     /// `StP`, `SpP` (stick → positive slip, the stick after slip or after re-contact), `P`
     /// (positive slip → stick), `StN`, `SpN`, `N`, `Sp1` (start of separation), `Sp2` (end).
     pub fn transitions(&self) -> Vec<(f64, &'static str)> {
-        let n = self.phases.len();
+        let phases = self.phases();
+        let n = phases.len();
         let mut out = Vec::new();
         if n < 2 {
             return out;
         }
         for i in 0..n {
-            let (a, b) = (&self.phases[i], &self.phases[(i + 1) % n]);
+            let (a, b) = (&phases[i], &phases[(i + 1) % n]);
             let name = match (a.kind, b.kind) {
                 (_, PhaseKind::Separation) => "Sp1",
                 (PhaseKind::Separation, _) => "Sp2",
@@ -504,46 +738,43 @@ pub struct PointResult {
     pub normal_jacobian: Option<[[f64; 7]; 3]>,
 }
 
-/// M_kl = p_k ∫_a^b e_k e_l dτ with the projection weights p = (1/2π, 1/π, 1/π) of the harmonic
-/// coefficients (F0 = (1/2π)∮f, Re F1 = (1/π)∮f cos τ, Im F1 = −(1/π)∮f sin τ).
-fn projection(a: f64, b: f64) -> [[f64; 3]; 3] {
-    let d = b - a;
-    let (sa, ca) = a.sin_cos();
-    let (sb, cb) = b.sin_cos();
+/// M_kl = p_k ∫_a^b e_k e_l dτ over a phase, with the projection weights p = (1/2π, 1/π, 1/π)
+/// of the harmonic coefficients (F0 = (1/2π)∮f, Re F1 = (1/π)∮f cos τ, Im F1 = −(1/π)∮f sin τ).
+#[inline]
+fn projection(ph: &Phase) -> [[f64; 3]; 3] {
+    let d = ph.end - ph.start;
+    let [sa, ca, sb, cb] = ph.sc;
     let s2 = 2.0 * (sb * cb - sa * ca);
-    let i1 = d;
-    let ic = sb - sa;
-    let is = cb - ca; // ∫ −sin
-    let icc = 0.5 * d + 0.25 * s2;
-    let iss = 0.5 * d - 0.25 * s2;
-    let ics = -0.5 * (sb * sb - sa * sa); // ∫ cos·(−sin)
-    let raw = [[i1, ic, is], [ic, icc, ics], [is, ics, iss]];
-    let w = [1.0 / TAU, 1.0 / PI, 1.0 / PI];
-    let mut m = [[0.0; 3]; 3];
-    for k in 0..3 {
-        for l in 0..3 {
-            m[k][l] = w[k] * raw[k][l];
-        }
-    }
-    m
+    let q = FRAC_1_PI;
+    let ic = (sb - sa) * q;
+    let is = (cb - ca) * q; // ∫ −sin
+    let icc = (0.5 * d + 0.25 * s2) * q;
+    let iss = (0.5 * d - 0.25 * s2) * q;
+    let ics = -0.5 * (sb * sb - sa * sa) * q; // ∫ cos·(−sin)
+    [
+        [0.5 * d * q, 0.5 * ic, 0.5 * is],
+        [ic, icc, ics],
+        [is, ics, iss],
+    ]
 }
 
 /// The periodic cycle of a point with the harmonic motion u, v (layout (X0, Re X1, Im X1), m)
 /// and the slider state `slider` (m) at τ = 0.
 pub fn cycle(p: &ContactParams, u: [f64; 3], v: [f64; 3], slider: f64) -> Result<Cycle> {
-    build(&Motion::new(p, u, v), slider)
+    let mut out = Cycle::empty();
+    out.regime = build(&Motion::new(p, u, v), slider, &mut |ph| out.push(*ph))?;
+    Ok(out)
 }
 
-fn build(mo: &Motion, slider: f64) -> Result<Cycle> {
-    if mo.window == Some((0.0, 0.0)) {
-        return Ok(Cycle {
-            phases: vec![Phase {
-                kind: PhaseKind::Separation,
-                start: 0.0,
-                end: TAU,
-            }],
-            regime: CycleRegime::AlwaysSeparated,
-        });
+/// Builds the periodic cycle of `mo` from the slider state `slider` and hands its phases, in
+/// order over one period, to `sink` (which returns false to stop: too many phases). Every phase
+/// starts at the instant its state was entered (for a stick phase: where its slider was set).
+/// Returns the regime.
+fn build(mo: &Motion, slider: f64, sink: &mut impl FnMut(&Phase) -> bool) -> Result<CycleRegime> {
+    let z = At::ZERO;
+    if mo.window == Window::Never {
+        sink(&Phase::whole(PhaseKind::Separation, z));
+        return Ok(CycleRegime::AlwaysSeparated);
     }
     if mo.p.kt <= 0.0 {
         // No tangential stiffness: f ≡ 0; only the contact window matters.
@@ -552,88 +783,72 @@ fn build(mo: &Motion, slider: f64) -> Result<Cycle> {
             origin: SliderOrigin::Carried,
         };
         return Ok(match mo.window {
-            None => Cycle {
-                phases: vec![Phase {
-                    kind: stick,
-                    start: 0.0,
-                    end: TAU,
-                }],
-                regime: CycleRegime::CompleteStick,
-            },
-            Some((t2, len)) => Cycle {
-                phases: vec![
-                    Phase {
-                        kind: stick,
-                        start: t2,
-                        end: t2 + len,
-                    },
-                    Phase {
-                        kind: PhaseKind::Separation,
-                        start: t2 + len,
-                        end: t2 + TAU,
-                    },
-                ],
-                regime: CycleRegime::Separation,
-            },
+            Window::Part {
+                recontact,
+                separation,
+                ..
+            } => {
+                let _ = sink(&Phase::new(stick, recontact, separation))
+                    && sink(&Phase::new(
+                        PhaseKind::Separation,
+                        separation,
+                        recontact.labelled(recontact.t + TAU),
+                    ));
+                CycleRegime::Separation
+            }
+            _ => {
+                sink(&Phase::whole(stick, z));
+                CycleRegime::CompleteStick
+            }
         });
     }
     // A history-free start known in closed form: the re-contact (separation), or the end of
     // positive slip at the maximum of g (stick–slip without separation, 2μ n0e < |G| + |H|,
     // eq. 19); else (complete stick, or a degenerate sinusoid) the transient march below.
     let known = match mo.window {
-        Some((t2, _)) => Some((t2, mo.recontact_state(t2))),
-        None if mo.g.0 > 0.0
-            && mo.h.0 > 0.0
-            && 2.0 * mo.p.mu * mo.n0e < (mo.g.0 + mo.h.0) * (1.0 - 1e-9) =>
+        Window::Part { recontact, .. } => Some((recontact, mo.recontact_state(recontact))),
+        _ if mo.g.amp > 0.0
+            && mo.h.amp > 0.0
+            && 2.0 * mo.p.mu * mo.n0e < (mo.g.amp + mo.h.amp) * (1.0 - 1e-9) =>
         {
-            let tp = (-mo.g.1).rem_euclid(TAU);
+            let tp = mo.g.maximum();
+            let tp = tp.labelled(wrap(tp.t));
             Some((
                 tp,
                 PhaseKind::Stick {
                     slider: mo.u_at(tp) - mo.p.mu * mo.n_at(tp) / mo.p.kt,
-                    origin: SliderOrigin::AfterPositiveSlip(tp),
+                    origin: SliderOrigin::AfterPositiveSlip(tp.t),
                 },
             ))
         }
-        None => None,
+        _ => None,
     };
     // Transient: from τ = 0 until the first history-free event (at most two periods).
-    let mut t = 0.0;
-    let mut kind = mo.initial_state(slider);
-    let mut start = None;
-    let transient_events = match known {
-        Some((t0, k0)) => {
-            start = Some(t0);
-            kind = k0;
-            0
-        }
-        None => MAX_EVENTS,
+    let (mut start, mut kind) = match known {
+        Some((a, k)) => (Some(a), k),
+        None => (None, mo.initial_state(slider)),
     };
-    for _ in 0..transient_events {
-        let (d, next) = mo.next_event(t, kind);
-        if t + d > 2.0 * TAU {
-            break;
-        }
-        let free = history_free(kind, next);
-        t += d;
-        kind = next;
-        if free {
-            start = Some(t);
-            break;
+    if start.is_none() {
+        let mut t = 0.0;
+        for _ in 0..MAX_EVENTS {
+            let (d, next, a) = mo.next_event(t, kind);
+            if t + d > 2.0 * TAU {
+                break;
+            }
+            let free = history_free(kind, next);
+            t += d;
+            kind = next;
+            if free {
+                start = Some(a.labelled(t));
+                break;
+            }
         }
     }
-    let Some(t0) = start else {
+    let Some(a0) = start else {
         // No slip and no separation: stuck over the whole cycle with the state at τ = 0.
         if let PhaseKind::Stick { .. } = kind {
-            let first = mo.initial_state(slider);
-            return Ok(Cycle {
-                phases: vec![Phase {
-                    kind: first,
-                    start: 0.0,
-                    end: TAU,
-                }],
-                regime: CycleRegime::CompleteStick,
-            });
+            sink(&Phase::whole(mo.initial_state(slider), z));
+            return Ok(CycleRegime::CompleteStick);
         }
         return Err(Error::Compute(format!(
             "analytic friction point: no periodic state reached (u = {:?}, v = {:?}, {:?})",
@@ -641,56 +856,36 @@ fn build(mo: &Motion, slider: f64) -> Result<Cycle> {
         )));
     };
     // One period from the history-free event.
-    let end = t0 + TAU;
-    let mut phases = Vec::with_capacity(8);
-    let mut t = t0;
+    let end = a0.labelled(a0.t + TAU);
+    let mut cur = a0;
+    let mut closed = false;
+    let mut slips = false;
     for _ in 0..MAX_EVENTS {
-        let (d, next) = mo.next_event(t, kind);
-        if t + d >= end - BEHIND {
-            phases.push(Phase {
-                kind,
-                start: t,
-                end,
-            });
+        let (d, next, a) = mo.next_event(cur.t, kind);
+        slips |= matches!(kind, PhaseKind::PositiveSlip | PhaseKind::NegativeSlip);
+        if cur.t + d >= end.t - BEHIND {
+            closed = sink(&Phase::new(kind, cur, end));
             break;
         }
-        if d > 0.0 {
-            phases.push(Phase {
-                kind,
-                start: t,
-                end: t + d,
-            });
+        let at = a.labelled(cur.t + d);
+        if d > 0.0 && !sink(&Phase::new(kind, cur, at)) {
+            break;
         }
-        t += d;
+        cur = at;
         kind = next;
     }
-    if phases.last().map(|p| p.end) != Some(end) {
+    if !closed {
         return Err(Error::Compute(format!(
-            "analytic friction point: more than {MAX_EVENTS} transitions in one cycle (u = {:?}, v = {:?}, {:?})",
+            "analytic friction point: more than {MAX_PHASES} phases or {MAX_EVENTS} transitions in one cycle (u = {:?}, v = {:?}, {:?})",
             mo.u, mo.v, mo.p
         )));
     }
-    // Merge neighbouring phases of the same kind (zero-length intermediates removed above).
-    let mut merged: Vec<Phase> = Vec::with_capacity(phases.len());
-    for ph in phases {
-        match merged.last_mut() {
-            Some(last) if same_state(&last.kind, &ph.kind) => last.end = ph.end,
-            _ => merged.push(ph),
-        }
-    }
-    let slips = merged
-        .iter()
-        .any(|p| matches!(p.kind, PhaseKind::PositiveSlip | PhaseKind::NegativeSlip));
-    let regime = if mo.window.is_some() {
+    Ok(if matches!(mo.window, Window::Part { .. }) {
         CycleRegime::Separation
     } else if slips {
         CycleRegime::StickSlip
     } else {
         CycleRegime::CompleteStick
-    };
-    Ok(Cycle {
-        phases: merged,
-        regime,
     })
 }
 
@@ -701,14 +896,15 @@ fn same_state(a: &PhaseKind, b: &PhaseKind) -> bool {
     }
 }
 
-/// ∂w/∂(U0, U1, U2, V0, V1, V2, n0) of a stick phase's slider.
-fn slider_derivative(mo: &Motion, origin: SliderOrigin) -> [f64; 7] {
+/// ∂w/∂(U0, U1, U2, V0, V1, V2, n0) of a stick phase's slider; `at` is the instant the slider
+/// was set (the start of the stick phase).
+fn slider_derivative(mo: &Motion, origin: SliderOrigin, at: At) -> [f64; 7] {
     let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
     let mut d = [0.0; 7];
     // w = u(τ) − s μ (n0 + k_n v(τ))/k_t at a fixed τ (or at an extremum of g or h, where the
     // τ-derivative vanishes).
-    let mut at_limit = |t: f64, s: f64| {
-        let e = basis(t);
+    let mut at_limit = |a: At, s: f64| {
+        let e = a.basis();
         for l in 0..3 {
             d[l] = e[l];
             d[3 + l] = -s * mu * kn * e[l] / kt;
@@ -717,14 +913,14 @@ fn slider_derivative(mo: &Motion, origin: SliderOrigin) -> [f64; 7] {
     };
     match origin {
         SliderOrigin::Carried => {}
-        SliderOrigin::Clamped(s) => at_limit(0.0, s),
-        SliderOrigin::AfterPositiveSlip(t) => at_limit(t, 1.0),
-        SliderOrigin::AfterNegativeSlip(t) => at_limit(t, -1.0),
-        SliderOrigin::Recontact(t) => {
+        SliderOrigin::Clamped(s) => at_limit(At::ZERO, s),
+        SliderOrigin::AfterPositiveSlip(_) => at_limit(at, 1.0),
+        SliderOrigin::AfterNegativeSlip(_) => at_limit(at, -1.0),
+        SliderOrigin::Recontact(_) => {
             // w = u(τ_Sp2), with n0 + k_n v(τ_Sp2) = 0:
             // ∂τ = −(∂n0 + k_n e·∂V)/(k_n v1′(τ)), ∂w = e·∂U + u1′(τ) ∂τ.
-            let e = basis(t);
-            let de = basis_rate(t);
+            let e = at.basis();
+            let de = at.basis_rate();
             d[..3].copy_from_slice(&e);
             let dv = kn * (mo.v[1] * de[1] + mo.v[2] * de[2]);
             if dv.abs() > 0.0 {
@@ -737,6 +933,136 @@ fn slider_derivative(mo: &Motion, origin: SliderOrigin) -> [f64; 7] {
         }
     }
     d
+}
+
+/// The harmonic results of one point without its cycle.
+struct Harmonics {
+    friction: [f64; 3],
+    normal: [f64; 3],
+    energy: f64,
+    slider: f64,
+    friction_jacobian: [[f64; 7]; 3],
+    normal_jacobian: [[f64; 7]; 3],
+}
+
+/// Builds the cycle of `mo` from `slider` ([`build`]; each phase is also handed to `keep`) and
+/// integrates the forces over it.
+///
+/// On every phase f = c·e(τ) with c constant, so each coefficient is Σ_phases M(phase)·c
+/// ([`projection`]): with M_stick, M_slip (signed by the slip direction) and M_contact the sums
+/// over the phases of each kind, F = k_t (M_stick U − Σ_stick w M_·0) + μ M_slip N and
+/// N = M_contact N with N = (n0e, k_n V1, k_n V2); the derivatives follow from the same sums and
+/// the stick sliders' derivatives ([`slider_derivative`]).
+fn harmonics(
+    mo: &Motion,
+    slider: f64,
+    jacobian: bool,
+    mut keep: impl FnMut(&Phase) -> bool,
+) -> Result<(Harmonics, CycleRegime)> {
+    let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
+    let u = mo.u;
+    let mut m_stick = [[0.0; 3]; 3];
+    let mut m_slip = [[0.0; 3]; 3];
+    let mut m_contact = [[0.0; 3]; 3];
+    let mut w_col = [0.0; 3];
+    let mut fj = [[0.0; 7]; 3];
+    // The state at τ ≡ 0 (mod 2π): the first phase that ends at or after it.
+    let mut zero = f64::NAN;
+    let mut at_zero = None;
+    let regime = build(mo, slider, &mut |ph: &Phase| {
+        if zero.is_nan() {
+            zero = ph.start + wrap(-ph.start);
+        }
+        if at_zero.is_none() && ph.end >= zero {
+            at_zero = Some(ph.kind);
+        }
+        let sign = match ph.kind {
+            PhaseKind::Separation => return keep(ph),
+            PhaseKind::Stick { .. } => 0.0,
+            PhaseKind::PositiveSlip => 1.0,
+            PhaseKind::NegativeSlip => -1.0,
+        };
+        let m = projection(ph);
+        for k in 0..3 {
+            for l in 0..3 {
+                m_contact[k][l] += m[k][l];
+            }
+        }
+        if let PhaseKind::Stick { slider: w, origin } = ph.kind {
+            for k in 0..3 {
+                for l in 0..3 {
+                    m_stick[k][l] += m[k][l];
+                }
+                w_col[k] += w * m[k][0];
+            }
+            if jacobian && origin != SliderOrigin::Carried {
+                let at = At {
+                    t: ph.start,
+                    s: ph.sc[0],
+                    c: ph.sc[1],
+                };
+                let dw = slider_derivative(mo, origin, at);
+                for k in 0..3 {
+                    for x in 0..7 {
+                        fj[k][x] -= kt * m[k][0] * dw[x];
+                    }
+                }
+            }
+        } else {
+            for k in 0..3 {
+                for l in 0..3 {
+                    m_slip[k][l] += sign * m[k][l];
+                }
+            }
+        }
+        keep(ph)
+    })?;
+    let cn = [mo.n0e, mo.nv.x1, mo.nv.x2];
+    let mut friction = [0.0; 3];
+    let mut normal = [0.0; 3];
+    let mut nj = [[0.0; 7]; 3];
+    for k in 0..3 {
+        friction[k] = kt * (dot(m_stick[k], u) - w_col[k]) + mu * dot(m_slip[k], cn);
+        normal[k] = dot(m_contact[k], cn);
+        if jacobian {
+            for l in 0..3 {
+                fj[k][l] += kt * m_stick[k][l];
+                fj[k][3 + l] += mu * kn * m_slip[k][l];
+                nj[k][3 + l] = kn * m_contact[k][l];
+            }
+            fj[k][6] += mu * m_slip[k][0];
+            nj[k][6] = m_contact[k][0];
+        }
+    }
+    let energy = PI * (u[1] * friction[2] - u[2] * friction[1]);
+    let z = At::ZERO;
+    let end = match at_zero.unwrap_or(PhaseKind::Separation) {
+        PhaseKind::Stick { slider: w, .. } => w,
+        PhaseKind::Separation => mo.u_at(z),
+        PhaseKind::PositiveSlip => mo.u_at(z) - mu * mo.n_at(z) / kt,
+        PhaseKind::NegativeSlip => mo.u_at(z) + mu * mo.n_at(z) / kt,
+    };
+    Ok((
+        Harmonics {
+            friction,
+            normal,
+            energy,
+            slider: end,
+            friction_jacobian: fj,
+            normal_jacobian: nj,
+        },
+        regime,
+    ))
+}
+
+fn check_finite(u: &[f64; 3], v: &[f64; 3], slider: f64) -> Result<()> {
+    if u.iter().chain(v).chain([&slider]).all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(Error::Compute(format!(
+            "analytic friction point: non-finite input u = {u:?}, v = {v:?}, slider = {slider}"
+        )))
+    }
 }
 
 /// Evaluates one point (one tangential direction): the periodic cycle from the slider state
@@ -752,85 +1078,20 @@ pub fn evaluate(
     slider: f64,
     jacobian: bool,
 ) -> Result<PointResult> {
-    if !u.iter().chain(&v).chain([&slider]).all(|x| x.is_finite()) {
-        return Err(Error::Compute(format!(
-            "analytic friction point: non-finite input u = {u:?}, v = {v:?}, slider = {slider}"
-        )));
-    }
-    let mo = Motion::new(p, u, v);
-    let cycle = build(&mo, slider)?;
-    let (kt, kn, mu) = (p.kt, p.kn, p.mu);
-    let mut friction = [0.0; 3];
-    let mut normal = [0.0; 3];
-    let mut fj = [[0.0; 7]; 3];
-    let mut nj = [[0.0; 7]; 3];
-    for ph in &cycle.phases {
-        if let PhaseKind::Separation = ph.kind {
-            continue;
-        }
-        let m = projection(ph.start, ph.end);
-        // Normal force on every contact phase: n = n0e + k_n v1.
-        let cn = [mo.n0e, kn * v[1], kn * v[2]];
-        // Friction: coefficients c on the basis e, and ∂c/∂x.
-        let mut dc = [[0.0; 7]; 3];
-        let c = match ph.kind {
-            PhaseKind::Stick { slider: w, origin } => {
-                if jacobian {
-                    let dw = slider_derivative(&mo, origin);
-                    for (l, row) in dc.iter_mut().enumerate() {
-                        row[l] = kt;
-                    }
-                    for (x, dwx) in dw.iter().enumerate() {
-                        dc[0][x] -= kt * dwx;
-                    }
-                }
-                [kt * (u[0] - w), kt * u[1], kt * u[2]]
-            }
-            PhaseKind::PositiveSlip | PhaseKind::NegativeSlip => {
-                let s = if ph.kind == PhaseKind::PositiveSlip {
-                    1.0
-                } else {
-                    -1.0
-                };
-                if jacobian {
-                    for (l, row) in dc.iter_mut().enumerate() {
-                        row[3 + l] = s * mu * kn;
-                    }
-                    dc[0][6] = s * mu;
-                }
-                [s * mu * cn[0], s * mu * cn[1], s * mu * cn[2]]
-            }
-            PhaseKind::Separation => unreachable!("skipped above"),
-        };
-        for k in 0..3 {
-            friction[k] += dot(m[k], c);
-            normal[k] += dot(m[k], cn);
-            if jacobian {
-                for x in 0..7 {
-                    fj[k][x] += m[k][0] * dc[0][x] + m[k][1] * dc[1][x] + m[k][2] * dc[2][x];
-                }
-                for l in 0..3 {
-                    nj[k][3 + l] += m[k][l] * kn;
-                }
-                nj[k][6] += m[k][0];
-            }
-        }
-    }
-    let energy = PI * (u[1] * friction[2] - u[2] * friction[1]);
-    let end = match cycle.phase_at(0.0).kind {
-        PhaseKind::Stick { slider: w, .. } => w,
-        PhaseKind::Separation => mo.u_at(0.0),
-        PhaseKind::PositiveSlip => mo.u_at(0.0) - mu * mo.n_at(0.0) / kt,
-        PhaseKind::NegativeSlip => mo.u_at(0.0) + mu * mo.n_at(0.0) / kt,
-    };
+    check_finite(&u, &v, slider)?;
+    let mut cycle = Cycle::empty();
+    let (r, regime) = harmonics(&Motion::new(p, u, v), slider, jacobian, |ph| {
+        cycle.push(*ph)
+    })?;
+    cycle.regime = regime;
     Ok(PointResult {
-        friction,
-        normal,
-        energy,
-        slider: end,
+        friction: r.friction,
+        normal: r.normal,
+        energy: r.energy,
+        slider: r.slider,
         cycle,
-        friction_jacobian: jacobian.then_some(fj),
-        normal_jacobian: jacobian.then_some(nj),
+        friction_jacobian: jacobian.then_some(r.friction_jacobian),
+        normal_jacobian: jacobian.then_some(r.normal_jacobian),
     })
 }
 
@@ -845,8 +1106,10 @@ pub fn state_at(
 ) -> (f64, f64, f64, PhaseKind) {
     let mo = Motion::new(p, u, v);
     let ph = cycle.phase_at(t);
-    let ut = mo.u_at(t);
-    let n = mo.n_at(t).max(0.0);
+    let (s, c) = t.sin_cos();
+    let a = At { t, s, c };
+    let ut = mo.u_at(a);
+    let n = mo.n_at(a).max(0.0);
     let (f, w) = match ph.kind {
         PhaseKind::Stick { slider, .. } => (p.kt * (ut - slider), slider),
         PhaseKind::PositiveSlip => (p.mu * n, ut - p.mu * n / p.kt),
@@ -868,7 +1131,7 @@ pub fn state_at(
 /// if `jacobian`, the local Jacobian (with the ∂n0 column) to the workspace.
 pub(crate) fn evaluate_element(
     element: &super::element::LocalElement,
-    harmonics: usize,
+    harmonics_count: usize,
     x: &[f64],
     slider: &mut [f64; 2],
     force: &mut [f64],
@@ -880,9 +1143,9 @@ pub(crate) fn evaluate_element(
             "evaluation = \"analytic\" is the exact cycle of the 1-D friction law; the 2-D (Coulomb disc) element is evaluated by the AFT only (evaluation = \"aft\")",
         ));
     }
-    if harmonics != 1 {
+    if harmonics_count != 1 {
         return Err(Error::input(format!(
-            "evaluation = \"analytic\" is the exact single-harmonic cycle and needs harmonics = 1 (here H = {harmonics}); use evaluation = \"aft\" for H > 1"
+            "evaluation = \"analytic\" is the exact single-harmonic cycle and needs harmonics = 1 (here H = {harmonics_count}); use evaluation = \"aft\" for H > 1"
         )));
     }
     let nt = element.tangential;
@@ -893,21 +1156,32 @@ pub(crate) fn evaluate_element(
         [0.0; 3]
     };
     let cols = nsig * 3 + 1;
-    let mut jac = [0.0; 9 * 10];
+    let jac: &mut [f64] = if jacobian {
+        ws.analytic_jacobian(nsig * 3, cols)
+    } else {
+        &mut []
+    };
     let mut u_all = [[0.0; 3]; 2];
-    let mut cycles = Vec::with_capacity(nt);
+    let slider_in = *slider;
     let mut energy = 0.0;
     for d in 0..nt {
         let u = [x[d * 3], x[d * 3 + 1], x[d * 3 + 2]];
+        check_finite(&u, &v, slider[d])?;
         u_all[d] = u;
-        let r = evaluate(&element.params, u, v, slider[d], jacobian)?;
+        let (r, _) = harmonics(
+            &Motion::new(&element.params, u, v),
+            slider[d],
+            jacobian,
+            |_| true,
+        )?;
         slider[d] = r.slider;
         energy += r.energy;
         force[d * 3..d * 3 + 3].copy_from_slice(&r.friction);
         if element.normal && d == 0 {
             force[nt * 3..nt * 3 + 3].copy_from_slice(&r.normal);
         }
-        if let (Some(fj), Some(nj)) = (r.friction_jacobian, r.normal_jacobian) {
+        if jacobian {
+            let (fj, nj) = (r.friction_jacobian, r.normal_jacobian);
             for k in 0..3 {
                 let row = &mut jac[(d * 3 + k) * cols..(d * 3 + k + 1) * cols];
                 row[d * 3..d * 3 + 3].copy_from_slice(&fj[k][..3]);
@@ -922,18 +1196,14 @@ pub(crate) fn evaluate_element(
                 }
             }
         }
-        cycles.push(r.cycle);
     }
-    ws.set_analytic(
-        jacobian.then_some((&jac[..nsig * 3 * cols], cols)),
-        super::element::AnalyticPeriod {
-            params: element.params,
-            tangential: nt,
-            u: u_all,
-            v,
-            cycles,
-            energy,
-        },
-    );
+    ws.set_analytic(super::element::AnalyticPeriod {
+        params: element.params,
+        tangential: nt,
+        u: u_all,
+        v,
+        slider: slider_in,
+        energy,
+    });
     Ok(())
 }
