@@ -572,6 +572,26 @@ fn moreau_jean_at_a_hundred_times_carpenters_limit_agrees_with_carpenter() {
 // `nlrom march` on a casing case and tools/post/plot_nonsmooth.py
 // ---------------------------------------------------------------------------------------------
 
+/// Runs the Python tool `script` (a path from the repository root) with `args`; its JSON
+/// stdout.
+fn python_json<S: AsRef<std::ffi::OsStr>>(
+    script: &str,
+    args: impl IntoIterator<Item = S>,
+) -> serde_json::Value {
+    let out = std::process::Command::new("python3")
+        .current_dir(root())
+        .arg(script)
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
 #[test]
 fn nlrom_march_writes_temperatures_and_plot_nonsmooth_compares_two_steps() {
     // The thermal coarse blade at 1000/3 Hz (one 3 ms period) at h = 2.5e-6 s and 1e-5 s.
@@ -634,22 +654,18 @@ fn nlrom_march_writes_temperatures_and_plot_nonsmooth_compares_two_steps() {
         assert!(r["heat_balance_residual_j"].as_f64().unwrap().abs() < 1e-9 * frictional);
         assert!(r["max_temperature_rise_k"].as_f64().unwrap() > 0.0);
     }
-    let py = std::process::Command::new("python3")
-        .current_dir(root())
-        .arg("tools/post/plot_nonsmooth.py")
-        .arg(dir.join("fine.h5"))
-        .arg(dir.join("coarse.h5"))
-        .arg("-o")
-        .arg(dir.join("plot.png"))
-        .args(["--labels", "fine", "coarse"])
-        .output()
-        .unwrap();
-    assert!(
-        py.status.success(),
-        "{}",
-        String::from_utf8_lossy(&py.stderr)
+    let e = python_json(
+        "tools/post/plot_nonsmooth.py",
+        [
+            dir.join("fine.h5").into_os_string(),
+            dir.join("coarse.h5").into_os_string(),
+            "-o".into(),
+            dir.join("plot.png").into_os_string(),
+            "--labels".into(),
+            "fine".into(),
+            "coarse".into(),
+        ],
     );
-    let e: serde_json::Value = serde_json::from_slice(&py.stdout).unwrap();
     for key in ["gap", "temperature", "force"] {
         let v = e["coarse"][key].as_f64().unwrap();
         assert!(v.is_finite() && v < 0.05, "{key}: {v} ({e})");
@@ -727,19 +743,21 @@ fn a_casing_case_refuses_an_interface_reduction() {
 fn step_study_errors_fall_at_first_order_with_the_step() {
     // tools/validation/step_study.py on the Craig–Bampton surrogate (20 modes), one revolution
     // (30 ms) from rest in contact (g0 = 0): h = 4e-5, 2e-5, 1e-5 s against h = 2.5e-6 s.
-    let out = std::process::Command::new("python3")
-        .current_dir(root())
-        .arg("tools/validation/step_study.py")
-        .args(["--steps", "4e-5", "2e-5", "1e-5", "--reference", "2.5e-6"])
-        .args(["--modes", "20", "--nlrom", env!("CARGO_BIN_EXE_nlrom")])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let r = python_json(
+        "tools/validation/step_study.py",
+        [
+            "--steps",
+            "4e-5",
+            "2e-5",
+            "1e-5",
+            "--reference",
+            "2.5e-6",
+            "--modes",
+            "20",
+            "--nlrom",
+            env!("CARGO_BIN_EXE_nlrom"),
+        ],
     );
-    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     eprintln!("{r}");
     for key in ["gap", "temperature", "force"] {
         let e: Vec<f64> = r["errors"][key]
