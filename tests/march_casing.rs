@@ -578,12 +578,14 @@ fn python_json<S: AsRef<std::ffi::OsStr>>(
     script: &str,
     args: impl IntoIterator<Item = S>,
 ) -> serde_json::Value {
-    let out = std::process::Command::new("python3")
-        .current_dir(root())
-        .arg(script)
-        .args(args)
-        .output()
-        .unwrap();
+    let mut cmd = std::process::Command::new("python3");
+    cmd.current_dir(root()).arg(script).args(args);
+    json_of(&mut cmd)
+}
+
+/// Runs `cmd`, which must succeed; its JSON stdout.
+fn json_of(cmd: &mut std::process::Command) -> serde_json::Value {
+    let out = cmd.output().unwrap();
     assert!(
         out.status.success(),
         "{}",
@@ -631,20 +633,14 @@ fn nlrom_march_writes_temperatures_and_plot_nonsmooth_compares_two_steps() {
             text.replace("[march]\n", "[march]\nscheme = \"moreau-jean\"\n"),
         )
         .unwrap();
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_nlrom"))
-            .arg("march")
-            .arg(&case)
-            .arg("-o")
-            .arg(dir.join(format!("{name}.h5")))
-            .arg("--json")
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        serde_json::from_slice(&out.stdout).unwrap()
+        json_of(
+            std::process::Command::new(env!("CARGO_BIN_EXE_nlrom"))
+                .arg("march")
+                .arg(&case)
+                .arg("-o")
+                .arg(dir.join(format!("{name}.h5")))
+                .arg("--json"),
+        )
     };
     let fine = run("2.5e-6", "fine");
     let coarse = run("1e-5", "coarse");
