@@ -146,15 +146,15 @@ impl<E> Iterate<E> {
     }
 }
 
-/// A converged [`newton_core`]: the iterate, the steps taken and the factors of the last step's
-/// matrix (at the previous iterate), to solve nearby systems with
-/// ([`LinearSolver::solve_near`]: the continuation tangent).
+/// A converged [`newton_core`]: the iterate, the steps taken and the factors of the last
+/// factorised step matrix (at an earlier iterate: the last when every step was factorised), to
+/// solve nearby systems with ([`LinearSolver::solve_near`]: the continuation tangent).
 pub struct NewtonOutcome<E> {
     /// The converged iterate.
     pub iterate: Iterate<E>,
     /// Newton steps taken.
     pub iterations: usize,
-    /// Factors of the matrix of the last step.
+    /// Factors of the last factorised step matrix.
     pub factors: Factored,
 }
 
@@ -172,8 +172,12 @@ pub type Evaluate<'a, E> = dyn FnMut(&[f64], bool) -> Result<Iterate<E>> + 'a;
 
 /// Newton on g(z) = 0 from `z0`. `eval(z, matrix)` returns the iterate at z, with ∂g/∂z when
 /// `matrix` (an `Err` counts as a failed iteration, e.g. a singular condensation); `floor` is
-/// the smallest ‖z‖ the increment test is relative to; `solver` solves the steps (each matrix
-/// factorised once, then dropped).
+/// the smallest ‖z‖ the increment test is relative to; `solver` solves the steps. The first
+/// step factorises its matrix; when [`LinearSolver::reuses_factors`], the later ones are solved
+/// by GMRES on the last factors ([`LinearSolver::solve_krylov`], to the backward error of a
+/// direct solve) and factorise only when that fails or the step before needed more than
+/// [`linsolve::KRYLOV_REFRESH`] iterations. Each matrix is handed back to the solver after its
+/// step ([`LinearSolver::recycle`]).
 pub fn newton_core<E>(
     z0: Vec<f64>,
     eval: &mut Evaluate<'_, E>,
@@ -189,6 +193,9 @@ pub fn newton_core<E>(
     if !current.norm().is_finite() {
         return Err(fail("the residual at the start is not finite".into(), 0));
     }
+    // the last factorisation, and whether the next step must factorise
+    let mut factors: Option<Factored> = None;
+    let mut refresh = true;
     for it in 1..=opts.max_iterations {
         if current.matrix.is_none() {
             current =
@@ -199,21 +206,40 @@ pub fn newton_core<E>(
             .take()
             .ok_or_else(|| fail(format!("no Jacobian at iteration {it}"), it))?;
         let rhs: Vec<f64> = current.g.iter().map(|g| g * current.g_scale).collect();
-        let (step, factors) = solver
-            .factor_solve(&matrix, &rhs)
-            .ok_or_else(|| fail(format!("singular Jacobian at iteration {it}"), it))?;
-        drop(matrix);
+        let krylov = match &factors {
+            Some(f) if !refresh && solver.reuses_factors(matrix.dim()) => {
+                solver.solve_krylov(f, &matrix, &rhs)
+            }
+            _ => None,
+        };
+        let step = match krylov {
+            Some((step, iterations)) => {
+                refresh = iterations > linsolve::KRYLOV_REFRESH;
+                step
+            }
+            None => {
+                let (step, f) = solver
+                    .factor_solve(&matrix, &rhs)
+                    .ok_or_else(|| fail(format!("singular Jacobian at iteration {it}"), it))?;
+                factors = Some(f);
+                refresh = false;
+                step
+            }
+        };
+        solver.recycle(matrix);
         let (next, taken) = damped_step(&current, &step, eval, opts)
             .map_err(|e| fail(format!("iteration {it}: {e}"), it))?;
         let z_norm = norm(&next.z).max(floor);
         let converged = next.norm() <= opts.tolerance && taken <= opts.increment_tolerance * z_norm;
         current = next;
         if converged {
-            return Ok(NewtonOutcome {
-                iterate: current,
-                iterations: it,
-                factors,
-            });
+            if let Some(factors) = factors {
+                return Ok(NewtonOutcome {
+                    iterate: current,
+                    iterations: it,
+                    factors,
+                });
+            }
         }
         if !current.norm().is_finite() || current.norm() > 1e12 {
             return Err(fail(

@@ -57,24 +57,29 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         self.force
     }
 
+    /// The complex coefficients of harmonic n of the real harmonic vector Q (n = 0: real).
+    fn harmonic_of(&self, q: &[f64], n: usize) -> Vec<c64> {
+        let nd = self.linear.n_condensed();
+        (0..nd)
+            .map(|i| {
+                if n == 0 {
+                    c64::new(q[self.layout.static_index(i)], 0.0)
+                } else {
+                    let c = self.layout.cos_index(n, i, nd);
+                    c64::new(q[c], q[c + 1])
+                }
+            })
+            .collect()
+    }
+
     /// Every harmonic condensed at ω for an evaluation at Q (in parallel over the harmonics;
     /// [`LinearModel::condense_applied`]).
     pub fn condense_all_applied(&self, q: &[f64], omega: f64) -> Result<Vec<CondensedApplied>> {
-        let nd = self.linear.n_condensed();
         (0..=self.layout.harmonics)
             .into_par_iter()
             .map(|n| {
-                let q_n: Vec<c64> = (0..nd)
-                    .map(|i| {
-                        if n == 0 {
-                            c64::new(q[self.layout.static_index(i)], 0.0)
-                        } else {
-                            let c = self.layout.cos_index(n, i, nd);
-                            c64::new(q[c], q[c + 1])
-                        }
-                    })
-                    .collect();
-                self.linear.condense_applied(n, omega, &q_n)
+                self.linear
+                    .condense_applied(n, omega, &self.harmonic_of(q, n))
             })
             .collect()
     }
@@ -123,25 +128,6 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         self.evaluate_parts(q, omega, level, state, parts)
     }
 
-    /// The residual r alone at (Q, ω) with excitation factor `level` (no Jacobian, no
-    /// derivatives). Returns the end-of-period force state.
-    pub fn evaluate_residual(
-        &self,
-        q: &[f64],
-        omega: f64,
-        level: f64,
-        state: &F::State,
-        residual: &mut [f64],
-    ) -> Result<F::State> {
-        let parts = Parts {
-            residual,
-            jacobian: None,
-            d_omega: None,
-            d_level: None,
-        };
-        self.evaluate_parts(q, omega, level, state, parts)
-    }
-
     /// Fills the parts that are given (see [`HbmSystem::evaluate`]).
     fn evaluate_parts(
         &self,
@@ -177,6 +163,45 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         }
         if let Some(Jacobian::Blocks(b)) = out.jacobian {
             b.coalesce();
+        }
+        Ok(end_state)
+    }
+
+    /// The residual r alone at (Q, ω) with excitation factor `level` (no Jacobian, no
+    /// derivatives): the linear part by [`LinearModel::condensed_residual`] (no condensed
+    /// matrix), in parallel over the harmonics, plus the nonlinear force. Returns the
+    /// end-of-period force state.
+    pub fn evaluate_residual(
+        &self,
+        q: &[f64],
+        omega: f64,
+        level: f64,
+        state: &F::State,
+        residual: &mut [f64],
+    ) -> Result<F::State> {
+        let nd = self.linear.n_condensed();
+        let layout = self.layout;
+        let linear: Vec<Vec<c64>> = (0..=layout.harmonics)
+            .into_par_iter()
+            .map(|n| {
+                self.linear
+                    .condensed_residual(n, omega, &self.harmonic_of(q, n), level)
+            })
+            .collect::<Result<_>>()?;
+        residual.iter_mut().for_each(|v| *v = 0.0);
+        let mut end_state = state.clone();
+        self.force
+            .evaluate_into(&layout, q, omega, &mut end_state, residual, None, None)?;
+        for (n, r) in linear.iter().enumerate() {
+            for (i, v) in r.iter().enumerate() {
+                if n == 0 {
+                    residual[layout.static_index(i)] += v.re;
+                } else {
+                    let ri = layout.cos_index(n, i, nd);
+                    residual[ri] += v.re;
+                    residual[ri + 1] += v.im;
+                }
+            }
         }
         Ok(end_state)
     }

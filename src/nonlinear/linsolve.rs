@@ -32,7 +32,16 @@
 //! no n × n matrix is formed (the dense LU of a block-stored matrix works on a dense copy).
 //! [`LinearSolver::factor_solve`] returns the factors, and [`LinearSolver::solve_near`] solves
 //! a nearby matrix on them by iterative refinement (the continuation tangent at a converged
-//! point on the factors of the last Newton step).
+//! point on the factors of the last Newton step). [`LinearSolver::solve_krylov`] solves a
+//! nearby matrix A by GMRES (Saad & Schultz 1986; Saad 2003, "Iterative methods for sparse
+//! linear systems", Alg. 9.5) right-preconditioned by the factors F of an earlier one: when A
+//! differs from F by the stiffness of the few contact elements that changed regime, F⁻¹A is the
+//! identity plus a matrix of low rank and GMRES converges in about as many iterations as that
+//! rank; each costs one solve on F and one product with A (the block-stored A is not factorised
+//! again). Newton ([`super::newton_core`]) solves its steps after the first this way and
+//! factorises again only when GMRES needs more than [`KRYLOV_ITERATIONS`] iterations (or more than
+//! [`KRYLOV_REFRESH`] at the step before); every Krylov solution is checked by the same backward
+//! error as a direct one.
 //!
 //! Cost for n unknowns, blocks s_b, rank r (flops): dense LU (2/3)n³; structured
 //! Σ_b (2/3)s_b³ + 2 Σ_b s_b² r + 2 r Σ_k r_k |C_k| + (2/3) r³, plus the QRs (Σ_k 2|R_k||C_k|²).
@@ -41,6 +50,7 @@
 //! takes the cheaper path by this flop count for every matrix it sees.
 
 use std::cell::Cell;
+use std::sync::Mutex;
 
 use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::{Accum, Mat, MatRef};
@@ -80,6 +90,14 @@ pub const REFINEMENTS: usize = 2;
 /// Most steps of iterative refinement of a solve on the factors of a nearby matrix.
 pub const NEAR_REFINEMENTS: usize = 4;
 
+/// Most GMRES iterations of a solve on the factors of a nearby matrix
+/// ([`LinearSolver::solve_krylov`]): beyond, the matrix is factorised.
+pub const KRYLOV_ITERATIONS: usize = 30;
+
+/// A Krylov solve of more GMRES iterations than this tells Newton to factorise at its next
+/// step (the factors have drifted from the matrices).
+pub const KRYLOV_REFRESH: usize = 10;
+
 /// Relative threshold of the rank of a component of E (|r_ii| of its column-pivoted QR against
 /// the largest).
 const RANK_TOLERANCE: f64 = 1e-13;
@@ -99,8 +117,13 @@ pub struct SolverStats {
     /// Sum of the sizes of the structured systems (to compare with `rank_sum`).
     pub size_sum: usize,
     /// Factorisations (dense LUs and block factorisations with their capacitance matrix);
-    /// the solves beyond them reused factors ([`LinearSolver::solve_near`]).
+    /// the solves beyond them reused factors ([`LinearSolver::solve_near`],
+    /// [`LinearSolver::solve_krylov`]).
     pub factorizations: usize,
+    /// Solves by GMRES on the factors of an earlier matrix ([`LinearSolver::solve_krylov`]).
+    pub krylov: usize,
+    /// GMRES iterations of those solves.
+    pub krylov_iterations: usize,
 }
 
 thread_local! {
@@ -111,6 +134,8 @@ thread_local! {
         rank_sum: 0,
         size_sum: 0,
         factorizations: 0,
+        krylov: 0,
+        krylov_iterations: 0,
     }) };
 }
 
@@ -143,11 +168,21 @@ fn count(path: SolvePath, n: usize) {
 }
 
 /// The linear solver of Newton steps and tangents: the block partition of the matrices it will
-/// see (see the module documentation) and the choice of path.
-#[derive(Clone, Debug, Default)]
+/// see (see the module documentation) and the choice of path; it keeps one block-stored matrix
+/// handed back by [`LinearSolver::recycle`] for the next [`LinearSolver::linearization`] (no
+/// allocation of the block storage per evaluation).
+#[derive(Debug, Default)]
 pub struct LinearSolver {
     blocks: Vec<usize>,
     choice: SolverChoice,
+    spare: Mutex<Option<BlockJacobian>>,
+}
+
+impl Clone for LinearSolver {
+    /// The same partition and choice (without the spare storage).
+    fn clone(&self) -> LinearSolver {
+        LinearSolver::new(self.blocks.clone(), self.choice)
+    }
 }
 
 /// Factors of a matrix from [`LinearSolver::factor_solve`], to solve further right-hand sides
@@ -252,17 +287,42 @@ fn backward_error(a: View<'_>, norm_a: f64, x: &[f64], b: &[f64]) -> (f64, Vec<f
 impl LinearSolver {
     /// A solver that always uses the dense LU.
     pub fn dense() -> LinearSolver {
-        LinearSolver {
-            blocks: Vec::new(),
-            choice: SolverChoice::Dense,
-        }
+        LinearSolver::new(Vec::new(), SolverChoice::Dense)
     }
 
     /// A solver for matrices whose leading diagonal blocks have the sizes `blocks` (in order;
     /// rows and columns after them are a border, e.g. of a bordered continuation system; empty:
     /// no partition, dense LU).
     pub fn new(blocks: Vec<usize>, choice: SolverChoice) -> LinearSolver {
-        LinearSolver { blocks, choice }
+        LinearSolver {
+            blocks,
+            choice,
+            spare: Mutex::new(None),
+        }
+    }
+
+    /// Whether Newton solves the steps after its first on earlier factors by GMRES
+    /// ([`LinearSolver::solve_krylov`]) for systems of `dim` unknowns: with the structured choice,
+    /// or the automatic one from [`AUTO_MIN_UNKNOWNS`] unknowns on (never with the dense choice,
+    /// which is the reference path).
+    pub fn reuses_factors(&self, dim: usize) -> bool {
+        match self.choice {
+            SolverChoice::Dense => false,
+            SolverChoice::Structured => true,
+            SolverChoice::Auto => dim >= AUTO_MIN_UNKNOWNS,
+        }
+    }
+
+    /// Hands a matrix that is no longer needed back for the next
+    /// [`LinearSolver::linearization`] (kept when it is block-stored over this solver's blocks).
+    pub fn recycle(&self, matrix: Jacobian) {
+        if let Jacobian::Blocks(b) = matrix {
+            if b.block_sizes() == self.blocks {
+                if let Ok(mut spare) = self.spare.lock() {
+                    *spare = Some(b);
+                }
+            }
+        }
     }
 
     /// Whether the Jacobians of `dim` unknowns are stored by blocks: a partition of `dim` is
@@ -282,9 +342,17 @@ impl LinearSolver {
     /// block-stored when [`LinearSolver::stores_blocks`], dense otherwise.
     pub fn linearization(&self, dim: usize) -> Linearization {
         if self.stores_blocks(dim) {
+            let spare = self.spare.lock().ok().and_then(|mut s| s.take());
+            let blocks = match spare {
+                Some(mut b) => {
+                    b.clear();
+                    b
+                }
+                None => BlockJacobian::new(&self.blocks),
+            };
             Linearization {
                 residual: vec![0.0; dim],
-                jacobian: Jacobian::Blocks(BlockJacobian::new(&self.blocks)),
+                jacobian: Jacobian::Blocks(blocks),
                 d_parameter: vec![0.0; dim],
             }
         } else {
@@ -424,6 +492,121 @@ impl LinearSolver {
         }
         None
     }
+
+    /// Solves A x = b by GMRES right-preconditioned by the factors `near` of a nearby matrix of
+    /// the same order (module documentation; Saad 2003, Alg. 9.5, modified Gram–Schmidt and
+    /// Givens rotations), from x₀ = F⁻¹ b, restarted from the current x whenever the Arnoldi
+    /// residual estimate says the backward error ‖b − A x‖∞ / (‖A‖₁ ‖x‖∞ + ‖b‖∞) should be
+    /// below [`BACKWARD_ERROR`], which is then checked on the true residual. Returns x and the
+    /// GMRES iterations; `None` when that is not reached within [`KRYLOV_ITERATIONS`] iterations
+    /// (factorise A instead). The sign of det A is not known from this solve.
+    pub fn solve_krylov(
+        &self,
+        near: &Factored,
+        a: &Jacobian,
+        b: &[f64],
+    ) -> Option<(Vec<f64>, usize)> {
+        let n = b.len();
+        if near.n != n || a.dim() != n {
+            return None;
+        }
+        let inf = |v: &[f64]| v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        let view = View::of(a);
+        let norm_a = view.norm_1();
+        let norm_b = inf(b);
+        let mut x = near.solve(b)?;
+        let mut used = 0;
+        loop {
+            let (eta, r) = backward_error(view, norm_a, &x, b);
+            if !eta.is_finite() {
+                return None;
+            }
+            if eta <= BACKWARD_ERROR || norm_b == 0.0 {
+                record(|s| {
+                    s.krylov += 1;
+                    s.krylov_iterations += used;
+                });
+                return Some((x, used));
+            }
+            if used >= KRYLOV_ITERATIONS {
+                return None;
+            }
+            // ‖r‖₂ that makes the backward error at most half the threshold
+            let target = 0.5 * BACKWARD_ERROR * (norm_a * inf(&x) + norm_b);
+            let (dx, k) = gmres_cycle(near, view, r, target, KRYLOV_ITERATIONS - used)?;
+            if k == 0 {
+                return None;
+            }
+            used += k;
+            x.iter_mut().zip(dx).for_each(|(xi, d)| *xi += d);
+        }
+    }
+}
+
+/// One cycle of right-preconditioned GMRES on A d = r (at most `max` iterations, until the
+/// residual estimate is at most `target`): d = F⁻¹ V_k y_k with y_k minimising ‖β e₁ − H̄_k y‖
+/// (Saad 2003, Alg. 9.5). Returns d and k.
+fn gmres_cycle(
+    near: &Factored,
+    a: View<'_>,
+    r: Vec<f64>,
+    target: f64,
+    max: usize,
+) -> Option<(Vec<f64>, usize)> {
+    let dot = |u: &[f64], v: &[f64]| u.iter().zip(v).map(|(a, b)| a * b).sum::<f64>();
+    let beta = super::norm(&r);
+    if beta == 0.0 || !beta.is_finite() {
+        return Some((vec![0.0; r.len()], 0));
+    }
+    let mut basis: Vec<Vec<f64>> = vec![r.iter().map(|v| v / beta).collect()];
+    // columns of the rotated Hessenberg matrix (the upper triangle R), the rotations, and g
+    let mut columns: Vec<Vec<f64>> = Vec::new();
+    let mut rotations: Vec<(f64, f64)> = Vec::new();
+    let mut g = vec![beta];
+    while columns.len() < max {
+        let k = columns.len();
+        let mut w = a.mul_vec(&near.solve(&basis[k])?);
+        let mut h = vec![0.0; k + 2];
+        for (i, v) in basis.iter().enumerate() {
+            let hi = dot(&w, v);
+            h[i] = hi;
+            w.iter_mut().zip(v).for_each(|(w, v)| *w -= hi * v);
+        }
+        let next = super::norm(&w);
+        h[k + 1] = next;
+        for (i, &(c, s)) in rotations.iter().enumerate() {
+            let (p, q) = (h[i], h[i + 1]);
+            h[i] = c * p + s * q;
+            h[i + 1] = -s * p + c * q;
+        }
+        let d = h[k].hypot(h[k + 1]);
+        if d == 0.0 || !d.is_finite() {
+            break;
+        }
+        let (c, s) = (h[k] / d, h[k + 1] / d);
+        h[k] = d;
+        h[k + 1] = 0.0;
+        rotations.push((c, s));
+        g.push(-s * g[k]);
+        g[k] *= c;
+        columns.push(h);
+        if next == 0.0 || g[k + 1].abs() <= target {
+            break;
+        }
+        basis.push(w.iter().map(|v| v / next).collect());
+    }
+    let k = columns.len();
+    // R y = g, back substitution
+    let mut y = vec![0.0; k];
+    for i in (0..k).rev() {
+        let sum: f64 = (i + 1..k).map(|j| columns[j][i] * y[j]).sum();
+        y[i] = (g[i] - sum) / columns[i][i];
+    }
+    let mut u = vec![0.0; r.len()];
+    for (yj, v) in y.iter().zip(&basis) {
+        u.iter_mut().zip(v).for_each(|(u, v)| *u += yj * v);
+    }
+    Some((near.solve(&u)?, k))
 }
 
 /// The path of one solve.
@@ -935,6 +1118,57 @@ mod tests {
                     "border {border} coupling {coupling}: {err:e}"
                 );
                 assert_eq!(ss, sd, "border {border} coupling {coupling}");
+            }
+        }
+    }
+
+    /// GMRES on the factors of a matrix that differs by the stiffness of one "element" (rank 3,
+    /// on rows and columns {4, 15, 40} in three blocks, bordered) gives the dense solution in
+    /// at most rank + 2 iterations; from unrelated factors (every diagonal entry moved) it either
+    /// gives the dense solution too or reports that it did not converge — never another x.
+    #[test]
+    fn krylov_on_nearby_factors() {
+        let (a, blocks) = example(true, 0.5);
+        let n = a.nrows();
+        let b: Vec<f64> = (0..n).map(|i| noise(4000 + i)).collect();
+        let (xd, _) = solve_dense_signed_ref(a.as_ref(), &b).unwrap();
+        let scale = xd.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let err = |x: &[f64]| {
+            x.iter()
+                .zip(&xd)
+                .map(|(p, q)| (p - q).abs())
+                .fold(0.0, f64::max)
+        };
+        let el = [4usize, 15, 40];
+        for choice in [SolverChoice::Dense, SolverChoice::Structured] {
+            let solver = LinearSolver::new(blocks.clone(), choice);
+            let mut near = a.clone();
+            for (p, &i) in el.iter().enumerate() {
+                for (q, &j) in el.iter().enumerate() {
+                    near[(i, j)] += 0.8 * noise(5000 + 3 * p + q) + if p == q { 0.5 } else { 0.0 };
+                }
+            }
+            let (_, f) = solver.factor_solve(&Jacobian::Dense(near), &b).unwrap();
+            let before = stats();
+            let (x, iterations) = solver
+                .solve_krylov(&f, &Jacobian::Dense(a.clone()), &b)
+                .unwrap();
+            assert!(err(&x) <= 1e-11 * scale, "{choice:?}: {:e}", err(&x));
+            assert!((1..=5).contains(&iterations), "{choice:?}: {iterations}");
+            let after = stats();
+            assert_eq!(after.krylov - before.krylov, 1);
+            assert_eq!(
+                after.krylov_iterations - before.krylov_iterations,
+                iterations
+            );
+            let far = Mat::from_fn(n, n, |i, j| {
+                a[(i, j)] + if i == j { 4.0 * noise(6000 + i) } else { 0.0 }
+            });
+            let (_, f) = solver.factor_solve(&Jacobian::Dense(far), &b).unwrap();
+            if let Some((x, iterations)) = solver.solve_krylov(&f, &Jacobian::Dense(a.clone()), &b)
+            {
+                assert!(err(&x) <= 1e-10 * scale, "{choice:?} far: {:e}", err(&x));
+                assert!(iterations <= KRYLOV_ITERATIONS);
             }
         }
     }

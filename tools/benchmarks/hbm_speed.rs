@@ -162,11 +162,19 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
     let t = Instant::now();
     let sm = model::build(&case, &mut |_| {})?;
     let rom = reduce(&case, &sm, &mut |_| {})?;
+    let rss_rom = rss_gb();
     let mesh = sm.mesh.as_ref().expect("a sector case has a mesh");
     let interfaces = build_interfaces(&case, mesh, rom.cyclic.as_ref())?;
     let problem = SectorProblem::build(&case, &rom, mesh, &interfaces)?;
+    let rss_problem = rss_gb();
     let system = problem.system()?;
     drop((sm, rom, interfaces));
+    eprintln!(
+        "resident: {rss_rom:.2} GB after the reduction, {rss_problem:.2} GB with the problem, {:.2} GB after dropping the model and ROM; {} rows per harmonic ({} condensed)",
+        rss_gb(),
+        problem.linear.uncondensed(0).stiffness.nrows(),
+        problem.linear.n_condensed()
+    );
     eprintln!(
         "setup (model, reduction, interfaces) {:.1} s, peak RSS {:.2} GB; H = {h}, N_t = {}, {} contact DOF, {} unknowns",
         t.elapsed().as_secs_f64(),
@@ -204,14 +212,17 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
             cpu / iterations.max(1) as f64
         );
         let structured = after.structured - before.structured;
+        let krylov = after.krylov - before.krylov;
         println!(
-            "  linear solves: {} dense LU, {structured} structured (mean rank {:.0} = {:.1} % of the unknowns), {} fallbacks to the dense LU, {} factorisations; peak RSS of the continuation {:.2} GB (resident before it {rss_before:.2} GB)",
+            "  linear solves: {} dense LU, {structured} structured (mean rank {:.0} = {:.1} % of the unknowns), {} fallbacks to the dense LU, {} factorisations ({:.2} per point), {krylov} by GMRES on earlier factors ({:.1} iterations each); peak RSS of the continuation {:.2} GB (resident before it {rss_before:.2} GB)",
             after.dense - before.dense,
             (after.rank_sum - before.rank_sum) as f64 / structured.max(1) as f64,
             100.0 * (after.rank_sum - before.rank_sum) as f64
                 / (after.size_sum - before.size_sum).max(1) as f64,
             after.fallbacks - before.fallbacks,
             after.factorizations - before.factorizations,
+            (after.factorizations - before.factorizations) as f64 / n as f64,
+            (after.krylov_iterations - before.krylov_iterations) as f64 / krylov.max(1) as f64,
             peak_rss_gb()
         );
         let points: Vec<(f64, Vec<f64>)> = path
@@ -248,16 +259,22 @@ fn print_difference(a: &[(f64, Vec<f64>)], b: &[(f64, Vec<f64>)]) {
     );
 }
 
-/// Resets the peak resident memory of this process to the current one (Linux: `5` to
-/// /proc/self/clear_refs) and returns the current one (GB).
-fn reset_peak_rss() -> f64 {
-    let _ = std::fs::write("/proc/self/clear_refs", "5");
+/// Resident memory of this process now (GB), from /proc/self/status (VmRSS); 0 where
+/// unavailable.
+fn rss_gb() -> f64 {
     let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
     status
         .lines()
         .find_map(|l| l.strip_prefix("VmRSS:"))
         .and_then(|v| v.split_whitespace().next()?.parse::<f64>().ok())
         .map_or(0.0, |kb| kb / 1024.0 / 1024.0)
+}
+
+/// Resets the peak resident memory of this process to the current one (Linux: `5` to
+/// /proc/self/clear_refs) and returns the current one (GB).
+fn reset_peak_rss() -> f64 {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+    rss_gb()
 }
 
 /// Times the parts of one Newton iteration at (x, ω) and prints them.
