@@ -572,6 +572,28 @@ fn moreau_jean_at_a_hundred_times_carpenters_limit_agrees_with_carpenter() {
 // `nlrom march` on a casing case and tools/post/plot_nonsmooth.py
 // ---------------------------------------------------------------------------------------------
 
+/// Runs the Python tool `script` (a path from the repository root) with `args`; its JSON
+/// stdout.
+fn python_json<S: AsRef<std::ffi::OsStr>>(
+    script: &str,
+    args: impl IntoIterator<Item = S>,
+) -> serde_json::Value {
+    let mut cmd = std::process::Command::new("python3");
+    cmd.current_dir(root()).arg(script).args(args);
+    json_of(&mut cmd)
+}
+
+/// Runs `cmd`, which must succeed; its JSON stdout.
+fn json_of(cmd: &mut std::process::Command) -> serde_json::Value {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
 #[test]
 fn nlrom_march_writes_temperatures_and_plot_nonsmooth_compares_two_steps() {
     // The thermal coarse blade at 1000/3 Hz (one 3 ms period) at h = 2.5e-6 s and 1e-5 s.
@@ -611,20 +633,14 @@ fn nlrom_march_writes_temperatures_and_plot_nonsmooth_compares_two_steps() {
             text.replace("[march]\n", "[march]\nscheme = \"moreau-jean\"\n"),
         )
         .unwrap();
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_nlrom"))
-            .arg("march")
-            .arg(&case)
-            .arg("-o")
-            .arg(dir.join(format!("{name}.h5")))
-            .arg("--json")
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        serde_json::from_slice(&out.stdout).unwrap()
+        json_of(
+            std::process::Command::new(env!("CARGO_BIN_EXE_nlrom"))
+                .arg("march")
+                .arg(&case)
+                .arg("-o")
+                .arg(dir.join(format!("{name}.h5")))
+                .arg("--json"),
+        )
     };
     let fine = run("2.5e-6", "fine");
     let coarse = run("1e-5", "coarse");
@@ -634,22 +650,18 @@ fn nlrom_march_writes_temperatures_and_plot_nonsmooth_compares_two_steps() {
         assert!(r["heat_balance_residual_j"].as_f64().unwrap().abs() < 1e-9 * frictional);
         assert!(r["max_temperature_rise_k"].as_f64().unwrap() > 0.0);
     }
-    let py = std::process::Command::new("python3")
-        .current_dir(root())
-        .arg("tools/post/plot_nonsmooth.py")
-        .arg(dir.join("fine.h5"))
-        .arg(dir.join("coarse.h5"))
-        .arg("-o")
-        .arg(dir.join("plot.png"))
-        .args(["--labels", "fine", "coarse"])
-        .output()
-        .unwrap();
-    assert!(
-        py.status.success(),
-        "{}",
-        String::from_utf8_lossy(&py.stderr)
+    let e = python_json(
+        "tools/post/plot_nonsmooth.py",
+        [
+            dir.join("fine.h5").into_os_string(),
+            dir.join("coarse.h5").into_os_string(),
+            "-o".into(),
+            dir.join("plot.png").into_os_string(),
+            "--labels".into(),
+            "fine".into(),
+            "coarse".into(),
+        ],
     );
-    let e: serde_json::Value = serde_json::from_slice(&py.stdout).unwrap();
     for key in ["gap", "temperature", "force"] {
         let v = e["coarse"][key].as_f64().unwrap();
         assert!(v.is_finite() && v < 0.05, "{key}: {v} ({e})");
@@ -717,4 +729,69 @@ fn a_casing_case_refuses_an_interface_reduction() {
     let sm = nlrom::model::build(&case, &mut |_| {}).unwrap();
     let err = nonsmooth_case(&case, &sm).err().unwrap().to_string();
     assert!(err.contains("reduction.gsi_modes"), "{err}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Step-size study (Thorin et al. 2018, Figs 4–5)
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn step_study_errors_fall_at_first_order_with_the_step() {
+    // tools/validation/step_study.py on the Craig–Bampton surrogate (20 modes), one revolution
+    // (30 ms) from rest in contact (g0 = 0): h = 4e-5, 2e-5, 1e-5 s against h = 2.5e-6 s.
+    let r = python_json(
+        "tools/validation/step_study.py",
+        [
+            "--steps",
+            "4e-5",
+            "2e-5",
+            "1e-5",
+            "--reference",
+            "2.5e-6",
+            "--modes",
+            "20",
+            "--nlrom",
+            env!("CARGO_BIN_EXE_nlrom"),
+        ],
+    );
+    eprintln!("{r}");
+    for key in ["gap", "temperature", "force"] {
+        let e: Vec<f64> = r["errors"][key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert!(e[0] > e[1] && e[1] > e[2], "{key}: {e:?}");
+        let p = r["order"][key].as_f64().unwrap();
+        assert!(p > 0.8, "{key}: order {p} ({e:?})");
+        // The paper's accuracy at h = 1e-5 s: within a few per cent.
+        assert!(e[2] < 0.02, "{key}: {e:?}");
+    }
+}
+
+#[test]
+fn residual_penetration_of_a_first_impact_falls_with_the_step() {
+    // The Craig–Bampton surrogate from a 1 µm gap, 10 ms: the largest penetration after the
+    // first impact, bounded by h·|ẏ|, shrinks with h (Thorin et al. 2018, Fig. 4).
+    let rom = surrogate("\n[reduction]\ninterface_modes = 20\n");
+    let mut sys = rom.system.clone();
+    for o in &mut sys.obstacles {
+        o.gap = 1e-6;
+    }
+    let pen: Vec<f64> = [4e-5, 2e-5, 1e-5, 5e-6]
+        .iter()
+        .map(|&h| {
+            let s = NonsmoothSettings {
+                step: h,
+                steps: (0.01 / h).round() as usize,
+                record: Some(Vec::new()),
+                ..rom.settings.clone()
+            };
+            moreau_jean(&sys, &s).unwrap().max_penetration()
+        })
+        .collect();
+    eprintln!("max penetration at h = 4e-5, 2e-5, 1e-5, 5e-6 s: {pen:?}");
+    assert!(pen.windows(2).all(|w| w[1] < w[0]), "{pen:?}");
+    assert!(pen[0] > 1e-7 && pen[3] < 0.8 * pen[0], "{pen:?}");
 }

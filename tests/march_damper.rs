@@ -275,8 +275,8 @@ fn march_command_writes_the_results_file() {
     }
 
     // bad input: a march case whose scheme needs mass it does not have is refused by the library;
-    // a case without [march] and a sector (mesh, cyclic) model excited as a travelling wave (k = 3
-    // of N = 8) are clear input errors (exit 2)
+    // a case without [march] and a sector (mesh, cyclic) model with the 2-D friction element are
+    // clear input errors (exit 2)
     let bad = dir.path().join("bad.toml");
     std::fs::write(&bad, "[damper]\nmass = 0.01\ninertia = 1e-7\ncentrifugal_force = 10.0\nplatform = []\ncontact = []\n").unwrap();
     let res = nlrom(&[
@@ -321,6 +321,10 @@ fn march_command_writes_the_results_file() {
     .replace(
         "../meshes/",
         concat!(env!("CARGO_MANIFEST_DIR"), "/meshes/"),
+    )
+    .replace(
+        "model = \"node-to-node\"",
+        "model = \"node-to-node\"\nelement = \"2d\"",
     );
     let sector_case = dir.path().join("sector.toml");
     std::fs::write(
@@ -344,9 +348,7 @@ steps_per_period = 100
     let err = String::from_utf8_lossy(&res.stderr);
     assert_eq!(res.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("sector.toml")
-            && err.contains("engine_order = 3")
-            && err.contains("travelling wave"),
+        err.contains("sector.toml") && err.contains("shroud") && err.contains("element = \"1d\""),
         "{err}"
     );
     assert!(!dir.path().join("y.h5").exists());

@@ -6,7 +6,7 @@
 //! - micro-slip: the steady first-harmonic amplitude equals the harmonic balance of
 //!   `nlrom::problem::sector::SectorProblem` (PairSet kinematics, AFT, H = 5) within 1 %;
 //!
-//! A travelling wave (k ≠ 0, N/2) is an input error naming `engine_order` (tests/march_damper.rs).
+//! Travelling waves (k ≠ 0, N/2): tests/march_travelling.rs.
 
 mod support;
 
@@ -21,77 +21,9 @@ use nlrom::problem::sector::SectorProblem;
 use nlrom::reduction::reduce;
 
 use support::cli::root;
-use support::sector_hb::hb_outputs;
+use support::sector_hb::{case_text, hb_outputs, rel_err};
 
 const N: usize = 8;
-const FORCE: [f64; 3] = [0.3, -0.2, 1.0];
-
-/// The sector8 case: engine order `m`, shroud contact (kt, kn, μ, n0), the excitation `FORCE`
-/// times `scale` per node, H harmonics, a march at `hz` with `steps` per period.
-fn case_text(
-    m: usize,
-    contact: [f64; 4],
-    scale: f64,
-    harmonics: usize,
-    hz: f64,
-    steps: usize,
-) -> String {
-    let [kt, kn, mu, n0] = contact;
-    format!(
-        r#"
-[model]
-mesh = "{mesh}"
-material = {{ young = 210e9, poisson = 0.3, density = 7800.0 }}
-clamp = ["hub"]
-damping = {{ modal = 0.03 }}
-
-[cyclic]
-sectors = {N}
-low = "left_frontier"
-high = "right_frontier"
-
-[reduction]
-interface_modes = 10
-gsi_modes = 6
-keep = ["excitation"]
-
-[[contact]]
-name = "shroud"
-contact = "shroud_contact"
-target = "shroud_target"
-model = "node-to-node"
-mu = {mu:e}
-kt = {kt:e}
-kn = {kn:e}
-n0 = {n0:e}
-
-[excitation]
-engine_order = {m}
-group = "excitation"
-force = [{f0}, {f1}, {f2}]
-force_scale = {scale:e}
-
-[harmonic_balance]
-harmonics = {harmonics}
-time_samples = 256
-
-[march]
-frequency_hz = {hz}
-periods = 200
-steps_per_period = {steps}
-scheme = "piecewise-linear"
-time_step_s = {dt:e}
-stop_at_steady = true
-steady_tolerance = 1e-4
-"#,
-        mesh = root().join("meshes/sector8.msh").display(),
-        f0 = FORCE[0],
-        f1 = FORCE[1],
-        f2 = FORCE[2],
-        dt = 1.0 / (hz * steps as f64),
-    )
-}
-
 fn load(text: &str) -> Case {
     Case::from_str(text, &root().join("cases/test_march_sector.toml")).expect("case")
 }
@@ -127,17 +59,6 @@ fn march_h1(cm: &CaseMarch, out: &MarchOutcome) -> Vec<c64> {
             c64::new(re, im)
         })
         .collect()
-}
-
-/// max_i |a_i − b_i| / max_i |b_i|.
-fn rel_err(a: &[c64], b: &[c64]) -> f64 {
-    let scale = b.iter().map(|z| z.norm()).fold(0.0, f64::max);
-    let diff = a
-        .iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).norm())
-        .fold(0.0, f64::max);
-    diff / scale
 }
 
 /// Direct complex solve (K + K_c − ω²M + iωC) Q = F of the marched system with every contact

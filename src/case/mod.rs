@@ -24,11 +24,13 @@ use crate::vec3::norm;
 
 pub use casing::{CasingTable, ThermalTable};
 pub use obstacle::ObstacleTable;
+pub use strip::{PreloadDistribution, Strip};
 
 mod casing;
 mod groups;
 mod obstacle;
 mod parse;
+pub mod strip;
 mod sweep;
 mod validate;
 
@@ -65,6 +67,10 @@ pub struct Case {
     /// `[[element]]`: friction elements on DOF combinations of a matrix model, in file order.
     #[serde(default)]
     pub element: Vec<FrictionElement>,
+    /// `[[strip]]`: distributed friction interfaces along lines of a matrix model (each a
+    /// quadrature of friction points, [`strip`]), in file order.
+    #[serde(default)]
+    pub strip: Vec<Strip>,
     /// `[[obstacle]]`: rigid obstacles with unilateral contact on DOF combinations of a matrix
     /// model (the nonsmooth schemes of `nlrom march`), in file order.
     #[serde(default)]
@@ -128,12 +134,12 @@ pub enum CaseKind {
 
 impl Case {
     /// The kind of the case: `[damper]` → [`CaseKind::Damper`]; no mesh, or any `[[element]]`
-    /// → [`CaseKind::Matrix`] (elements act on matrix rows, which only the unreduced model has);
+    /// or `[[strip]]` → [`CaseKind::Matrix`] (elements act on matrix rows, which only the unreduced model has);
     /// else [`CaseKind::Sector`].
     pub fn kind(&self) -> CaseKind {
         if self.damper.is_some() {
             CaseKind::Damper
-        } else if self.model.mesh.is_none() || !self.element.is_empty() {
+        } else if self.model.mesh.is_none() || !self.element.is_empty() || !self.strip.is_empty() {
             CaseKind::Matrix
         } else {
             CaseKind::Sector

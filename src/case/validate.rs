@@ -15,6 +15,7 @@ impl Case {
         self.validate_excitation()?;
         self.validate_response()?;
         self.validate_elements()?;
+        self.validate_strips()?;
         self.validate_obstacles()?;
         self.validate_casings()?;
         self.validate_harmonic_balance()?;
@@ -277,6 +278,113 @@ impl Case {
             self.require(
                 e.evaluation != Evaluation::Analytic || self.harmonic_balance.harmonics == 1,
                 &format!("{key}.evaluation"),
+                || {
+                    format!(
+                        "evaluation = \"analytic\" is the exact single-harmonic cycle and needs [harmonic_balance] harmonics = 1 (this case has {}); use evaluation = \"aft\" for H > 1",
+                        self.harmonic_balance.harmonics
+                    )
+                },
+            )?;
+        }
+        Ok(())
+    }
+
+    /// `[[strip]]`: station table shapes, ranges, and a preload distribution that keeps one sign.
+    pub(super) fn validate_strips(&self) -> Result<()> {
+        for (i, s) in self.strip.iter().enumerate() {
+            let key = format!("strip[{i}]");
+            let k = |name: &str| format!("{key}.{name}");
+            let n = s.stations.len();
+            self.require(!s.dofs.is_empty(), &k("dofs"), || {
+                "needs at least one matrix row"
+            })?;
+            self.finite(&k("stations"), &s.stations)?;
+            self.require(
+                n >= 2 && s.stations.windows(2).all(|w| w[1] > w[0]),
+                &k("stations"),
+                || format!("needs at least two strictly increasing positions (found {n})"),
+            )?;
+            for (name, table) in [
+                ("tangential", Some(&s.tangential)),
+                ("normal", s.normal.as_ref()),
+            ] {
+                let Some(t) = table else { continue };
+                self.require(t.len() == n, &k(name), || {
+                    format!("needs one row per station ({n}), found {}", t.len())
+                })?;
+                for (j, row) in t.iter().enumerate() {
+                    self.require(row.len() == s.dofs.len(), &k(name), || {
+                        format!(
+                            "row {j} has {} weights; it needs one per entry of `dofs` ({})",
+                            row.len(),
+                            s.dofs.len()
+                        )
+                    })?;
+                    self.finite(&k(name), row)?;
+                }
+            }
+            self.require(
+                (1..=strip::MAX_GAUSS).contains(&s.gauss),
+                &k("gauss"),
+                || {
+                    format!(
+                        "Gauss points per segment must be 1 to {} (found {})",
+                        strip::MAX_GAUSS,
+                        s.gauss
+                    )
+                },
+            )?;
+            self.non_negative(&k("kt"), s.kt)?;
+            self.non_negative(&k("kn"), s.kn)?;
+            self.non_negative(&k("mu"), s.mu)?;
+            self.finite(&k("preload"), &[s.preload])?;
+            self.require(
+                s.preload >= 0.0 || (s.normal.is_some() && s.kn > 0.0),
+                &k("preload"),
+                || {
+                    format!(
+                        "a negative total preload ({}) is an initial gap; it needs `normal` weights and kn > 0",
+                        s.preload
+                    )
+                },
+            )?;
+            let dist = s.distribution;
+            let needs_c = dist == PreloadDistribution::Quadratic;
+            let needs_values = dist == PreloadDistribution::Stations;
+            self.require(s.c.is_some() == needs_c, &k("c"), || {
+                format!(
+                    "`c` is the coefficient of distribution = \"quadratic\" (here distribution = \"{}\"): give it exactly then",
+                    dist.name()
+                )
+            })?;
+            self.require(s.values.is_some() == needs_values, &k("values"), || {
+                format!(
+                    "`values` are the station preloads of distribution = \"stations\" (here distribution = \"{}\"): give them exactly then",
+                    dist.name()
+                )
+            })?;
+            if let Some(c) = s.c {
+                self.finite(&k("c"), &[c])?;
+                self.require(c >= -1.0, &k("c"), || {
+                    format!(
+                        "q(s) ∝ 1 + c(2ξ − 1)² is negative at the strip's ends for c < −1 (found {c}): the distribution would give points a negative preload (and a negative stiffness where they close)"
+                    )
+                })?;
+            }
+            if let Some(v) = &s.values {
+                self.require(v.len() == n, &k("values"), || {
+                    format!("needs one value per station ({n}), found {}", v.len())
+                })?;
+                self.finite(&k("values"), v)?;
+                self.require(
+                    v.iter().all(|&x| x >= 0.0) && v.iter().any(|&x| x > 0.0),
+                    &k("values"),
+                    || "relative preloads must be ≥ 0 and not all 0 (a sign change would give points a negative preload); the sign of the total is `preload`'s",
+                )?;
+            }
+            self.require(
+                s.evaluation != Evaluation::Analytic || self.harmonic_balance.harmonics == 1,
+                &k("evaluation"),
                 || {
                     format!(
                         "evaluation = \"analytic\" is the exact single-harmonic cycle and needs [harmonic_balance] harmonics = 1 (this case has {}); use evaluation = \"aft\" for H > 1",

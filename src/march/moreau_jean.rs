@@ -49,7 +49,7 @@ pub fn moreau_jean(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsm
                 + h * h * gamma[i] * gamma[j] * sys.stiffness[ij]
         })
         .collect();
-    let lu = StepSolver::new(&mhat, n, nm)?;
+    let lu = StepSolver::new(sys, &mhat)?;
     let b = Blocks::new(sys);
     let m = sys.obstacles.len();
     let columns: Vec<Vec<f64>> = sys.obstacles.iter().map(|o| o.column(n)).collect();
@@ -58,6 +58,8 @@ pub fn moreau_jean(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsm
     let w: Vec<f64> = (0..m * m)
         .map(|ij| sys.obstacles[ij / m].rate(&z[ij % m]))
         .collect();
+    // K^uθ Z_i: the thermal load of a unit impulse's heat (the energy balance's coupling term).
+    let kz: Vec<Vec<f64>> = z.iter().map(|zi| b.k_ut.mul(zi)).collect();
     let mut x = sys.x0.clone();
     let mut v = sys.v0.clone();
     let mut hist = NonsmoothHistory::new("moreau-jean", sys, s);
@@ -89,15 +91,7 @@ pub fn moreau_jean(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsm
         let fg: Vec<f64> = (0..n)
             .map(|r| gamma[r] * f1[r] + (1.0 - gamma[r]) * f0[r])
             .collect();
-        // K x_n + hΓK v_n row block by row block: K_u(x_n + hγ v_n), K_θ(x_n + hγ_θ v_n).
-        let mut ky = Vec::with_capacity(n);
-        for (rows, g) in [(&b.k_u, s.gamma), (&b.k_t, s.gamma_thermal)] {
-            let y: Vec<f64> = x.iter().zip(&v).map(|(a, b)| a + h * g * b).collect();
-            ky.extend(rows.mul(&y));
-        }
-        let cv = b.c.mul(&v);
-        let rhs: Vec<f64> = (0..n).map(|r| -h * (cv[r] + ky[r] - fg[r])).collect();
-        let dv = lu.solve(&rhs);
+        let (dv, kut_free) = lu.free_increment(&b, (&x, &v), &fg, h, (s.gamma, s.gamma_thermal));
         let mut v1: Vec<f64> = v.iter().zip(&dv).map(|(a, b)| a + b).collect();
         // Active set from the predicted gap g(u_n + h u̇_n / 2).
         let mid: Vec<f64> = x.iter().zip(&v).map(|(a, b)| a + 0.5 * h * b).collect();
@@ -138,6 +132,27 @@ pub fn moreau_jean(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsm
         let x1: Vec<f64> = (0..n)
             .map(|r| x[r] + h * (gamma[r] * v1[r] + (1.0 - gamma[r]) * v[r]))
             .collect();
+        // K^uθ θ_{n+γ}: from the free step's product plus the impulses' share, or directly.
+        let kut_theta_g: Vec<f64> = match &kut_free {
+            Some(p) => {
+                let c = s.gamma * h * s.gamma_thermal;
+                (0..nm)
+                    .map(|r| {
+                        p[r] + c * kz
+                            .iter()
+                            .zip(&lambda)
+                            .filter(|(_, &l)| l != 0.0)
+                            .map(|(k, &l)| k[r] * l)
+                            .sum::<f64>()
+                    })
+                    .collect()
+            }
+            None if thermal => {
+                let theta_g: Vec<f64> = (0..n).map(|c| x[c] + s.gamma * (x1[c] - x[c])).collect();
+                b.k_ut.mul(&theta_g)
+            }
+            None => vec![0.0; nm],
+        };
         accumulate_energy(
             sys,
             &b,
@@ -146,6 +161,7 @@ pub fn moreau_jean(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsm
             (&x, &x1),
             (&v, &v1),
             &fg,
+            &kut_theta_g,
             &columns,
             &lambda,
             k0 + s0,
@@ -202,10 +218,19 @@ struct BlockLu {
 }
 
 impl StepSolver {
-    fn new(mhat: &[f64], n: usize, nm: usize) -> Result<Self> {
+    fn new(sys: &NonsmoothSystem, mhat: &[f64]) -> Result<Self> {
+        let (n, nm) = (sys.n, sys.n_mech);
         let what = "the Moreau–Jean iteration matrix M + hγC + h²γ²K";
-        let lower_zero = (nm..n).all(|i| (0..nm).all(|j| mhat[i * n + j] == 0.0));
-        if nm == n || nm == 0 || !lower_zero {
+        // Blocks when M and C have no mechanical–thermal entries and K^θu = 0.
+        let cross = |a: &[f64], i: usize, j: usize| a[i * n + j] != 0.0 || a[j * n + i] != 0.0;
+        let coupled = (nm..n).any(|i| {
+            (0..nm).any(|j| {
+                cross(&sys.mass, i, j)
+                    || cross(&sys.damping, i, j)
+                    || sys.stiffness[i * n + j] != 0.0
+            })
+        });
+        if nm == n || nm == 0 || coupled {
             return Ok(StepSolver::Whole(Box::new(StepLu::new(mhat, n, what)?)));
         }
         let sub = |r: std::ops::Range<usize>| -> Vec<f64> {
@@ -220,6 +245,60 @@ impl StepSolver {
             b: SparseRows::new(mhat, n, 0..nm, nm..n),
             nm,
         })))
+    }
+
+    /// The free velocity increment ṽ − v_n = M̂⁻¹[−h(C v_n + K x_n − f_{n+Γ}) − h²ΓK v_n] (step 1
+    /// of the module doc) and, by blocks, K^uθ(θ_n + hγ v^θ_n + hγγ_θ Δṽ^θ), the thermal load at
+    /// t_{n+γ} of the contact-free step.
+    fn free_increment(
+        &self,
+        b: &Blocks,
+        (x, v): (&[f64], &[f64]),
+        fg: &[f64],
+        h: f64,
+        (gamma, gamma_t): (f64, f64),
+    ) -> (Vec<f64>, Option<Vec<f64>>) {
+        let n = x.len();
+        match self {
+            StepSolver::Whole(lu) => {
+                // K x_n + hΓK v_n row block by row block: K_u(x_n + hγ v_n), K_θ(x_n + hγ_θ v_n).
+                let mut ky = Vec::with_capacity(n);
+                for (rows, g) in [(&b.k_uu, gamma), (&b.k_t, gamma_t)] {
+                    let y: Vec<f64> = x.iter().zip(v).map(|(a, b)| a + h * g * b).collect();
+                    ky.extend(rows.mul(&y));
+                }
+                let y: Vec<f64> = x.iter().zip(v).map(|(a, b)| a + h * gamma * b).collect();
+                for (k, p) in ky.iter_mut().zip(b.k_ut.mul(&y)) {
+                    *k += p;
+                }
+                let cv = b.c.mul(v);
+                let rhs: Vec<f64> = (0..n).map(|r| -h * (cv[r] + ky[r] - fg[r])).collect();
+                (lu.solve(&rhs), None)
+            }
+            StepSolver::Blocks(blocks) => {
+                let BlockLu { a, d, nm, .. } = blocks.as_ref();
+                let nm = *nm;
+                // Heat rows first: D Δṽ^θ = −h(C^θθ v^θ + K^θθ(θ + hγ_θ v^θ) − f^θ).
+                let y: Vec<f64> = x.iter().zip(v).map(|(a, b)| a + h * gamma_t * b).collect();
+                let kt = b.k_t.mul(&y);
+                let rt: Vec<f64> = (0..n - nm)
+                    .map(|a| -h * (b.c.row_dot(nm + a, v) + kt[a] - fg[nm + a]))
+                    .collect();
+                let dvt = d.solve(&rt);
+                // Then A Δṽ^u = −h(C v + K^uu(u + hγv^u) + K^uθ(θ + hγv^θ + hγγ_θΔṽ^θ) − f^u).
+                let mut z: Vec<f64> = x.iter().zip(v).map(|(a, b)| a + h * gamma * b).collect();
+                for (za, d) in z[nm..].iter_mut().zip(&dvt) {
+                    *za += h * gamma * gamma_t * d;
+                }
+                let (kuu, kut) = (b.k_uu.mul(&z), b.k_ut.mul(&z));
+                let ru: Vec<f64> = (0..nm)
+                    .map(|r| -h * (b.c.row_dot(r, v) + kuu[r] + kut[r] - fg[r]))
+                    .collect();
+                let mut dv = a.solve(&ru);
+                dv.extend(dvt);
+                (dv, Some(kut))
+            }
+        }
     }
 
     /// M̂⁻¹ r.
@@ -241,8 +320,7 @@ impl StepSolver {
 
 /// The blocks of M, C and K the time loop multiplies by, as sparse rows.
 struct Blocks {
-    /// The mechanical and the thermal rows of K (all columns), and C.
-    k_u: SparseRows,
+    /// The thermal rows of K (all columns), and C.
     k_t: SparseRows,
     c: SparseRows,
     /// M^uu, C^uu, K^uu.
@@ -265,7 +343,6 @@ impl Blocks {
                 .collect()
         };
         Blocks {
-            k_u: SparseRows::new(&sys.stiffness, n, 0..nm, 0..n),
             k_t: SparseRows::new(&sys.stiffness, n, nm..n, 0..n),
             c: SparseRows::new(&sys.damping, n, 0..n, 0..n),
             m_uu: SparseRows::new(&sys.mass, n, 0..nm, 0..nm),
@@ -290,12 +367,13 @@ fn accumulate_energy(
     (x0, x1): (&[f64], &[f64]),
     (v0, v1): (&[f64], &[f64]),
     fg: &[f64],
+    kut_theta_g: &[f64],
     columns: &[Vec<f64>],
     lambda: &[f64],
     e0: f64,
     e: &mut EnergyTerms,
 ) {
-    let (n, nm) = (sys.n, sys.n_mech);
+    let nm = sys.n_mech;
     let vg: Vec<f64> = (0..nm)
         .map(|r| gamma * v1[r] + (1.0 - gamma) * v0[r])
         .collect();
@@ -307,8 +385,7 @@ fn accumulate_energy(
         e.numerical += (gamma - 0.5) * (b.m_uu.quad(&dv) + b.k_uu.quad(&du));
     }
     e.external += h * (0..nm).map(|r| vg[r] * fg[r]).sum::<f64>();
-    let theta_g: Vec<f64> = (0..n).map(|c| x0[c] + gamma * (x1[c] - x0[c])).collect();
-    let coupling: f64 = (0..nm).map(|r| vg[r] * b.k_ut.row_dot(r, &theta_g)).sum();
+    let coupling: f64 = (0..nm).map(|r| vg[r] * kut_theta_g[r]).sum();
     e.thermal -= h * coupling;
     e.contact += columns
         .iter()

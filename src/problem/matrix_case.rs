@@ -15,9 +15,12 @@ use std::path::Path;
 
 use faer::{Mat, MatRef};
 
-use crate::case::{Case, Damping, ElementKind, ExcitationLoad, FrictionElement, WeightedDofs};
+use crate::case::{
+    Case, Damping, ElementKind, ExcitationLoad, FrictionElement, Strip, WeightedDofs,
+};
 use crate::contact::grounded::DofElements;
 use crate::error::{Error, Result};
+use crate::fe::quadrature::gauss_legendre;
 use crate::hbm::LinearModel;
 use crate::march::element::{Direction, Element};
 use crate::march::law::FrictionParams;
@@ -65,10 +68,11 @@ pub fn matrix_setup(case: &Case, model: &StructuralModel) -> Result<MatrixSetup>
     let c = damping_matrix(case, model, k.as_ref(), m.as_ref())?;
     let force = excitation(case, model, &free_of)?;
     let mut nonlinear_rows = Vec::new();
-    for (i, e) in case.element.iter().enumerate() {
-        let mut rows = vec![(format!("element[{i}].tangential.dofs"), &e.tangential.dofs)];
+    let elements = case_elements(case);
+    for (name, e) in &elements {
+        let mut rows = vec![(format!("{name}.tangential.dofs"), &e.tangential.dofs)];
         if let Some(nrm) = &e.normal {
-            rows.push((format!("element[{i}].normal.dofs"), &nrm.dofs));
+            rows.push((format!("{name}.normal.dofs"), &nrm.dofs));
         }
         for (key, dofs) in rows {
             for &d in dofs {
@@ -232,23 +236,97 @@ pub fn matrix_elements(
             weights: w.weights.clone(),
         })
     };
-    let elements = case
-        .element
-        .iter()
-        .enumerate()
-        .map(|(i, e)| {
+    let elements = case_elements(case)
+        .into_iter()
+        .map(|(name, e)| {
             Ok(FrictionElement {
-                tangential: remap(format!("element[{i}].tangential.dofs"), &e.tangential)?,
+                tangential: remap(format!("{name}.tangential.dofs"), &e.tangential)?,
                 normal: e
                     .normal
                     .as_ref()
-                    .map(|n| remap(format!("element[{i}].normal.dofs"), n))
+                    .map(|n| remap(format!("{name}.normal.dofs"), n))
                     .transpose()?,
-                ..e.clone()
+                ..e
             })
         })
         .collect::<Result<Vec<_>>>()?;
     DofElements::from_case(&elements, setup.nonlinear_rows.len())
+}
+
+/// The nonlinear elements of a matrix case with the names its messages use: the `[[element]]`
+/// entries (`element[i]`), then the points of every `[[strip]]` (`strip[s].point[p]`,
+/// [`strip_points`]).
+pub fn case_elements(case: &Case) -> Vec<(String, FrictionElement)> {
+    let mut out: Vec<(String, FrictionElement)> = case
+        .element
+        .iter()
+        .enumerate()
+        .map(|(i, e)| (format!("element[{i}]"), e.clone()))
+        .collect();
+    for (s, strip) in case.strip.iter().enumerate() {
+        out.extend(
+            strip_points(strip)
+                .into_iter()
+                .enumerate()
+                .map(|(p, (_, e))| (format!("strip[{s}].point[{p}]"), e)),
+        );
+    }
+    out
+}
+
+/// The integration points of a validated strip (`docs/case-file.md`, `[[strip]]`) as friction
+/// elements, with their positions s (m): per segment [s_j, s_j+1] of length h the
+/// Gauss–Legendre points s = s_j + h(1 + x_g)/2 of weight dA = h w_g/2, the station weights
+/// interpolated linearly (η = (1 + x_g)/2), k_t = k_u dA, k_n = k_v dA and
+/// n0 = P q(s) dA / Σ q dA (P the total preload, so the points' preloads add up to P exactly).
+/// Weights that interpolate to exactly 0 are left out of a point's combination.
+pub fn strip_points(strip: &Strip) -> Vec<(f64, FrictionElement)> {
+    let (xg, wg) = gauss_legendre(strip.gauss);
+    let st = &strip.stations;
+    let mut points = Vec::new();
+    for j in 0..st.len().saturating_sub(1) {
+        let h = st[j + 1] - st[j];
+        for (x, w) in xg.iter().zip(&wg) {
+            let eta = 0.5 * (1.0 + x);
+            points.push((j, eta, st[j] + h * eta, 0.5 * h * w));
+        }
+    }
+    let total: f64 = points
+        .iter()
+        .map(|&(_, _, s, da)| strip.shape(s) * da)
+        .sum();
+    let combination = |table: &[Vec<f64>], j: usize, eta: f64| {
+        let mut c = WeightedDofs::default();
+        for (k, &d) in strip.dofs.iter().enumerate() {
+            let w = (1.0 - eta) * table[j][k] + eta * table[j + 1][k];
+            if w != 0.0 {
+                c.dofs.push(d);
+                c.weights.push(w);
+            }
+        }
+        if c.dofs.is_empty() {
+            c.dofs.push(strip.dofs[0]);
+            c.weights.push(0.0);
+        }
+        c
+    };
+    points
+        .into_iter()
+        .map(|(j, eta, s, da)| {
+            let e = FrictionElement {
+                kind: ElementKind::Friction,
+                tangential: combination(&strip.tangential, j, eta),
+                normal: strip.normal.as_ref().map(|t| combination(t, j, eta)),
+                kt: Some(strip.kt * da),
+                kn: strip.kn * da,
+                mu: Some(strip.mu),
+                n0: Some(strip.preload * strip.shape(s) * da / total),
+                evaluation: strip.evaluation,
+                ..FrictionElement::default()
+            };
+            (s, e)
+        })
+        .collect()
 }
 
 /// The march system of a matrix-defined case: dense K, M, C over the free rows (row-major), the
@@ -304,8 +382,7 @@ pub fn matrix_march(case: &Case, sm: &StructuralModel) -> Result<(MarchSystem, V
         })
     };
     let mut elements = Vec::new();
-    for (i, e) in case.element.iter().enumerate() {
-        let name = format!("element[{i}]");
+    for (name, e) in case_elements(case) {
         if e.kind != ElementKind::Friction {
             return Err(Error::input(format!(
                 "{file}: {name}: kind = \"{}\" is computed by the harmonic balance (`nlrom solve`); time marching takes `friction` elements only",

@@ -7,7 +7,8 @@
 //! | [`rom_store`] | the ROM of a sector case: read from a ROM file whose key matches, else reduced (and cached) |
 //! | [`matrix_case`] | a model on matrix rows: free rows, dense K, M, C, excitation, output rows, `[[element]]` elements |
 //! | [`sector`] | the harmonic balance problem of a reduced sector with its contact interfaces |
-//! | [`sector_march`] | the real ROM of a sector (no cyclic symmetry, k = 0, k = N/2) as a time-marching model |
+//! | [`sector_march`] | the ROM of a sector as a time-marching model (no cyclic symmetry, k = 0, k = N/2, travelling waves) |
+//! | [`travelling_wave`] | a travelling wave as the real model of the sectors of one wave period |
 //! | [`damper`] | the underplatform damper of a `[damper]` table as a time-marching model |
 //! | [`nonsmooth_case`] | a matrix case with `[[obstacle]]` contacts as the model of the nonsmooth schemes |
 //! | [`casing_case`] | a mesh case with `[[casing]]` (and `[thermal]`) as the thermoelastic model of the nonsmooth schemes |
@@ -28,6 +29,7 @@ pub mod rom_store;
 pub mod sector;
 pub mod sector_march;
 pub mod settings;
+pub mod travelling_wave;
 
 /// Where a problem builder's messages go: lines about what was read, reused or written
 /// (`info`), problems the user must see (`warn`) and the stages' own logs (`detail`). The

@@ -15,7 +15,8 @@
 //!   has no even harmonics (e.g. a stuck or symmetric contact), and differ by the even harmonics
 //!   otherwise.
 //!
-//! A travelling wave (k ≠ 0, N/2) has a complex ROM and is an input error.
+//! A travelling wave (k ≠ 0, N/2) has a complex ROM; its march is that of the sectors of one wave
+//! period ([`super::travelling_wave`]), reported on the reference sector.
 //!
 //! Contact (SAMA paper, Battiato 2021, §3 and eq. 33; `docs/theory.md`): each node-to-node pair
 //! (u1, u2, v) = P (u_c − e^{iσφ_k} R_α^σ u_t), P = [t1; t2; −n], becomes two 1-D elements of the
@@ -27,6 +28,7 @@
 
 use super::rom_store::{sector_rom, RomPolicy};
 use super::sector::SectorDofs;
+use super::travelling_wave::travelling_wave;
 use super::Log;
 use crate::case::{Case, ContactElement};
 use crate::contact::pairs::PairElement;
@@ -41,7 +43,8 @@ use crate::rom::{HarmonicRom, ReducedDof, Rom};
 
 /// The marched sector model, its reported rows and their node labels.
 pub struct SectorMarch {
-    /// The model on the real ROM coordinates of one harmonic index.
+    /// The model: the real ROM coordinates of one harmonic index, or the sectors of one period
+    /// of a travelling wave.
     pub system: MarchSystem,
     /// Reported rows (output DOFs: `[response]` groups, else the excitation group, × x y z).
     pub response: Vec<usize>,
@@ -53,12 +56,15 @@ pub struct SectorMarch {
 
 /// Builds the march of the sector case `case` (module documentation). `log` receives progress.
 ///
-/// Errors ([`Error::Input`]): a travelling wave (k ≠ 0, N/2), the 2-D friction element, a missing
+/// Errors ([`Error::Input`]): the 2-D friction element, a missing
 /// or matrix-row excitation, nodes that are not physical ROM coordinates, and the errors of the
 /// reduction and of the contact interfaces.
 pub fn sector_march(case: &Case, log: &mut dyn FnMut(&str)) -> Result<SectorMarch> {
-    let k = harmonic_index(case)?;
+    let (k, wave) = harmonic_index(case)?;
     check_friction_elements(case)?;
+    if let Some(m) = wave {
+        return travelling_march(case, k, m, log);
+    }
     let (rom, mesh, _) = sector_rom(case, &RomPolicy::ReadIfMatching, &StageLog::new(log))?;
     let h = rom.harmonic(k).ok_or_else(|| {
         Error::input(format!(
@@ -72,7 +78,21 @@ pub fn sector_march(case: &Case, log: &mut dyn FnMut(&str)) -> Result<SectorMarc
     let dofs = SectorDofs::new(case, &mesh)?;
     let force = excitation(&dofs, h)?;
     let response = dofs.output_rows(h)?;
-    let system = rom_system(h, elements, force, &case.path.display().to_string())?;
+    let system = march_system(
+        h.len(),
+        [
+            real_dense(&h.mass, "mass")?,
+            match &h.damping {
+                Some(c) => real_dense(c, "damping")?,
+                None => vec![0.0; h.len() * h.len()],
+            },
+            real_dense(&h.stiffness, "stiffness")?,
+        ],
+        force,
+        elements,
+        h.dofs.iter().map(dof_name).collect(),
+        &case.path.display().to_string(),
+    )?;
     log(&format!(
         "sector ROM of harmonic index k = {k}: {} coordinates, {} friction elements on {} contact pairs{}",
         system.n,
@@ -87,39 +107,83 @@ pub fn sector_march(case: &Case, log: &mut dyn FnMut(&str)) -> Result<SectorMarc
     Ok(SectorMarch {
         system,
         response,
-        response_dofs: dofs
-            .outputs
-            .iter()
-            .map(|d| ResponseDof::Node {
-                tag: d.node_tag,
-                component: d.component,
-            })
-            .collect(),
+        response_dofs: response_dofs(&dofs),
         harmonic_index: k,
     })
 }
 
-/// The march system on the real matrices of `h` with the contact `elements` and the external
-/// `force`, its contact force measured from the static equilibrium, starting at rest; `what`
-/// names the case in messages.
-fn rom_system(
-    h: &HarmonicRom,
-    elements: Vec<Element>,
+/// The march of a travelling wave of engine order `m` (harmonic index `k`): the sectors of one
+/// wave period of [`super::travelling_wave`], on a ROM holding every harmonic index
+/// n·m mod N (n = 0..N − 1) the wave can excite.
+fn travelling_march(
+    case: &Case,
+    k: usize,
+    m: usize,
+    log: &mut dyn FnMut(&str),
+) -> Result<SectorMarch> {
+    let mut all = case.clone();
+    let n_sec = case.cyclic.as_ref().map_or(1, |g| g.sectors);
+    all.harmonic_balance.harmonics = all.harmonic_balance.harmonics.max(n_sec - 1);
+    let (rom, mesh, _) = sector_rom(&all, &RomPolicy::ReadIfMatching, &StageLog::new(log))?;
+    let interfaces = build_interfaces(case, &mesh, rom.cyclic.as_ref())?;
+    let dofs = SectorDofs::new(case, &mesh)?;
+    let what = case.path.display().to_string();
+    let wave = travelling_wave(&rom, m, &interfaces, &dofs, &what)?;
+    let system = march_system(
+        wave.n,
+        [wave.mass, wave.damping, wave.stiffness],
+        wave.force,
+        wave.elements,
+        wave.dof_names,
+        &what,
+    )?;
+    log(&format!(
+        "travelling wave of harmonic index k = {k} (engine order {m}): {} sectors of one wave period on the ROMs of k = {:?}, {} coordinates, {} friction elements on {} contact pairs",
+        wave.sectors,
+        wave.blocks,
+        system.n,
+        system.elements.len(),
+        system.elements.len() / 2,
+    ));
+    Ok(SectorMarch {
+        system,
+        response: wave.response,
+        response_dofs: response_dofs(&dofs),
+        harmonic_index: k,
+    })
+}
+
+/// The output DOFs of `dofs` as results-file response DOFs.
+fn response_dofs(dofs: &SectorDofs) -> Vec<ResponseDof> {
+    dofs.outputs
+        .iter()
+        .map(|d| ResponseDof::Node {
+            tag: d.node_tag,
+            component: d.component,
+        })
+        .collect()
+}
+
+/// The march system with the real matrices `[mass, damping, stiffness]` (row-major n × n), the
+/// external `force`, the contact `elements` and a name per coordinate, its contact force
+/// measured from the static equilibrium, starting at rest; `what` names the case in messages.
+fn march_system(
+    n: usize,
+    [mass, damping, stiffness]: [Vec<f64>; 3],
     force: Vec<Harmonic>,
+    elements: Vec<Element>,
+    dof_names: Vec<String>,
     what: &str,
 ) -> Result<MarchSystem> {
     let mut system = MarchSystem {
-        n: h.len(),
-        mass: real_dense(&h.mass, "mass")?,
-        damping: match &h.damping {
-            Some(c) => real_dense(c, "damping")?,
-            None => vec![0.0; h.len() * h.len()],
-        },
-        stiffness: real_dense(&h.stiffness, "stiffness")?,
+        n,
+        mass,
+        damping,
+        stiffness,
         force,
         damping_force: Vec::new(),
         elements,
-        dof_names: h.dofs.iter().map(dof_name).collect(),
+        dof_names,
         initial: InitialCondition::Rest,
         displacement_scale: 1.0,
     };
@@ -130,9 +194,12 @@ fn rom_system(
 }
 
 /// The harmonic index k of the march: 0 without cyclic symmetry, else m mod N of the
-/// excitation's engine order m, which must be 0 or N/2.
-fn harmonic_index(case: &Case) -> Result<usize> {
-    let Some(g) = &case.cyclic else { return Ok(0) };
+/// excitation's engine order m; with the engine order m when k is a travelling wave
+/// (k ≠ 0, N/2).
+fn harmonic_index(case: &Case) -> Result<(usize, Option<usize>)> {
+    let Some(g) = &case.cyclic else {
+        return Ok((0, None));
+    };
     let n = g.sectors;
     let m = case
         .excitation
@@ -145,14 +212,7 @@ fn harmonic_index(case: &Case) -> Result<usize> {
             ))
         })?;
     let k = m % n;
-    if k == 0 || 2 * k == n {
-        return Ok(k);
-    }
-    Err(Error::input(format!(
-        "{}: [excitation] engine_order = {m} excites harmonic index k = {k} of the N = {n} sectors: a travelling wave, whose ROM is complex (e^{{iφ_k}} between neighbours) and has no real time-domain model; `nlrom march` integrates k = 0 (engine_order a multiple of {n}) or k = N/2 (engine_order ≡ {} mod {n}, N even) — use `nlrom solve` (harmonic balance) for k = {k}",
-        case.path.display(),
-        n / 2
-    )))
+    Ok((k, (k != 0 && 2 * k != n).then_some(m)))
 }
 
 /// Every `[[contact]]` must use the 1-D friction element (the march's elements have one
@@ -242,7 +302,7 @@ fn contact_elements(
 /// The two 1-D elements (t1, t2) of a pair: local a = P_a·u_c − c (P R^σ)_a·u_t with
 /// P = [t1; t2; −n], R^σ the target's rotation and c the neighbour phase.
 /// `label` names the pair in messages and results.
-fn pair_elements(
+pub(super) fn pair_elements(
     pair: &PairElement,
     rotation: &[[f64; 3]; 3],
     c: f64,

@@ -1,0 +1,115 @@
+//! `[[strip]]`: a distributed friction interface along a line of a matrix model — the 1-D
+//! contact strip of Cigeroglu, An & Menq 2007 (§2, eqs 4–17 at every point; §4.1, the bar
+//! damper) as a quadrature of point elements.
+//!
+//! The strip has stations s_0 < s_1 < … (m) along the line; at each station the tangential
+//! relative displacement is u(s_j) = Σ_k T_jk q(dofs_k) (and the normal approach
+//! v(s_j) = Σ_k N_jk q(dofs_k)), with weights that are the nodes' shape-function values (a
+//! nodal model) or the mode-shape values φ_k(s_j) (a modal model). Between stations the weights
+//! are interpolated linearly. The integration points are the Gauss–Legendre points of every
+//! segment [s_j, s_{j+1}]; a point of weight dA (m) is one friction element of the 1-D law with
+//! k_t = k_u dA, k_n = k_v dA, μ and the preload n0 = q(s) dA, where the preload per length q(s)
+//! has the chosen shape and integrates (by the same rule) to the strip's total preload.
+
+use serde::Deserialize;
+
+use super::Evaluation;
+
+/// How the total preload is distributed along a strip.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PreloadDistribution {
+    /// q(s) constant.
+    #[default]
+    Uniform,
+    /// q(s) ∝ 1 + c (2ξ − 1)², ξ = (s − s_0)/(s_last − s_0): c > 0 smallest at the centre, c < 0
+    /// largest at the centre (c ≥ −1, so that q does not change sign).
+    Quadratic,
+    /// q(s) ∝ the `values` given at the stations, interpolated linearly (each ≥ 0).
+    Stations,
+}
+
+impl PreloadDistribution {
+    /// The name used in case files.
+    pub fn name(self) -> &'static str {
+        match self {
+            PreloadDistribution::Uniform => "uniform",
+            PreloadDistribution::Quadratic => "quadratic",
+            PreloadDistribution::Stations => "stations",
+        }
+    }
+}
+
+/// `[[strip]]`: a line of friction points on DOF combinations of a matrix model.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Strip {
+    /// The matrix rows (0-based) the strip's kinematics read.
+    pub dofs: Vec<usize>,
+    /// Station positions s_j (m), strictly increasing, at least two.
+    pub stations: Vec<f64>,
+    /// Per station, one weight per entry of `dofs`: u(s_j) = Σ_k tangential\[j\]\[k\]·q[dofs\[k\]].
+    pub tangential: Vec<Vec<f64>>,
+    /// Per station, the weights of the normal approach v(s_j) (v > 0 loads the contact); none:
+    /// no normal motion (constant preload).
+    #[serde(default)]
+    pub normal: Option<Vec<Vec<f64>>>,
+    /// Gauss–Legendre points per segment (1 to 8; default 2).
+    #[serde(default = "default_gauss")]
+    pub gauss: usize,
+    /// Tangential contact stiffness per unit length k_u (N/m²), ≥ 0.
+    pub kt: f64,
+    /// Normal contact stiffness per unit length k_v (N/m²), ≥ 0; default 0.
+    #[serde(default)]
+    pub kn: f64,
+    /// Friction coefficient μ ≥ 0.
+    pub mu: f64,
+    /// Total normal preload ∫ q ds (N); negative: an initial gap, n0 = −k_v g0 per length (needs
+    /// `normal` and `kn` > 0).
+    pub preload: f64,
+    /// The shape of q(s) (default uniform).
+    #[serde(default)]
+    pub distribution: PreloadDistribution,
+    /// The coefficient c of the quadratic distribution.
+    #[serde(default)]
+    pub c: Option<f64>,
+    /// The relative preload at each station, for `distribution = "stations"`.
+    #[serde(default)]
+    pub values: Option<Vec<f64>>,
+    /// How the points are evaluated on harmonic vectors (as `[[element]] evaluation`).
+    #[serde(default)]
+    pub evaluation: Evaluation,
+}
+
+fn default_gauss() -> usize {
+    2
+}
+
+/// The largest number of Gauss points per segment.
+pub const MAX_GAUSS: usize = 8;
+
+impl Strip {
+    /// The relative preload per length at s (the shape of q, not normalised); valid after
+    /// validation (stations increasing, `c` and `values` present when their distribution needs
+    /// them).
+    pub fn shape(&self, s: f64) -> f64 {
+        let (s0, s1) = (self.stations[0], self.stations[self.stations.len() - 1]);
+        match self.distribution {
+            PreloadDistribution::Uniform => 1.0,
+            PreloadDistribution::Quadratic => {
+                let x = 2.0 * (s - s0) / (s1 - s0) - 1.0;
+                1.0 + self.c.unwrap_or(0.0) * x * x
+            }
+            PreloadDistribution::Stations => {
+                let v = self.values.as_deref().unwrap_or_default();
+                let j = self
+                    .stations
+                    .windows(2)
+                    .position(|w| s <= w[1])
+                    .unwrap_or(self.stations.len() - 2);
+                let eta = (s - self.stations[j]) / (self.stations[j + 1] - self.stations[j]);
+                (1.0 - eta) * v[j] + eta * v[j + 1]
+            }
+        }
+    }
+}
