@@ -4,7 +4,8 @@
 //! force, damping 0.1–5 %, steps 0.005–0.08 rad/s). Prints one line per case and the success
 //! rate, points, Newton iterations and time per curve.
 //!
-//! `cargo bench --bench robustness_corpus` (add `-- N` for the first N cases).
+//! `cargo bench --bench robustness_corpus` (add `-- N` for the first N cases, `-- analytic` to
+//! evaluate every friction element by the exact continuous-time cycle instead of the AFT).
 
 #[path = "../tests/corpus/mod.rs"]
 mod corpus;
@@ -14,10 +15,15 @@ fn main() {
         .skip(1)
         .find_map(|a| a.parse().ok())
         .unwrap_or(320);
+    let evaluation = if std::env::args().any(|a| a == "analytic") {
+        corpus::Evaluation::Analytic
+    } else {
+        corpus::Evaluation::Aft
+    };
     let (mut reached, mut points, mut iterations, mut seconds) = (0, 0, 0, 0.0);
     let mut worst: f64 = 0.0;
     for i in 0..count {
-        let case = corpus::case(i, 4096);
+        let case = corpus::evaluated(corpus::case(i, 4096), evaluation);
         let o = corpus::run(&case);
         println!(
             "{:<100} {:>5} pts {:>6} its {:>8.3} s  worst residual {:.1e}  {}",

@@ -456,26 +456,35 @@ fn element_path_and_its_errors() {
     let lp = ws.hysteresis();
     assert_eq!(lp.ft[0].len(), 64);
 
+    // H = 3: the exact cycle with transitions located as roots (`contact::exact`); a motion
+    // whose second and third harmonics are zero gives the closed-form cycle above
     let aft3 = Aft::new(HarmonicLayout::new(3, 64).unwrap()).unwrap();
     let mut ws3 = Workspace::new(&aft3);
-    let x3 = vec![0.1; 21];
+    let widen = |s: &[f64; 3]| [s[0], s[1], s[2], 0.0, 0.0, 0.0, 0.0];
+    let x3: Vec<f64> = [widen(&u1), widen(&u2), widen(&v)].concat();
     let mut f3 = vec![0.0; 21];
-    let err = evaluate_as(
+    let mut w3 = [0.0; 2];
+    evaluate_as(
         Evaluation::Analytic,
         &el,
         &aft3,
         &x3,
-        &mut w,
+        &mut w3,
         &mut f3,
         false,
         &mut ws3,
     )
-    .unwrap_err()
-    .to_string();
-    assert!(
-        err.contains("harmonics = 1") && err.contains("aft"),
-        "{err}"
-    );
+    .unwrap();
+    for (signal, closed) in [&r1.friction, &r2.friction, &r1.normal].iter().enumerate() {
+        for k in 0..7 {
+            let expected = if k < 3 { closed[k] } else { 0.0 };
+            assert!(
+                (f3[signal * 7 + k] - expected).abs() < 1e-12,
+                "signal {signal} coefficient {k}: {} vs {expected}",
+                f3[signal * 7 + k]
+            );
+        }
+    }
     let el2 = LocalElement {
         variant: Variant::TwoD,
         ..el

@@ -48,6 +48,62 @@ fn generated_curves_reach_their_end_within_the_tolerance() {
     );
 }
 
+/// The same 32 cases with every friction element evaluated by the exact continuous-time cycle
+/// (`evaluation = "analytic"`: transitions located as roots, force harmonics integrated
+/// exactly; `contact::exact`). The sampled law's kinks, folds and aliasing are gone, and more
+/// curves reach their end than with the AFT (the floor is the measured count).
+#[test]
+fn generated_curves_with_the_exact_cycle_reach_their_end() {
+    const CASES: u64 = 32;
+    const REACHED_AT_LEAST: usize = 30;
+    let mut reached = 0;
+    let mut stopped = vec![];
+    for i in 0..CASES {
+        let case = corpus::evaluated(corpus::case(i, 256), corpus::Evaluation::Analytic);
+        let outcome = corpus::run(&case);
+        assert!(
+            outcome.points == 0 || outcome.worst_residual <= TOLERANCE,
+            "{}: an accepted point has the residual {:.2e}",
+            case.label,
+            outcome.worst_residual
+        );
+        if outcome.reached_end {
+            reached += 1;
+        } else {
+            stopped.push(format!("{}: {}", case.label, outcome.end));
+        }
+    }
+    println!(
+        "exact cycle: {reached} of {CASES} curves reached their end; stopped:\n{}",
+        stopped.join("\n")
+    );
+    assert!(
+        reached >= REACHED_AT_LEAST,
+        "{reached} of {CASES} curves reached their end (at least {REACHED_AT_LEAST} did before):\n{}",
+        stopped.join("\n")
+    );
+}
+
+/// Cases whose AFT path stops at the sampled law's kinks reach their end with the exact cycle
+/// (corpus cases at N_t = 64: #165 (chain, H = 15, the start fails), #183 (pair, H = 15, 20 000
+/// points), #277 (chain, H = 15, stops at a superharmonic), #299 (pair, H = 3, folds back at a
+/// kink and leaves the range)), every point within the tolerance.
+#[test]
+fn the_exact_cycle_passes_where_the_sampled_law_stops() {
+    for i in [165, 183, 277, 299] {
+        let case = corpus::evaluated(corpus::case(i, 4096), corpus::Evaluation::Analytic);
+        let outcome = corpus::run(&case);
+        assert!(
+            outcome.reached_end,
+            "{}: {} after {} points",
+            case.label,
+            outcome.end,
+            outcome.points
+        );
+        assert!(outcome.worst_residual <= TOLERANCE, "{}", case.label);
+    }
+}
+
 /// A resonance of high amplitude is passed once. Corpus case #9: a chain of five unit masses
 /// grounded at both ends, three Jenkins elements in gross slip (excitation 97 × the slip force),
 /// ζ = 0.12 %. The unknowns' scale is the peak, about 70 × the response off resonance, so the path

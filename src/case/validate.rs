@@ -275,7 +275,6 @@ impl Case {
                 self.check_weighted(&format!("{key}.normal"), n)?;
             }
             self.check_element_values(&key, e)?;
-            self.check_evaluation(&format!("{key}.evaluation"), e.evaluation)?;
         }
         Ok(())
     }
@@ -373,23 +372,8 @@ impl Case {
                     || "relative preloads must be ≥ 0 and not all 0 (a sign change would give points a negative preload); the sign of the total is `preload`'s",
                 )?;
             }
-            self.check_evaluation(&k("evaluation"), s.evaluation)?;
         }
         Ok(())
-    }
-
-    /// `evaluation = "analytic"` (the exact single-harmonic cycle) needs H = 1.
-    fn check_evaluation(&self, key: &str, evaluation: Evaluation) -> Result<()> {
-        self.require(
-            evaluation != Evaluation::Analytic || self.harmonic_balance.harmonics == 1,
-            key,
-            || {
-                format!(
-                    "evaluation = \"analytic\" is the exact single-harmonic cycle and needs [harmonic_balance] harmonics = 1 (this case has {}); use evaluation = \"aft\" for H > 1",
-                    self.harmonic_balance.harmonics
-                )
-            },
-        )
     }
 
     /// The keys of `e` fit its kind: every required key given, no key of another kind.

@@ -40,6 +40,7 @@ use faer::{Accum, MatMut, MatRef, Par};
 
 use crate::case::Evaluation;
 use crate::contact::aft::{Aft, AftScratch};
+use crate::contact::exact;
 use crate::contact::law::{self, ContactParams, Regime, Variant};
 use crate::contact::microslip;
 use crate::error::{Error, Result};
@@ -275,6 +276,22 @@ impl Workspace {
         self.w[0][j] = s.slider[0];
         self.w[1][j] = s.slider[1];
         self.regime[j] = s.regime;
+    }
+
+    /// Stores sample j of an exact evaluation ([`super::exact`]): the motion (u1, u2, v) and the
+    /// law's state there; the report and the hysteresis loop then come from the samples.
+    pub(crate) fn store_exact(&mut self, j: usize, u: [f64; 2], v: f64, s: &law::Sample) {
+        if j == 0 {
+            self.analytic = None;
+            self.marching = Marching {
+                periods: 1,
+                converged: true,
+            };
+        }
+        self.u[0][j] = u[0];
+        self.u[1][j] = u[1];
+        self.v[j] = v;
+        self.store(j, s);
     }
 
     /// State report of the last evaluated period.
@@ -514,6 +531,11 @@ pub fn evaluate_as(
 ) -> Result<Marching> {
     match evaluation {
         Evaluation::Aft => evaluate(element, aft, x, slider, force, jacobian, ws),
+        Evaluation::Analytic if aft.layout().harmonics > 1 => {
+            element.check()?;
+            exact::evaluate_element(element, aft, x, slider, force, jacobian, ws)?;
+            Ok(ws.marching)
+        }
         Evaluation::Analytic => {
             element.check()?;
             microslip::evaluate_element(

@@ -7,6 +7,9 @@
 //! * [`aft`]: realfft transforms between the real harmonic layout and time samples.
 //! * [`element`]: one element over a period — periodic marching, forces, the analytic Jacobian,
 //!   stick/slip/separation fractions, dissipated energy, hysteresis loop.
+//! * [`exact`]: the exact continuous-time cycle of the 1-D law under multi-harmonic motion
+//!   (transitions located as roots, force harmonics integrated exactly): `evaluation =
+//!   "analytic"` for H > 1 ([`microslip`] is its closed form for H = 1).
 //! * [`kinematics`]: relative harmonics of a pair with the inter-sector rotation and phase.
 //! * [`pairs`]: [`pairs::PairSet`], node-to-node pairs on physical DOFs as a
 //!   [`HarmonicForce`](crate::harmonics::HarmonicForce) (parallel over pairs).
@@ -22,6 +25,7 @@
 pub mod aft;
 pub(crate) mod assembly;
 pub mod element;
+pub mod exact;
 pub mod grounded;
 pub mod kinematics;
 pub mod law;

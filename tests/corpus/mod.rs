@@ -10,6 +10,7 @@
 mod random;
 
 use faer::Mat;
+pub use nlrom::case::Evaluation;
 use nlrom::case::WeightedDofs;
 use nlrom::contact::grounded::{DofElement, DofElements};
 use nlrom::contact::law::ContactParams;
@@ -65,6 +66,19 @@ pub fn case(i: u64, max_samples: usize) -> Case {
         separating_pair(i, &mut r, layout, zeta, ratio, step)
     } else {
         chain(i, &mut r, layout, zeta, ratio, step)
+    }
+}
+
+/// The case with every friction element evaluated as `evaluation` (the exact continuous-time
+/// cycle with [`Evaluation::Analytic`]).
+pub fn evaluated(case: Case, evaluation: Evaluation) -> Case {
+    let n = case.force.evaluations().len();
+    Case {
+        force: case
+            .force
+            .with_evaluations(vec![evaluation; n])
+            .expect("one evaluation per element"),
+        ..case
     }
 }
 
