@@ -246,6 +246,32 @@ fn static_contact_forces(sys: &NonsmoothSystem, g_final: &[f64]) -> Vec<f64> {
     (0..m).map(|i| lambda[i]).collect()
 }
 
+/// Marches `nc` for 2000 steps with its load held at its peak (a constant) and heavy damping
+/// C = 2e-4 s·K: the history, the settings, the last step's contact forces λ/h and the static
+/// contact forces at the last step's gaps ([`static_contact_forces`]).
+fn press(
+    nc: &mut nlrom::problem::nonsmooth_case::NonsmoothCase,
+) -> (
+    nlrom::march::obstacle::NonsmoothHistory,
+    NonsmoothSettings,
+    Vec<f64>,
+    Vec<f64>,
+) {
+    let sys = &mut nc.system;
+    for f in &mut sys.force {
+        *f = Harmonic::constant(f.cos);
+    }
+    sys.damping = sys.stiffness.iter().map(|k| 2e-4 * k).collect();
+    let s = with_steps(&nc.settings, 2000);
+    let h = moreau_jean(sys, &s).unwrap();
+    let m = sys.obstacles.len();
+    let last: Vec<f64> = (0..m)
+        .map(|i| h.impulses(i).last().unwrap() / s.step)
+        .collect();
+    let lambda = static_contact_forces(sys, &h.gap[h.gap.len() - m..]);
+    (h, s, last, lambda)
+}
+
 #[test]
 fn a_blade_pressed_on_the_casing_settles_on_the_static_contact_forces() {
     // Gap 0, a constant 100 N per tip node outward, friction μ = 0.15 along +y and heavy
@@ -263,20 +289,8 @@ speed_rpm = 2000
 "#,
     );
     let mut nc = build(&text);
-    let sys = &mut nc.system;
-    let n = sys.n;
-    for r in 0..n {
-        let c = sys.force[r].cos;
-        sys.force[r] = Harmonic::constant(c);
-    }
-    sys.damping = sys.stiffness.iter().map(|k| 2e-4 * k).collect();
-    let s = with_steps(&nc.settings, 2000);
-    let h = moreau_jean(sys, &s).unwrap();
-    let m = sys.obstacles.len();
-    let last: Vec<f64> = (0..m)
-        .map(|i| h.impulses(i).last().unwrap() / s.step)
-        .collect();
-    let lambda = static_contact_forces(sys, &h.gap[h.gap.len() - m..]);
+    let (h, s, last, lambda) = press(&mut nc);
+    let m = nc.system.obstacles.len();
     let total: f64 = (0..m).map(|i| lambda[i]).sum();
     for i in 0..m {
         assert!(lambda[i] > 0.0, "static contact force {i}: {}", lambda[i]);
@@ -353,22 +367,8 @@ fn per_node_gaps_set_each_nodes_initial_gap_and_its_static_contact_force() {
         }
     }
     let uniform = build(&casing("gap = 0.0"));
-    let settle = |mut nc: nlrom::problem::nonsmooth_case::NonsmoothCase| -> (Vec<f64>, Vec<f64>) {
-        let sys = &mut nc.system;
-        for f in &mut sys.force {
-            *f = Harmonic::constant(f.cos);
-        }
-        sys.damping = sys.stiffness.iter().map(|k| 2e-4 * k).collect();
-        let s = with_steps(&nc.settings, 2000);
-        let h = moreau_jean(sys, &s).unwrap();
-        let m = sys.obstacles.len();
-        let last: Vec<f64> = (0..m)
-            .map(|i| h.impulses(i).last().unwrap() / s.step)
-            .collect();
-        (last, static_contact_forces(sys, &h.gap[h.gap.len() - m..]))
-    };
-    let (march, stat) = settle(sorted);
-    let (march_u, _) = settle(uniform);
+    let (_, _, march, stat) = press(&mut { sorted });
+    let (_, _, march_u, _) = press(&mut { uniform });
     let total: f64 = stat.iter().sum();
     let mut spread = 0.0_f64;
     for i in 0..5 {
@@ -805,13 +805,20 @@ fn nlrom_march_writes_temperatures_and_plot_nonsmooth_compares_two_steps() {
 // Craig–Bampton reduced mechanics
 // ---------------------------------------------------------------------------------------------
 
-/// The bundled surrogate `cases/blade_casing.toml` with `extra` appended.
-fn surrogate(extra: &str) -> nlrom::problem::nonsmooth_case::NonsmoothCase {
+/// The bundled surrogate `cases/blade_casing.toml` with its text passed through `edit`.
+fn surrogate_edited(
+    edit: impl Fn(String) -> String,
+) -> nlrom::problem::nonsmooth_case::NonsmoothCase {
     let path = root().join("cases/blade_casing.toml");
-    let text = std::fs::read_to_string(&path).unwrap() + extra;
+    let text = edit(std::fs::read_to_string(&path).unwrap());
     let case = Case::from_str(&text, &path).unwrap();
     let sm = nlrom::model::build(&case, &mut |_| {}).unwrap();
     nonsmooth_case(&case, &sm).unwrap()
+}
+
+/// The bundled surrogate `cases/blade_casing.toml` with `extra` appended.
+fn surrogate(extra: &str) -> nlrom::problem::nonsmooth_case::NonsmoothCase {
+    surrogate_edited(|text| text + extra)
 }
 
 #[test]
@@ -990,14 +997,10 @@ fn instability_rate(sys: &NonsmoothSystem, active: &[usize]) -> f64 {
 /// The bundled surrogate's Craig–Bampton model (20 modes), with `expansion` as the thermal
 /// expansion coefficient (1/K).
 fn reduced_surrogate(expansion: &str) -> nlrom::problem::nonsmooth_case::NonsmoothCase {
-    let path = root().join("cases/blade_casing.toml");
-    let text = std::fs::read_to_string(&path)
-        .unwrap()
-        .replace("expansion = 9e-6", &format!("expansion = {expansion}"))
-        + "\n[reduction]\ninterface_modes = 20\n";
-    let case = Case::from_str(&text, &path).unwrap();
-    let sm = nlrom::model::build(&case, &mut |_| {}).unwrap();
-    nonsmooth_case(&case, &sm).unwrap()
+    surrogate_edited(|text| {
+        text.replace("expansion = 9e-6", &format!("expansion = {expansion}"))
+            + "\n[reduction]\ninterface_modes = 20\n"
+    })
 }
 
 #[test]
