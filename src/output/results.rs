@@ -258,7 +258,8 @@ pub struct ResultsFile {
     pub contacts: Vec<ContactData>,
     /// The time-marching run, `/march`.
     pub march: Option<MarchData>,
-    /// Stick–slip–separation maps of friction strips, `/contact/<name>/map/<i>`.
+    /// Stick–slip–separation maps of friction strips, `/contact/<name>/map/<i>` (read back
+    /// sorted by name, then curve).
     pub maps: Vec<ContactMap>,
 }
 
@@ -291,6 +292,7 @@ pub fn results_file(results: &ResultsFile) -> Result<H5File> {
     }
     if !results.maps.is_empty() {
         let mut names: Vec<String> = results.maps.iter().map(|m| m.name.clone()).collect();
+        names.sort();
         names.dedup();
         file.root
             .group("contact")
