@@ -96,9 +96,7 @@ fn the_exact_cycle_passes_where_the_sampled_law_stops() {
         assert!(
             outcome.reached_end,
             "{}: {} after {} points",
-            case.label,
-            outcome.end,
-            outcome.points
+            case.label, outcome.end, outcome.points
         );
         assert!(outcome.worst_residual <= TOLERANCE, "{}", case.label);
     }

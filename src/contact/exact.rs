@@ -503,7 +503,7 @@ fn product_integrals(a: f64, b: f64, m: usize, out: &mut [f64]) {
         if l == 0 {
             (0, false)
         } else {
-            (l.div_ceil(2), l % 2 == 0)
+            (l.div_ceil(2), l.is_multiple_of(2))
         }
     };
     for k in 0..m {
