@@ -5,6 +5,7 @@
 //! independence, input errors.
 
 use faer::Mat;
+use nlrom::case::Evaluation;
 use nlrom::contact::kinematics::{relative_local, relative_transpose, Phases};
 use nlrom::contact::law::{ContactParams, Variant};
 use nlrom::contact::pairs::{PairElement, PairSet, SectorCoupling};
@@ -196,6 +197,32 @@ fn pair_set(variant: Variant, rot: &Mat3, axis: [f64; 3], h: usize) -> PairSet {
     PairSet::new(15, variant, pairs, Some(coupling)).unwrap()
 }
 
+/// The pairs of `set` (built by [`pair_set`] with the identity and the z axis) with every preload
+/// shifted by rate·p, evaluated by `evaluation`.
+fn preload_shifted(
+    set: &PairSet,
+    variant: Variant,
+    h: usize,
+    p: f64,
+    evaluation: Evaluation,
+) -> PairSet {
+    let mut pairs = set.pairs().to_vec();
+    for pr in pairs.iter_mut() {
+        pr.params.n0 += pr.preload_rate * p;
+    }
+    let geo = CyclicGeometry::new(12, [0.0; 3], [0.0, 0.0, 1.0]).unwrap();
+    let coupling = SectorCoupling {
+        sectors: 12,
+        rotation: geo.rotation(1),
+        harmonic_indices: harmonic_indices(12, 1, h),
+    };
+    let count = pairs.len();
+    PairSet::new(15, variant, pairs, Some(coupling))
+        .unwrap()
+        .with_evaluations(vec![evaluation; count])
+        .unwrap()
+}
+
 const IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
 /// q with node displacements of amplitude ~0.1 (tangential stick limit 0.05) and small normal parts.
@@ -238,17 +265,7 @@ fn assembled_jacobian_and_preload_derivative_match_finite_differences() {
             set.parameter_derivative(&layout, &q, &state, &mut dp)
                 .unwrap();
             let shifted = |p: f64| {
-                let mut pairs = set.pairs().to_vec();
-                for pr in pairs.iter_mut() {
-                    pr.params.n0 += pr.preload_rate * p;
-                }
-                let geo = CyclicGeometry::new(12, [0.0; 3], [0.0, 0.0, 1.0]).unwrap();
-                let coupling = SectorCoupling {
-                    sectors: 12,
-                    rotation: geo.rotation(1),
-                    harmonic_indices: harmonic_indices(12, 1, h),
-                };
-                let s2 = PairSet::new(15, variant, pairs, Some(coupling)).unwrap();
+                let s2 = preload_shifted(&set, variant, h, p, Evaluation::Aft);
                 forces(&s2, &layout, &q, &state)
             };
             check_derivative(&dp, &shifted(step), &shifted(-step), "∂F/∂p");
@@ -428,7 +445,6 @@ fn bad_pairs_and_inputs_are_reported() {
 /// (Coulomb disc) variant refuses it.
 #[test]
 fn analytic_pairs_agree_with_the_aft_and_finite_differences() {
-    use nlrom::case::Evaluation;
     let analytic = |variant| {
         pair_set(variant, &IDENTITY, [0.0, 0.0, 1.0], 1)
             .with_evaluations(vec![Evaluation::Analytic; 3])
@@ -466,20 +482,7 @@ fn analytic_pairs_agree_with_the_aft_and_finite_differences() {
     set.parameter_derivative(&layout, &q, &state, &mut dp)
         .unwrap();
     let shifted = |p: f64| {
-        let mut pairs = set.pairs().to_vec();
-        for pr in pairs.iter_mut() {
-            pr.params.n0 += pr.preload_rate * p;
-        }
-        let geo = CyclicGeometry::new(12, [0.0; 3], [0.0, 0.0, 1.0]).unwrap();
-        let coupling = SectorCoupling {
-            sectors: 12,
-            rotation: geo.rotation(1),
-            harmonic_indices: harmonic_indices(12, 1, 1),
-        };
-        let s2 = PairSet::new(15, Variant::OneD, pairs, Some(coupling))
-            .unwrap()
-            .with_evaluations(vec![Evaluation::Analytic; 3])
-            .unwrap();
+        let s2 = preload_shifted(&set, Variant::OneD, 1, p, Evaluation::Analytic);
         forces(&s2, &layout, &q, &state)
     };
     check_derivative(&dp, &shifted(1e-6), &shifted(-1e-6), "analytic ∂F/∂p");
