@@ -195,7 +195,6 @@ impl Case {
                 },
             )?;
             self.check_friction(&key, c.mu, c.kt, c.kn, c.n0, true)?;
-            self.check_evaluation(&format!("{key}.evaluation"), c.evaluation)?;
             self.require(
                 c.evaluation != Evaluation::Analytic || c.element == ContactElement::OneD,
                 &format!("{key}.evaluation"),
