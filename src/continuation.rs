@@ -561,7 +561,7 @@ fn unit_tangent(t: Vec<f64>, orientation: f64, factors: Option<Factored>) -> Opt
 /// the parameter would have to turn twice within one step. This is the jump back to an earlier
 /// part of the same path across a resonance of high amplitude, where the unknowns' scale x_s is
 /// the peak and the path before and after the resonance pass close to each other in (u, μ).
-#[allow(clippy::type_complexity)]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn correct<S: ParameterSystem>(
     system: &S,
     state: &S::State,
