@@ -847,6 +847,15 @@ fn craig_bampton_reduced_blade_follows_the_full_thermoelastic_march() {
         let (_, u0, _) = on_grid(&reference, 1, 1e-5, middle, uy);
         let last = h.heat.last().unwrap();
         assert!(last.residual.abs() < 1e-9 * last.frictional, "{last:?}");
+        // The heat balance is the full model's (stored, conducted and frictional heat).
+        let q = reference.heat.last().unwrap();
+        for (a, b) in [
+            (last.stored, q.stored),
+            (last.exchanged, q.exchanged),
+            (last.frictional, q.frictional),
+        ] {
+            assert!((a - b).abs() < 1e-6 * q.frictional, "{last:?} vs {q:?}");
+        }
         (eta(&u1, &u0), eta(&t1, &t0), eta(&f1, &f0), rom.system.n)
     };
     let (eu5, et5, ef5, n5) = errors(5);

@@ -164,6 +164,7 @@ pub fn casing_case(case: &Case, sm: &StructuralModel) -> Result<NonsmoothCase> {
         dof_names,
         x0: vec![0.0; n],
         v0: vec![0.0; n],
+        heat_weights: Vec::new(),
     };
     if let Some(e) = &case.excitation {
         match &e.load {
