@@ -223,6 +223,55 @@ speed_rpm = -2000
 // Persistent contact against the static contact solution
 // ---------------------------------------------------------------------------------------------
 
+/// The static contact forces of `sys` under its constant load (`Harmonic::mean`) with every
+/// obstacle in contact at the gaps `g_final`: K u = F + Hλ, g0 + G u = g_f, i.e.
+/// λ = (G K⁻¹ H)⁻¹ (g_f − g0 − G K⁻¹ F).
+fn static_contact_forces(sys: &NonsmoothSystem, g_final: &[f64]) -> Vec<f64> {
+    let (n, m) = (sys.n, sys.obstacles.len());
+    let k = Mat::from_fn(n, n, |i, j| sys.stiffness[i * n + j]);
+    let lu = k.partial_piv_lu();
+    let solve = |b: &[f64]| -> Vec<f64> {
+        let mut x = faer::Col::from_fn(n, |i| b[i]);
+        lu.solve_in_place(x.as_mut());
+        (0..n).map(|i| x[i]).collect()
+    };
+    let f: Vec<f64> = sys.force.iter().map(|f| f.mean).collect();
+    let kf = solve(&f);
+    let kh: Vec<Vec<f64>> = sys.obstacles.iter().map(|o| solve(&o.column(n))).collect();
+    let a = Mat::from_fn(m, m, |i, j| sys.obstacles[i].rate(&kh[j]));
+    let b = faer::Col::from_fn(m, |i| {
+        g_final[i] - sys.obstacles[i].gap - sys.obstacles[i].rate(&kf)
+    });
+    let lambda = a.partial_piv_lu().solve(&b);
+    (0..m).map(|i| lambda[i]).collect()
+}
+
+/// Marches `nc` for 2000 steps with its load held at its peak (a constant) and heavy damping
+/// C = 2e-4 s·K: the history, the settings, the last step's contact forces λ/h and the static
+/// contact forces at the last step's gaps ([`static_contact_forces`]).
+fn press(
+    nc: &mut nlrom::problem::nonsmooth_case::NonsmoothCase,
+) -> (
+    nlrom::march::obstacle::NonsmoothHistory,
+    NonsmoothSettings,
+    Vec<f64>,
+    Vec<f64>,
+) {
+    let sys = &mut nc.system;
+    for f in &mut sys.force {
+        *f = Harmonic::constant(f.cos);
+    }
+    sys.damping = sys.stiffness.iter().map(|k| 2e-4 * k).collect();
+    let s = with_steps(&nc.settings, 2000);
+    let h = moreau_jean(sys, &s).unwrap();
+    let m = sys.obstacles.len();
+    let last: Vec<f64> = (0..m)
+        .map(|i| h.impulses(i).last().unwrap() / s.step)
+        .collect();
+    let lambda = static_contact_forces(sys, &h.gap[h.gap.len() - m..]);
+    (h, s, last, lambda)
+}
+
 #[test]
 fn a_blade_pressed_on_the_casing_settles_on_the_static_contact_forces() {
     // Gap 0, a constant 100 N per tip node outward, friction μ = 0.15 along +y and heavy
@@ -240,36 +289,8 @@ speed_rpm = 2000
 "#,
     );
     let mut nc = build(&text);
-    let sys = &mut nc.system;
-    let n = sys.n;
-    for r in 0..n {
-        let c = sys.force[r].cos;
-        sys.force[r] = Harmonic::constant(c);
-    }
-    sys.damping = sys.stiffness.iter().map(|k| 2e-4 * k).collect();
-    let s = with_steps(&nc.settings, 2000);
-    let h = moreau_jean(sys, &s).unwrap();
-    let m = sys.obstacles.len();
-    let last: Vec<f64> = (0..m)
-        .map(|i| h.impulses(i).last().unwrap() / s.step)
-        .collect();
-    // Static solution.
-    let k = Mat::from_fn(n, n, |i, j| sys.stiffness[i * n + j]);
-    let lu = k.partial_piv_lu();
-    let solve = |b: &[f64]| -> Vec<f64> {
-        let mut x = faer::Col::from_fn(n, |i| b[i]);
-        lu.solve_in_place(x.as_mut());
-        (0..n).map(|i| x[i]).collect()
-    };
-    let f: Vec<f64> = sys.force.iter().map(|f| f.mean).collect();
-    let kf = solve(&f);
-    let kh: Vec<Vec<f64>> = sys.obstacles.iter().map(|o| solve(&o.column(n))).collect();
-    let a = Mat::from_fn(m, m, |i, j| sys.obstacles[i].rate(&kh[j]));
-    let g_final = &h.gap[h.gap.len() - m..];
-    let b = faer::Col::from_fn(m, |i| {
-        g_final[i] - sys.obstacles[i].gap - sys.obstacles[i].rate(&kf)
-    });
-    let lambda = a.partial_piv_lu().solve(&b);
+    let (h, s, last, lambda) = press(&mut nc);
+    let m = nc.system.obstacles.len();
     let total: f64 = (0..m).map(|i| lambda[i]).sum();
     for i in 0..m {
         assert!(lambda[i] > 0.0, "static contact force {i}: {}", lambda[i]);
@@ -302,6 +323,68 @@ speed_rpm = 2000
             }
         }
     }
+}
+
+#[test]
+fn per_node_gaps_set_each_nodes_initial_gap_and_its_static_contact_force() {
+    // `gap = [...]` gives g0 per node, in ascending tag order or in the order of `gap_nodes`.
+    // Pressed by a constant 100 N per node (heavy damping), every node lands and the forces
+    // settle on the static solution with those gaps, which differs from the uniform gap's.
+    let mesh = read_msh(&root().join("meshes/blade_coarse.msh")).unwrap();
+    let mut tags: Vec<u64> = mesh
+        .nodes_of("tip_contact")
+        .unwrap()
+        .iter()
+        .map(|&i| mesh.node_tags[i as usize])
+        .collect();
+    tags.sort_unstable();
+    let gaps = [0.0, 1e-7, 3e-7, 2e-7, 0.5e-7];
+    let list = |v: &[f64]| {
+        v.iter()
+            .map(|g| format!("{g:e}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let casing = |gap: &str| {
+        blade_case(&format!(
+            "[[casing]]\ngroup = \"tip_contact\"\naxis = {{ direction = [1, 0, 0] }}\n{gap}\nmu = 0.15\nspeed_rpm = 2000\n"
+        ))
+    };
+    let sorted = build(&casing(&format!("gap = [{}]", list(&gaps))));
+    let reversed: Vec<f64> = gaps.iter().rev().copied().collect();
+    let rev_tags: Vec<String> = tags.iter().rev().map(|t| t.to_string()).collect();
+    let keyed = build(&casing(&format!(
+        "gap = [{}]\ngap_nodes = [{}]",
+        list(&reversed),
+        rev_tags.join(", ")
+    )));
+    let tag_of = |o: &Obstacle| -> u64 { o.name.rsplit(':').next().unwrap().parse().unwrap() };
+    for nc in [&sorted, &keyed] {
+        assert_eq!(nc.system.obstacles.len(), 5);
+        for o in &nc.system.obstacles {
+            let k = tags.iter().position(|&t| t == tag_of(o)).unwrap();
+            assert_eq!(o.gap, gaps[k], "node {}", tag_of(o));
+        }
+    }
+    let uniform = build(&casing("gap = 0.0"));
+    let (_, _, march, stat) = press(&mut { sorted });
+    let (_, _, march_u, _) = press(&mut { uniform });
+    let total: f64 = stat.iter().sum();
+    let mut spread = 0.0_f64;
+    for i in 0..5 {
+        assert!(stat[i] > 0.0, "node {i}: static force {}", stat[i]);
+        assert!(
+            (march[i] - stat[i]).abs() < 1e-6 * total,
+            "node {i}: march {} N, static {} N",
+            march[i],
+            stat[i]
+        );
+        spread = spread.max((march[i] - march_u[i]).abs());
+    }
+    eprintln!("per-node gaps: forces {march:?} N; uniform gap {march_u:?} N");
+    // Sub-micrometre gaps against the blade's micrometre deflection under the load: the forces
+    // shift by newtons, not by round-off.
+    assert!(spread > 1.0, "largest force change {spread} N");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -446,6 +529,26 @@ fn bad_casing_and_thermal_keys_are_reported_with_their_path() {
             "casing[0].axis.direction",
         ),
         (
+            casing("group = \"tip_contact\"\ngap = [0, 0, 0]"),
+            "casing[0].gap",
+        ),
+        (
+            casing("group = \"tip_contact\"\ngap = [0, 0, 0, 0, 1e-6, 0]"),
+            "casing[0].gap",
+        ),
+        (
+            casing("group = \"tip_contact\"\ngap = [0, 0, 0, 0, 0]\ngap_nodes = [1, 2, 3, 4]"),
+            "casing[0].gap_nodes",
+        ),
+        (
+            casing("group = \"tip_contact\"\ngap = [0, 0, 0, 0, 0]\ngap_nodes = [999999, 2, 3, 4, 5]"),
+            "casing[0].gap_nodes[0]",
+        ),
+        (
+            casing("group = \"tip_contact\"\ngap = 0\ngap_nodes = [1]"),
+            "casing[0].gap_nodes",
+        ),
+        (
             blade_case("[thermal]\nspecific_heat = 520\nexpansion = 9e-6\n"),
             "conductivity",
         ),
@@ -463,6 +566,34 @@ fn bad_casing_and_thermal_keys_are_reported_with_their_path() {
         let err = load_err(&text);
         assert!(err.contains(key), "expected '{key}' in: {err}");
     }
+    // Per-node gaps: the count and the node tags are checked against the group.
+    let err = load_err(&casing("group = \"tip_contact\"\ngap = [0, 0, 0]"));
+    assert!(
+        err.contains("3 gaps for the 5 nodes of group 'tip_contact'"),
+        "{err}"
+    );
+    let err = load_err(&casing(
+        "group = \"tip_contact\"\ngap = [0, 0, 0, 0, 0]\ngap_nodes = [999999, 2, 3, 4, 5]",
+    ));
+    assert!(
+        err.contains("node 999999 is not a node of group 'tip_contact'"),
+        "{err}"
+    );
+    let mesh = read_msh(&root().join("meshes/blade_coarse.msh")).unwrap();
+    let t: Vec<u64> = mesh
+        .nodes_of("tip_contact")
+        .unwrap()
+        .iter()
+        .map(|&i| mesh.node_tags[i as usize])
+        .collect();
+    let err = load_err(&casing(&format!(
+        "group = \"tip_contact\"\ngap = [0, 0, 0, 0, 0]\ngap_nodes = [{}, {}, {}, {}, {}]",
+        t[0], t[1], t[2], t[3], t[1]
+    )));
+    assert!(
+        err.contains("casing[0].gap_nodes[4]") && err.contains("listed twice"),
+        "{err}"
+    );
     // A casing on a node that lies on the axis has no radial direction.
     let err = load_err(&casing(
         "group = \"tip_contact\"\ngap = 0\naxis = { origin = [0, 0, 0.25], direction = [1, 0, 0] }",
@@ -674,13 +805,20 @@ fn nlrom_march_writes_temperatures_and_plot_nonsmooth_compares_two_steps() {
 // Craig–Bampton reduced mechanics
 // ---------------------------------------------------------------------------------------------
 
-/// The bundled surrogate `cases/blade_casing.toml` with `extra` appended.
-fn surrogate(extra: &str) -> nlrom::problem::nonsmooth_case::NonsmoothCase {
+/// The bundled surrogate `cases/blade_casing.toml` with its text passed through `edit`.
+fn surrogate_edited(
+    edit: impl Fn(String) -> String,
+) -> nlrom::problem::nonsmooth_case::NonsmoothCase {
     let path = root().join("cases/blade_casing.toml");
-    let text = std::fs::read_to_string(&path).unwrap() + extra;
+    let text = edit(std::fs::read_to_string(&path).unwrap());
     let case = Case::from_str(&text, &path).unwrap();
     let sm = nlrom::model::build(&case, &mut |_| {}).unwrap();
     nonsmooth_case(&case, &sm).unwrap()
+}
+
+/// The bundled surrogate `cases/blade_casing.toml` with `extra` appended.
+fn surrogate(extra: &str) -> nlrom::problem::nonsmooth_case::NonsmoothCase {
+    surrogate_edited(|text| text + extra)
 }
 
 #[test]
@@ -709,6 +847,15 @@ fn craig_bampton_reduced_blade_follows_the_full_thermoelastic_march() {
         let (_, u0, _) = on_grid(&reference, 1, 1e-5, middle, uy);
         let last = h.heat.last().unwrap();
         assert!(last.residual.abs() < 1e-9 * last.frictional, "{last:?}");
+        // The heat balance is the full model's (stored, conducted and frictional heat).
+        let q = reference.heat.last().unwrap();
+        for (a, b) in [
+            (last.stored, q.stored),
+            (last.exchanged, q.exchanged),
+            (last.frictional, q.frictional),
+        ] {
+            assert!((a - b).abs() < 1e-6 * q.frictional, "{last:?} vs {q:?}");
+        }
         (eta(&u1, &u0), eta(&t1, &t0), eta(&f1, &f0), rom.system.n)
     };
     let (eu5, et5, ef5, n5) = errors(5);
@@ -794,4 +941,213 @@ fn residual_penetration_of_a_first_impact_falls_with_the_step() {
     eprintln!("max penetration at h = 4e-5, 2e-5, 1e-5, 5e-6 s: {pen:?}");
     assert!(pen.windows(2).all(|w| w[1] < w[0]), "{pen:?}");
     assert!(pen[0] > 1e-7 && pen[3] < 0.8 * pen[0], "{pen:?}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Thermoelastic instability of the surrogate (the temperature runaway)
+// ---------------------------------------------------------------------------------------------
+
+/// The contact forces' change per kelvin of the temperature rows (N/K, one row per obstacle of
+/// `active`) of `sys` held on those obstacles with quasi-static mechanics: from
+/// K^uu u + K^uθ θ = f + H^u λ and g0_A + G_A u = 0, λ_A = λ_f + S θ with
+/// S = (G_A K⁻¹ H^u_A)⁻¹ G_A K⁻¹ K^uθ.
+fn thermal_sensitivity(sys: &NonsmoothSystem, active: &[usize]) -> Mat<f64> {
+    let (n, nm) = (sys.n, sys.n_mech);
+    let nt = n - nm;
+    let lu = Mat::from_fn(nm, nm, |i, j| sys.stiffness[i * n + j]).partial_piv_lu();
+    let a = active.len();
+    let k_h = lu.solve(Mat::from_fn(nm, a, |i, j| {
+        sys.obstacles[active[j]].column(n)[i]
+    }));
+    let k_t = lu.solve(Mat::from_fn(nm, nt, |i, j| sys.stiffness[i * n + nm + j]));
+    let g = |r: usize, x: &Mat<f64>, c: usize| -> f64 {
+        sys.obstacles[active[r]]
+            .normal
+            .iter()
+            .map(|&(j, w)| w * x[(j, c)])
+            .sum()
+    };
+    let w = Mat::from_fn(a, a, |r, c| g(r, &k_h, c));
+    w.partial_piv_lu()
+        .solve(Mat::from_fn(a, nt, |r, c| g(r, &k_t, c)))
+}
+
+/// The growth rate σ (1/s) of the thermoelastic instability of `sys` held on the obstacles
+/// `active`: with λ_A = λ_f + S θ ([`thermal_sensitivity`]) the heat rows
+/// C^θθ θ̇ + K^θθ θ = α P_A λ_A grow as e^{σt} along the eigenvectors v of
+/// C^θθ⁻¹(α P_A S − K^θθ). σ is the largest real eigenvalue whose mode loads every held node
+/// the same way (S v of one sign, so the active set can persist); the other modes open a contact.
+fn instability_rate(sys: &NonsmoothSystem, active: &[usize]) -> f64 {
+    let (n, nm) = (sys.n, sys.n_mech);
+    let nt = n - nm;
+    let s = thermal_sensitivity(sys, active);
+    let cols: Vec<Vec<f64>> = active.iter().map(|&i| sys.obstacles[i].column(n)).collect();
+    let rhs = Mat::from_fn(nt, nt, |i, j| {
+        -sys.stiffness[(nm + i) * n + nm + j]
+            + (0..active.len())
+                .map(|k| cols[k][nm + i] * s[(k, j)])
+                .sum::<f64>()
+    });
+    let c = Mat::from_fn(nt, nt, |i, j| sys.damping[(nm + i) * n + nm + j]);
+    let e = c.partial_piv_lu().solve(rhs).eigen().unwrap();
+    let (values, vectors) = (e.S(), e.U());
+    (0..nt)
+        .filter(|&k| values[k].im.abs() <= 1e-9 * values[k].re.abs())
+        .filter(|&k| {
+            let sv: Vec<f64> = (0..active.len())
+                .map(|r| (0..nt).map(|j| s[(r, j)] * vectors[(j, k)].re).sum())
+                .collect();
+            sv.iter().all(|&x| x >= 0.0) || sv.iter().all(|&x| x <= 0.0)
+        })
+        .map(|k| values[k].re)
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// The bundled surrogate's Craig–Bampton model (20 modes), with `expansion` as the thermal
+/// expansion coefficient (1/K).
+fn reduced_surrogate(expansion: &str) -> nlrom::problem::nonsmooth_case::NonsmoothCase {
+    surrogate_edited(|text| {
+        text.replace("expansion = 9e-6", &format!("expansion = {expansion}"))
+            + "\n[reduction]\ninterface_modes = 20\n"
+    })
+}
+
+#[test]
+fn the_temperature_runaway_is_the_thermoelastic_instability_of_the_blade_held_on_the_casing() {
+    // The bundled surrogate (Craig–Bampton, 20 modes) over 33 revolutions (0.99 s): frictional
+    // heat expands the tip against the rigid casing, so the contact forces rise with the
+    // temperature and the heat with the forces. Once two tip nodes alone hold the blade (the
+    // others lift off), temperatures and forces grow as e^{σt} with σ the admissible rate of
+    // the quasi-static linearisation on those two nodes ([`instability_rate`]).
+    let rom = reduced_surrogate("9e-6");
+    let (per, periods) = (3000, 33);
+    let s = NonsmoothSettings {
+        steps: per * periods,
+        ..rom.settings.clone()
+    };
+    let h = moreau_jean(&rom.system, &s).unwrap();
+    let m = rom.system.obstacles.len();
+    let last = per * periods;
+    let window = last - 3 * per..=last;
+    let pressed = |i: usize| h.impulse[last * m + i] > 0.0;
+    let held: Vec<usize> = (0..m).filter(|&i| pressed(i)).collect();
+    for i in 0..m {
+        let steps = window
+            .clone()
+            .filter(|&t| h.impulse[t * m + i] > 0.0)
+            .count();
+        assert!(
+            steps == if pressed(i) { 3 * per + 1 } else { 0 },
+            "obstacle {i}: in contact {steps} of the last {} steps",
+            3 * per + 1
+        );
+    }
+    assert_eq!(held.len(), 2, "{held:?}");
+    let (r, first_theta) = (h.dofs.len(), rom.response.len());
+    let hottest = |t: usize| {
+        (0..m)
+            .map(|i| h.x[t * r + first_theta + i])
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    let fitted = (hottest(last) / hottest(last - 3 * per)).ln() / (3.0 * per as f64 * s.step);
+    let sigma = instability_rate(&rom.system, &held);
+    let full = instability_rate(&surrogate("").system, &held);
+    let plain = instability_rate(
+        &reduced_surrogate("0.0").system,
+        &(0..m).collect::<Vec<_>>(),
+    );
+    eprintln!(
+        "held {held:?}: fitted {fitted:.4} 1/s, σ {sigma:.4} 1/s (full model {full:.4}); hottest {:.0} K at {:.2} s; without expansion σ {plain:.2e} 1/s",
+        hottest(last),
+        last as f64 * s.step
+    );
+    assert!((fitted - sigma).abs() < 0.01 * sigma, "{fitted} vs {sigma}");
+    assert!((full - sigma).abs() < 1e-4 * sigma, "{full} vs {sigma}");
+    // Without the thermal expansion the heat rows alone decay (conduction to the root).
+    assert!(plain < 0.0, "{plain}");
+}
+
+#[test]
+fn frictional_heating_changes_the_forces_and_displacements_as_the_thermal_load_predicts() {
+    // Thorin et al. 2018, Figs 6–7: the surrogate over one revolution (30 ms) with and without
+    // the thermal expansion. Both marches share the load and the heating; their difference is
+    // the response to the thermal load K^uθ θ, quasi-static against the blade's 1.3 kHz mode:
+    // in free flight (15 ms) Δu = −K⁻¹K^uθ θ, in contact (30 ms, every node pressed)
+    // Δλ = S θ ([`thermal_sensitivity`]), with θ the coupled march's temperatures.
+    let coupled = reduced_surrogate("9e-6");
+    let plain = reduced_surrogate("0.0");
+    let all = NonsmoothSettings {
+        record: None,
+        ..coupled.settings.clone()
+    };
+    let hc = moreau_jean(&coupled.system, &all).unwrap();
+    let hp = moreau_jean(&plain.system, &all).unwrap();
+    let sys = &coupled.system;
+    let (n, nm, m) = (sys.n, sys.n_mech, sys.obstacles.len());
+    let rows = coupled.settings.record.clone().unwrap();
+    let theta = |t: usize| &hc.x[t * n + nm..(t + 1) * n];
+    // Free flight at 15 ms.
+    let t = 1500;
+    assert!((0..m).all(|i| hc.impulse[t * m + i] == 0.0 && hp.impulse[t * m + i] == 0.0));
+    let lu = Mat::from_fn(nm, nm, |i, j| sys.stiffness[i * n + j]).partial_piv_lu();
+    let du = lu.solve(Mat::from_fn(nm, 1, |i, _| {
+        -(0..n - nm)
+            .map(|j| sys.stiffness[i * n + nm + j] * theta(t)[j])
+            .sum::<f64>()
+    }));
+    let radial: Vec<usize> = (0..m).map(|i| rows[3 * i + 2]).collect();
+    let march_du: Vec<f64> = radial
+        .iter()
+        .map(|&r| hc.x[t * n + r] - hp.x[t * n + r])
+        .collect();
+    let largest = march_du.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+    for (k, &r) in radial.iter().enumerate() {
+        assert!(
+            (march_du[k] - du[(r, 0)]).abs() < 1e-3 * largest,
+            "node {k}: Δu {} vs {}",
+            march_du[k],
+            du[(r, 0)]
+        );
+    }
+    // Every node pressed at 30 ms (the load at its outward peak).
+    let t = 3000;
+    let force = |hist: &nlrom::march::obstacle::NonsmoothHistory| -> Vec<f64> {
+        (0..m).map(|i| hist.impulse[t * m + i] / all.step).collect()
+    };
+    let (fc, fp) = (force(&hc), force(&hp));
+    assert!(fc.iter().chain(&fp).all(|&f| f > 0.0), "{fc:?} {fp:?}");
+    let s = thermal_sensitivity(sys, &(0..m).collect::<Vec<_>>());
+    let predicted: Vec<f64> = (0..m)
+        .map(|i| (0..n - nm).map(|j| s[(i, j)] * theta(t)[j]).sum())
+        .collect();
+    let change: Vec<f64> = (0..m).map(|i| fc[i] - fp[i]).collect();
+    let largest = change.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+    for i in 0..m {
+        assert!(
+            (change[i] - predicted[i]).abs() < 0.05 * largest,
+            "node {i}: Δλ/h {} vs S θ {}",
+            change[i],
+            predicted[i]
+        );
+    }
+    // The effect itself: the thermal expansion spreads the forces of the seven nodes and heats
+    // the hottest node more.
+    let spread = |f: &[f64]| {
+        f.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+            - f.iter().cloned().fold(f64::INFINITY, f64::min)
+    };
+    let hottest = |hist: &nlrom::march::obstacle::NonsmoothHistory| {
+        (nm..n)
+            .map(|r| hist.x[t * n + r])
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    eprintln!(
+        "30 ms: forces {fc:.1?} N with the coupling, {fp:.1?} N without; S θ − Δλ/h ≤ {:.2} N; hottest {:.1} / {:.1} K; 15 ms: Δu_r {:.4?} µm",
+        (0..m).map(|i| (change[i] - predicted[i]).abs()).fold(0.0, f64::max),
+        hottest(&hc),
+        hottest(&hp),
+        march_du.iter().map(|v| 1e6 * v).collect::<Vec<_>>()
+    );
+    assert!(spread(&fc) > 20.0 && spread(&fp) < 1.0, "{fc:?} {fp:?}");
+    assert!(hottest(&hc) > hottest(&hp) + 2.0);
 }

@@ -690,6 +690,7 @@ fn coupled(k_ut: f64) -> NonsmoothSystem {
         dof_names: vec!["u".into(), "theta".into()],
         x0: vec![1e-9, 0.0],
         v0: vec![0.0, 0.0],
+        heat_weights: Vec::new(),
     };
     let mut o = Obstacle::new("wall", vec![(0, -1.0)], 0.0, 0.0);
     o.heating = alpha;
@@ -949,6 +950,7 @@ fn thermoelastic_fe_bar_hitting_a_wall_closes_its_energy_and_heat_balances() {
         dof_names: (0..n).map(|i| format!("dof {i}")).collect(),
         x0: vec![0.0; n],
         v0: vec![0.0; n],
+        heat_weights: Vec::new(),
     };
     // The four tip nodes pushed along +x by 200 N at 2 kHz against a wall 0.1 µm away, with
     // friction along +y (μ = 0.15) and the frictional heat α λ into each tip node.

@@ -8,8 +8,8 @@ use std::collections::BTreeMap;
 
 use faer::c64;
 use nlrom::output::{
-    read_results, write_results, ContactCurveDetail, ContactData, ContactPairData, FileInfo,
-    FrfData, FrfRecord, MarchData, PointLoops, ResponseDof, ResultsFile,
+    read_results, write_results, ContactCurveDetail, ContactData, ContactMap, ContactPairData,
+    FileInfo, FrfData, FrfRecord, MarchData, PointLoops, ResponseDof, ResultsFile,
 };
 use nlrom::output::{Attr, Data, Dataset, Group};
 use serde_json::{json, Value};
@@ -165,6 +165,41 @@ fn sample() -> ResultsFile {
         // not in alphabetical order: the order of the points' fractions must survive
         contacts: vec![contact("underplatform", 3), contact("shroud", 4)],
         march: Some(march(9)),
+        maps: vec![map("bar", 0, 5), map("bar", 1, 2)],
+    }
+}
+
+/// A stick–slip–separation map of 3 points over 4 angles at point `point` of curve `curve`
+/// (one point without transitions, one NaN ratio: separated).
+fn map(name: &str, curve: usize, point: usize) -> ContactMap {
+    ContactMap {
+        name: name.to_string(),
+        mu: 0.3,
+        curve,
+        point,
+        omega: 6.5,
+        position: vec![0.1, 0.5, 0.9],
+        phase: (0..4)
+            .map(|j| j as f64 * std::f64::consts::FRAC_PI_2)
+            .collect(),
+        state: vec![0, 0, 0, 0, 1, 0, -1, 0, 2, 0, 0, 2],
+        friction_ratio: vec![
+            0.1,
+            0.2,
+            0.3,
+            0.4,
+            1.0,
+            0.5,
+            -1.0,
+            -0.5,
+            f64::NAN,
+            0.0,
+            -0.0,
+            f64::NAN,
+        ],
+        transition_offsets: vec![0, 0, 4, 6],
+        transition_angles: vec![0.5, 1.0, 3.0, 4.0, 1.0, 5.0],
+        transition_states: vec![1, 0, -1, 0, 0, 2],
     }
 }
 
@@ -182,6 +217,7 @@ fn results_round_trip_exactly() {
     let frf_only = ResultsFile {
         march: None,
         contacts: vec![],
+        maps: vec![],
         frfs: vec![frf(1.0, 2, 2, 0)],
         ..sample()
     };
@@ -190,6 +226,7 @@ fn results_round_trip_exactly() {
     let march_only = ResultsFile {
         frfs: vec![],
         contacts: vec![],
+        maps: vec![],
         ..sample()
     };
     write_results(&path, &march_only).unwrap();

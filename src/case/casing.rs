@@ -10,7 +10,8 @@ use crate::error::Result;
 
 /// `[[casing]]`: a rigid circular casing of radius R about the rotation axis, in contact with the
 /// nodes of `group`. Node i (initial position p_i, radius r_i from the axis, radial unit vector
-/// e_r,i) has the gap g_i = g0_i − e_r,i·u_i ≥ 0 with g0_i = R − r_i (`radius`) or g0_i = `gap`;
+/// e_r,i) has the gap g_i = g0_i − e_r,i·u_i ≥ 0 with g0_i = R − r_i (`radius`) or g0_i from `gap`
+/// (one value for every node, or one per node: [`CasingGap`]);
 /// the contact force λ_i ≥ 0 pushes the node along −e_r,i, the friction force μλ_i acts along
 /// −sgn(Ω) e_φ,i (e_φ = a × e_r, the casing sliding past the blade at −RΩ e_φ), and the heat flow
 /// α λ_i (W) enters the node's temperature row.
@@ -28,9 +29,14 @@ pub struct CasingTable {
     /// Casing radius R (m): g0_i = R − r_i. Exclusive with `gap`.
     #[serde(default)]
     pub radius: Option<f64>,
-    /// The same initial gap g0 (m) at every node instead of `radius`.
+    /// The initial gaps g0_i (m) instead of `radius`: one value for every node, or one per node.
     #[serde(default)]
-    pub gap: Option<f64>,
+    pub gap: Option<CasingGap>,
+    /// With a list `gap`: the node tags its values belong to, in the same order (each node of
+    /// `group` exactly once); without it the values follow the group's nodes in ascending tag
+    /// order.
+    #[serde(default)]
+    pub gap_nodes: Option<Vec<u64>>,
     /// Newton restitution coefficient e ∈ [0, 1]; default 0.
     #[serde(default)]
     pub restitution: f64,
@@ -47,10 +53,39 @@ pub struct CasingTable {
     pub heating: f64,
 }
 
+/// `casing.gap`: the initial gap g0 (m) of every contact node, or one per node.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum CasingGap {
+    /// The same g0 at every node.
+    Uniform(f64),
+    /// g0_i per node: in ascending node tag order of the group, or in the order of `gap_nodes`.
+    PerNode(Vec<f64>),
+}
+
 impl CasingTable {
     /// The casing's name: `name`, else `casing[i]`.
     pub fn label(&self, i: usize) -> String {
         self.name.clone().unwrap_or_else(|| format!("casing[{i}]"))
+    }
+
+    /// The initial gap g0 (m) of the node with tag `tag` at radius `r` (m) from the axis:
+    /// `radius` − r, the uniform `gap`, or the node's entry of a per-node `gap` (`tags` are the
+    /// group's node tags in ascending order). `None` for a node without a gap (the case check
+    /// [`Case::check_casing_gaps`] excludes it).
+    pub fn initial_gap(&self, tag: u64, r: f64, tags: &[u64]) -> Option<f64> {
+        match (&self.gap, self.radius) {
+            (Some(CasingGap::Uniform(g)), _) => Some(*g),
+            (Some(CasingGap::PerNode(gaps)), _) => {
+                let k = match &self.gap_nodes {
+                    Some(nodes) => nodes.iter().position(|&t| t == tag)?,
+                    None => tags.iter().position(|&t| t == tag)?,
+                };
+                gaps.get(k).copied()
+            }
+            (None, Some(radius)) => Some(radius - r),
+            (None, None) => None,
+        }
     }
 }
 
@@ -112,9 +147,14 @@ impl Case {
                 &format!("{key}.axis.direction"),
                 || "the axis direction must not be zero",
             )?;
-            match (c.radius, c.gap) {
+            match (c.radius, &c.gap) {
                 (Some(r), None) => self.positive(&format!("{key}.radius"), r)?,
-                (None, Some(g)) => self.finite(&format!("{key}.gap"), &[g])?,
+                (None, Some(CasingGap::Uniform(g))) => self.finite(&format!("{key}.gap"), &[*g])?,
+                (None, Some(CasingGap::PerNode(g))) => {
+                    for (k, v) in g.iter().enumerate() {
+                        self.finite(&format!("{key}.gap[{k}]"), &[*v])?;
+                    }
+                }
                 (Some(_), Some(_)) => {
                     return Err(self.key_error(
                         &super::parse::KeyPath::parse(&format!("{key}.gap")),
@@ -124,10 +164,15 @@ impl Case {
                 (None, None) => {
                     return Err(self.key_error(
                         &super::parse::KeyPath::parse(&key),
-                        "needs `radius` (the casing radius R, m) or `gap` (the initial gap g0 of every node, m)",
+                        "needs `radius` (the casing radius R, m) or `gap` (the initial gap g0 of every node, or a list of one per node, m)",
                     ))
                 }
             }
+            self.require(
+                c.gap_nodes.is_none() || matches!(c.gap, Some(CasingGap::PerNode(_))),
+                &format!("{key}.gap_nodes"),
+                || "`gap_nodes` names the nodes of a list `gap = [g0, ...]`; give the gaps as a list",
+            )?;
             self.require(
                 (0.0..=1.0).contains(&c.restitution),
                 &format!("{key}.restitution"),
@@ -148,6 +193,52 @@ impl Case {
                 &format!("{key}.heating"),
                 || "frictional heating needs temperature DOF: add a [thermal] table (conductivity, specific_heat, expansion)",
             )?;
+        }
+        Ok(())
+    }
+
+    /// Checks the per-node `gap` lists of `[[casing]]` against the mesh: one value per node of
+    /// the group, and with `gap_nodes` each node of the group named exactly once. Errors name the
+    /// file, line and key.
+    pub fn check_casing_gaps(&self, mesh: &crate::mesh::Mesh) -> Result<()> {
+        for (i, c) in self.casing.iter().enumerate() {
+            let Some(CasingGap::PerNode(gaps)) = &c.gap else {
+                continue;
+            };
+            let key = format!("casing[{i}]");
+            let mut tags: Vec<u64> = mesh
+                .nodes_of(&c.group)?
+                .iter()
+                .map(|&n| mesh.node_tags[n as usize])
+                .collect();
+            tags.sort_unstable();
+            self.require(gaps.len() == tags.len(), &format!("{key}.gap"), || {
+                format!(
+                    "{} gaps for the {} nodes of group '{}' (one per node, in ascending node tag order or that of `gap_nodes`)",
+                    gaps.len(),
+                    tags.len(),
+                    c.group
+                )
+            })?;
+            if let Some(nodes) = &c.gap_nodes {
+                self.require(
+                    nodes.len() == gaps.len(),
+                    &format!("{key}.gap_nodes"),
+                    || format!("{} node tags for {} gaps", nodes.len(), gaps.len()),
+                )?;
+                for (k, t) in nodes.iter().enumerate() {
+                    self.require(
+                        tags.binary_search(t).is_ok(),
+                        &format!("{key}.gap_nodes[{k}]"),
+                        || format!("node {t} is not a node of group '{}'", c.group),
+                    )?;
+                    self.require(
+                        !nodes[..k].contains(t),
+                        &format!("{key}.gap_nodes[{k}]"),
+                        || format!("node {t} is listed twice"),
+                    )?;
+                }
+            }
         }
         Ok(())
     }

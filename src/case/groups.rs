@@ -65,7 +65,7 @@ impl Case {
             .filter_map(|(key, name)| self.group_problem(mesh, key, name))
             .collect();
         if problems.is_empty() {
-            return Ok(());
+            return self.check_casing_gaps(mesh);
         }
         Err(Error::input(format!(
             "{}\nthe mesh {} has: {}",

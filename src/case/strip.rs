@@ -79,6 +79,15 @@ pub struct Strip {
     /// How the points are evaluated on harmonic vectors (as `[[element]] evaluation`).
     #[serde(default)]
     pub evaluation: Evaluation,
+    /// The strip's name in the results file (`/contact/<name>`); default `strip<s>` with s its
+    /// index in file order.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Phase angles N_θ of a stick–slip–separation map (`/contact/<name>/map/<i>`) at the
+    /// resonance peak of every curve; none: no map. Needs H = 1 (the map is built from the exact
+    /// single-harmonic cycle, [`crate::contact::slip_map`]).
+    #[serde(default)]
+    pub map: Option<usize>,
 }
 
 fn default_gauss() -> usize {
@@ -88,7 +97,15 @@ fn default_gauss() -> usize {
 /// The largest number of Gauss points per segment.
 pub const MAX_GAUSS: usize = 8;
 
+/// The most phase angles of a map.
+pub const MAX_MAP_PHASES: usize = 100_000;
+
 impl Strip {
+    /// The strip's name: `name`, else `strip<index>`.
+    pub fn label(&self, index: usize) -> String {
+        self.name.clone().unwrap_or_else(|| format!("strip{index}"))
+    }
+
     /// The relative preload per length at s (the shape of q, not normalised); valid after
     /// validation (stations increasing, `c` and `values` present when their distribution needs
     /// them).

@@ -374,6 +374,34 @@ impl Case {
                 )?;
             }
             self.check_evaluation(&k("evaluation"), s.evaluation)?;
+            if let Some(name) = &s.name {
+                self.require(!name.is_empty() && !name.contains('/'), &k("name"), || {
+                    format!("{name:?} is not a results-file group name (empty, or contains '/')")
+                })?;
+            }
+            let label = s.label(i);
+            self.require(
+                self.strip[..i]
+                    .iter()
+                    .enumerate()
+                    .all(|(j, o)| o.label(j) != label),
+                &k("name"),
+                || format!("another strip is named {label:?}; names must be unique"),
+            )?;
+            if let Some(m) = s.map {
+                self.require((4..=strip::MAX_MAP_PHASES).contains(&m), &k("map"), || {
+                    format!(
+                        "the number of phase angles must be 4 to {} (found {m})",
+                        strip::MAX_MAP_PHASES
+                    )
+                })?;
+                self.require(self.harmonic_balance.harmonics == 1, &k("map"), || {
+                    format!(
+                        "stick–slip–separation maps are built from the exact single-harmonic cycle and need [harmonic_balance] harmonics = 1 (this case has {}); remove `map` for H > 1",
+                        self.harmonic_balance.harmonics
+                    )
+                })?;
+            }
         }
         Ok(())
     }

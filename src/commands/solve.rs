@@ -27,7 +27,9 @@ use super::progress::Reporter;
 use super::summary::{summarize, CurveSummary};
 use crate::case::{Case, CaseKind};
 use crate::contact::element::{ElementReport, HysteresisLoop};
+use crate::contact::grounded::DofElements;
 use crate::contact::pairs::PairState;
+use crate::contact::slip_map::slip_map;
 use crate::continuation::PathEnd;
 use crate::error::{Error, Result};
 use crate::harmonics::{HarmonicForce, HarmonicLayout};
@@ -38,10 +40,10 @@ use crate::mesh::Mesh;
 use crate::model::{self, StructuralModel};
 use crate::nonlinear::{linsolve, SolverChoice};
 use crate::output::{
-    write_results, ContactCurveDetail, ContactData, FileInfo, FrfData, FrfRecord, PointLoops,
-    ResponseDof, ResultsFile,
+    write_results, ContactCurveDetail, ContactData, ContactMap, FileInfo, FrfData, FrfRecord,
+    PointLoops, ResponseDof, ResultsFile,
 };
-use crate::problem::matrix_case::{matrix_elements, matrix_setup};
+use crate::problem::matrix_case::{matrix_elements, matrix_setup, strip_points};
 use crate::problem::rom_store::{create_parent, sector_rom, RomOrigin, RomPolicy};
 use crate::problem::sector::SectorProblem;
 use crate::problem::settings::case_continuation;
@@ -179,7 +181,7 @@ pub fn solve_case(case: &Case, opts: &SolveOptions, rep: &Reporter) -> Result<So
     }
     case_continuation(case)?;
     let points = case.sweep_points()?;
-    let (curves, contacts, rom) = if case.kind() == CaseKind::Matrix {
+    let (mut curves, contacts, rom) = if case.kind() == CaseKind::Matrix {
         let (curves, contacts) = solve_matrix(case, &points, opts.stability, rep)?;
         (curves, contacts, None)
     } else {
@@ -187,6 +189,14 @@ pub fn solve_case(case: &Case, opts: &SolveOptions, rep: &Reporter) -> Result<So
         let (curves, contacts) = solve_sector(&points, &rom, &mesh, opts.stability, rep)?;
         (curves, contacts, Some(origin))
     };
+    let mut maps = Vec::new();
+    for (i, curve) in curves.iter_mut().enumerate() {
+        for mut m in std::mem::take(&mut curve.maps) {
+            m.curve = i;
+            maps.push(m);
+        }
+    }
+    maps.sort_by(|a, b| a.name.cmp(&b.name).then(a.curve.cmp(&b.curve)));
     let (frfs, reports) = curves.into_iter().map(|c| (c.frf, c.report)).unzip();
     Ok(SolveOutcome {
         results: ResultsFile {
@@ -197,6 +207,7 @@ pub fn solve_case(case: &Case, opts: &SolveOptions, rep: &Reporter) -> Result<So
             frfs,
             contacts,
             march: None,
+            maps,
         },
         curves: reports,
         rom,
@@ -209,6 +220,9 @@ struct Curve {
     report: CurveReport,
     /// Per contact interface: the per-element detail of this curve (empty for matrix cases).
     details: Vec<ContactCurveDetail>,
+    /// The stick–slip–separation maps at the curve's resonance peak (`[[strip]] map`; `curve`
+    /// set by the caller).
+    maps: Vec<ContactMap>,
 }
 
 /// The curves of a matrix case (no contact interfaces).
@@ -251,11 +265,52 @@ fn matrix_curve(
         .iter()
         .map(|&r| ResponseDof::Row(r as u64))
         .collect();
+    let maps =
+        |q: &[f64], state: &Vec<f64>| strip_maps(case, &elements, &system.layout(), q, state);
     let probe = ContactProbe {
         sizes: Vec::new(),
         evaluate: &|_: &[f64], _: &_, _| Ok(Vec::new()),
+        maps: case.strip.iter().any(|s| s.map.is_some()).then_some(&maps),
     };
     trace_curve(case, &system, dofs, &probe, stability, rep)
+}
+
+/// The maps of the `[[strip]]` entries that ask for one (`map = N_θ`), at the harmonics `q` with
+/// slider states `state` of the friction elements `elements` (the strips' points follow the
+/// friction `[[element]]` entries, in file order).
+fn strip_maps(
+    case: &Case,
+    elements: &DofElements,
+    layout: &HarmonicLayout,
+    q: &[f64],
+    state: &[f64],
+) -> Result<Vec<ContactMap>> {
+    let mut start = case
+        .element
+        .iter()
+        .filter(|e| e.kind == crate::case::ElementKind::Friction)
+        .count();
+    let mut maps = Vec::new();
+    for (s, strip) in case.strip.iter().enumerate() {
+        let points = strip_points(strip);
+        let range = start..start + points.len();
+        start = range.end;
+        let Some(phases) = strip.map else { continue };
+        let map = slip_map(&elements.map_points(layout, q, state, range)?, phases)?;
+        maps.push(ContactMap {
+            name: strip.label(s),
+            mu: strip.mu,
+            position: points.iter().map(|(x, _)| *x).collect(),
+            phase: map.phases,
+            state: map.state.into_iter().map(i64::from).collect(),
+            friction_ratio: map.friction_ratio,
+            transition_offsets: map.transition_offsets.iter().map(|&o| o as u64).collect(),
+            transition_angles: map.transition_angles,
+            transition_states: map.transition_states.into_iter().map(i64::from).collect(),
+            ..ContactMap::default()
+        });
+    }
+    Ok(maps)
 }
 
 /// The curves of a sector case; `/contact/` holds the interfaces of sweep point 0 (the sweep
@@ -315,6 +370,7 @@ fn sector_curve(
     let probe = ContactProbe {
         sizes,
         evaluate: &evaluate,
+        maps: None,
     };
     let dofs = problem
         .outputs
@@ -369,11 +425,16 @@ pub fn unprojected_warning(iface: &ContactInterface, hint: &str) -> Option<Strin
 type ElementReports<'a, S> =
     dyn Fn(&[f64], &S, bool) -> Result<Vec<(ElementReport, Option<HysteresisLoop>)>> + Sync + 'a;
 
+/// The stick–slip–separation maps at a solution (harmonic vector `q`, force memory `state`).
+type PeakMaps<'a, S> = dyn Fn(&[f64], &S) -> Result<Vec<ContactMap>> + Sync + 'a;
+
 /// How the contact state of a curve's points is recorded: the element reports, and the number of
-/// elements of each interface (consecutive in the pair set; empty without contact interfaces).
+/// elements of each interface (consecutive in the pair set; empty without contact interfaces),
+/// and the maps taken at the resonance peak, if any.
 struct ContactProbe<'a, S> {
     sizes: Vec<usize>,
     evaluate: &'a ElementReports<'a, S>,
+    maps: Option<&'a PeakMaps<'a, S>>,
 }
 
 impl<S> ContactProbe<'_, S> {
@@ -475,6 +536,7 @@ fn trace_curve<F: HarmonicForce>(
         points: Vec::new(),
     };
     let mut details = vec![ContactCurveDetail::default(); contact.sizes.len()];
+    let mut maps = Vec::new();
     let (end, failure) = match traced {
         Err(e @ (Error::Input(_) | Error::Io { .. } | Error::Msh(_))) => return Err(e),
         Err(e) => (
@@ -503,11 +565,20 @@ fn trace_curve<F: HarmonicForce>(
                     contact_fractions: contact.record_point(&p.q, &p.state, &mut details)?,
                 });
             }
-            if !contact.sizes.is_empty() {
+            if !contact.sizes.is_empty() || contact.maps.is_some() {
                 let (hz, amplitude) = curve_amplitudes(&frf);
                 if let Some(peak) = summarize(&hz, &amplitude) {
                     let p = &traced.points[peak.peak_point];
-                    contact.record_loops(peak.peak_point, &p.q, &p.state, &mut details)?;
+                    if !contact.sizes.is_empty() {
+                        contact.record_loops(peak.peak_point, &p.q, &p.state, &mut details)?;
+                    }
+                    if let Some(at_peak) = contact.maps {
+                        for mut m in at_peak(&p.q, &p.state)? {
+                            m.point = peak.peak_point;
+                            m.omega = p.omega;
+                            maps.push(m);
+                        }
+                    }
                 }
             }
             match traced.end {
@@ -552,6 +623,7 @@ fn trace_curve<F: HarmonicForce>(
         frf,
         report,
         details,
+        maps,
     })
 }
 

@@ -26,6 +26,7 @@ use crate::contact::element::{
 };
 use crate::contact::law::{ContactParams, Variant};
 use crate::contact::memoryless::{self, Law, LocalOutputs};
+use crate::contact::slip_map::MapPoint;
 use crate::error::{Error, Result};
 use crate::harmonics::{HarmonicForce, HarmonicLayout, JacobianMut};
 
@@ -262,6 +263,52 @@ impl DofElements {
             out.push((ws.report(), loops.then(|| ws.hysteresis())));
         }
         Ok(out)
+    }
+
+    /// The friction elements `range` as points of a stick–slip–separation map
+    /// ([`super::slip_map`]): each element's tangential and normal harmonics (U0, Re U1, Im U1),
+    /// (V0, Re V1, Im V1) at the harmonic vector `q` of an H = 1 layout, its parameters and its
+    /// slider state from `state`. An input error for H ≠ 1 (the maps are built from the exact
+    /// single-harmonic cycle).
+    pub fn map_points(
+        &self,
+        layout: &HarmonicLayout,
+        q: &[f64],
+        state: &[f64],
+        range: std::ops::Range<usize>,
+    ) -> Result<Vec<MapPoint>> {
+        if layout.harmonics != 1 {
+            return Err(Error::input(format!(
+                "stick–slip–separation maps are built from the exact single-harmonic cycle and need harmonics = 1 (here H = {})",
+                layout.harmonics
+            )));
+        }
+        self.prepare(layout, q, state)?;
+        let elements = self.elements.get(range.clone()).ok_or_else(|| {
+            Error::Compute(format!(
+                "friction elements: map of elements {range:?} of {}",
+                self.elements.len()
+            ))
+        })?;
+        let motion = |c: &WeightedDofs| {
+            let mut x = [0.0; 3];
+            for (&d, &w) in c.dofs.iter().zip(&c.weights) {
+                for (l, xl) in x.iter_mut().enumerate() {
+                    *xl += w * q[global_index(layout, l, d, self.n_dofs)];
+                }
+            }
+            x
+        };
+        Ok(elements
+            .iter()
+            .zip(&state[range])
+            .map(|(e, &slider)| MapPoint {
+                params: e.params,
+                u: motion(&e.tangential),
+                v: e.normal.as_ref().map_or([0.0; 3], motion),
+                slider,
+            })
+            .collect())
     }
 
     fn prepare(&self, layout: &HarmonicLayout, q: &[f64], state: &[f64]) -> Result<Arc<Aft>> {

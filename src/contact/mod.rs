@@ -16,6 +16,7 @@
 //!   coordinate's value and rate (cubic, polynomial, unilateral with gap, quadratic damper, tanh
 //!   friction), used by [`grounded::DofElements`] next to the friction elements.
 //! * `assembly`: the parallel evaluate-and-sum loop shared by the two.
+//! * [`slip_map`]: stick–slip–separation maps of a set of points from their exact cycles.
 //! * [`mapped`]: [`mapped::LinearMap`], elements reading linear combinations of the solved DOFs
 //!   (SAMA's interpolated virtual target nodes).
 
@@ -29,3 +30,4 @@ pub mod mapped;
 pub mod memoryless;
 pub mod microslip;
 pub mod pairs;
+pub mod slip_map;

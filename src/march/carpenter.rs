@@ -196,17 +196,23 @@ pub fn carpenter(sys: &NonsmoothSystem, s: &NonsmoothSettings) -> Result<Nonsmoo
                 x1[r] += h * d;
             }
             let dx: Vec<f64> = x1.iter().zip(&x).map(|(a, b)| a - b).collect();
-            let stored: f64 = (0..n - nm).map(|a| c_th.row_dot(a, &dx)).sum();
+            let stored: f64 = (0..n - nm)
+                .map(|a| sys.heat_weight(nm + a) * c_th.row_dot(a, &dx))
+                .sum();
             heat.stored += stored;
-            heat.exchanged += h * (nm..n).map(|r| f[r] - kx[r]).sum::<f64>();
+            heat.exchanged += h
+                * (nm..n)
+                    .map(|r| sys.heat_weight(r) * (f[r] - kx[r]))
+                    .sum::<f64>();
             heat.frictional += h
                 * (nm..n)
                     .map(|r| {
-                        columns
-                            .iter()
-                            .zip(&sol.lambda)
-                            .map(|(c, &l)| c[r] * l)
-                            .sum::<f64>()
+                        sys.heat_weight(r)
+                            * columns
+                                .iter()
+                                .zip(&sol.lambda)
+                                .map(|(c, &l)| c[r] * l)
+                                .sum::<f64>()
                     })
                     .sum::<f64>();
             heat.residual = heat.stored - heat.exchanged - heat.frictional;

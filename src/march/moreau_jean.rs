@@ -339,7 +339,7 @@ impl Blocks {
         let (n, nm) = (sys.n, sys.n_mech);
         let column_sums = |a: &[f64]| -> Vec<f64> {
             (0..n)
-                .map(|c| (nm..n).map(|r| a[r * n + c]).sum())
+                .map(|c| (nm..n).map(|r| sys.heat_weight(r) * a[r * n + c]).sum())
                 .collect()
         };
         Blocks {
@@ -397,8 +397,8 @@ fn accumulate_energy(
     e.residual = kin + strain - e0 + e.damping + e.numerical - e.external - e.thermal - e.contact;
 }
 
-/// Adds one step to the heat balance: summing the thermal rows,
-/// 1ᵀC^θθΔθ = h 1ᵀ(f^θ_{n+γ_θ} − K_θ x_{n+γ_θ}) + 1ᵀH^θλ.
+/// Adds one step to the heat balance: summing the thermal rows with the weights w
+/// ([`NonsmoothSystem::heat_weights`]), wᵀC^θθΔθ = h wᵀ(f^θ_{n+γ_θ} − K_θ x_{n+γ_θ}) + wᵀH^θλ.
 #[allow(clippy::too_many_arguments)]
 fn accumulate_heat(
     sys: &NonsmoothSystem,
@@ -418,8 +418,9 @@ fn accumulate_heat(
         q.exchanged -= h * b.k_th[c] * (x0[c] + gamma_thermal * dx);
     }
     for r in nm..n {
-        q.exchanged += h * fg[r];
-        q.frictional += columns
+        let w = sys.heat_weight(r);
+        q.exchanged += w * h * fg[r];
+        q.frictional += w * columns
             .iter()
             .zip(lambda)
             .map(|(col, &l)| col[r] * l)

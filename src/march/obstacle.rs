@@ -112,6 +112,11 @@ pub struct NonsmoothSystem {
     pub x0: Vec<f64>,
     /// Initial velocity v₀ (m/s; K/s, the latter without effect on the Moreau–Jean solution).
     pub v0: Vec<f64>,
+    /// The weight w_r of each thermal row in the heat balance ([`HeatTerms`]: wᵀ times the heat
+    /// rows), one per row n_mech..n; empty: 1 each (rows that are nodal temperatures). A model
+    /// projected on x = T x_r has rows Tᵀ(·), so w solves T_θ w = 1 and the balance stays the
+    /// physical one ([`super::reduced::project`]).
+    pub heat_weights: Vec<f64>,
 }
 
 impl NonsmoothSystem {
@@ -130,7 +135,16 @@ impl NonsmoothSystem {
             dof_names: (0..n).map(|i| format!("dof {i}")).collect(),
             x0: vec![0.0; n],
             v0: vec![0.0; n],
+            heat_weights: Vec::new(),
         }
+    }
+
+    /// The weight of row `r` (≥ n_mech) in the heat balance (`heat_weights`, else 1).
+    pub fn heat_weight(&self, r: usize) -> f64 {
+        self.heat_weights
+            .get(r - self.n_mech)
+            .copied()
+            .unwrap_or(1.0)
     }
 
     /// The load f(t) (N; W).
@@ -183,6 +197,13 @@ impl NonsmoothSystem {
         }
         if self.force.len() != n || self.x0.len() != n || self.v0.len() != n {
             return bad("the load or the initial state does not have one entry per DOF".into());
+        }
+        if !self.heat_weights.is_empty() && self.heat_weights.len() != n - nm {
+            return bad(format!(
+                "{} heat-balance weights for {} thermal rows",
+                self.heat_weights.len(),
+                n - nm
+            ));
         }
         for o in &self.obstacles {
             let key = format!("obstacle '{}'", o.name);
@@ -289,7 +310,8 @@ pub struct EnergyTerms {
     pub residual: f64,
 }
 
-/// Cumulative heat balance (J): stored = external + conducted + frictional, `residual` the
+/// Cumulative heat balance (J), the heat rows summed with the weights
+/// [`NonsmoothSystem::heat_weights`]: stored = external + conducted + frictional, `residual` the
 /// difference.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct HeatTerms {

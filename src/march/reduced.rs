@@ -12,10 +12,13 @@
 //! T_CB's master rows the identity (contact nodes kept as physical masters), the gaps, impulses
 //! and the contact nodes' temperatures of the reduced march are physical quantities; the kinetic
 //! and strain energies and the works of the energy balance are those of the physical model
-//! (quadratic forms are invariant under the projection), while the heat terms
-//! ([`super::obstacle::HeatTerms`]) sum the reduced thermal rows (the frictional input stays
-//! α Σλ when the heated nodes are masters).
+//! (quadratic forms are invariant under the projection). The heat terms
+//! ([`super::obstacle::HeatTerms`]) sum the reduced thermal rows with the weights w of the
+//! least-squares solution of T_θ w = 1 (`heat_weights`): the reduced rows are T_θᵀ times the full
+//! ones, so wᵀ(reduced rows) = (T_θ w)ᵀ(full rows) is the physical balance 1ᵀ(full rows) whenever
+//! 1 lies in the span of T_θ, as it does for a basis of every conduction mode.
 
+use faer::linalg::solvers::SolveLstsq;
 use faer::{Mat, MatRef};
 
 use super::obstacle::{NonsmoothSystem, Obstacle};
@@ -100,6 +103,16 @@ pub fn project(
             ..o.clone()
         })
         .collect();
+    // Heat-balance weights: T_θ w = 1 (least squares), with the full model's own weights.
+    let nt = n - nm;
+    let heat_weights = if nt > 0 && r > n_mech {
+        let tt = t.submatrix(nm, n_mech, nt, r - n_mech);
+        let ones = Mat::from_fn(nt, 1, |i, _| sys.heat_weight(nm + i));
+        let w = tt.qr().solve_lstsq(ones);
+        (0..r - n_mech).map(|c| w[(c, 0)]).collect()
+    } else {
+        Vec::new()
+    };
     let reduced = NonsmoothSystem {
         n: r,
         n_mech,
@@ -112,6 +125,7 @@ pub fn project(
         dof_names: names,
         x0: vec![0.0; r],
         v0: vec![0.0; r],
+        heat_weights,
     };
     reduced.validate("reduced nonsmooth model")?;
     Ok(reduced)

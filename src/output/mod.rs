@@ -22,8 +22,8 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 pub use h5::{Attr, Column, Data, Dataset, Group, H5File, H5Reader, Records};
 pub use results::{
-    read_results, write_results, ContactCurveDetail, ContactData, ContactPairData, FrfData,
-    FrfRecord, MarchData, PointLoops, ResponseDof, ResultsFile,
+    read_results, write_results, ContactCurveDetail, ContactData, ContactMap, ContactPairData,
+    FrfData, FrfRecord, MarchData, PointLoops, ResponseDof, ResultsFile,
 };
 pub use rom_file::{read_rom, write_rom};
 

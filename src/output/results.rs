@@ -29,6 +29,7 @@
 //! | `/contact/<name>/elements/<i>/dissipated_energy` | f64 [P, E] | J | energy dissipated per cycle by each element |
 //! | `/contact/<name>/elements/<i>/loop_u`, `loop_force` | f64 [E, N_t, 2] | m, N | hysteresis loops at point `loop_point` (attribute; the resonance peak): u1, u2 and f1, f2 over the last period |
 //! | `/contact/<name>/elements/<i>/loop_approach`, `loop_normal_force` | f64 [E, N_t] | m, N | normal approach v and normal force f_n at the same point |
+//! | `/contact/<name>/map/<i>` | group | | stick–slip–separation map of a `[[strip]]` at the peak of curve i ([`ContactMap`]): `phase` \[N_θ\], `position` \[E\], `state` and `friction_ratio` [E, N_θ], `transition_offsets` \[E + 1\], `transition_angles` and `transition_states` \[T\] |
 //! | `/march` attributes | | | `scheme`, `wall_seconds`, `omega` (rad/s), `frequency_hz`, `steps` |
 //! | `/march/time` | f64 \[T\] | s | instants |
 //! | `/march/response` | f64 [T, R] | m | response DOFs (`/march/response_dofs`) |
@@ -178,6 +179,41 @@ pub struct ContactData {
     pub curves: Vec<ContactCurveDetail>,
 }
 
+/// A stick–slip–separation map of a friction strip at one point of a curve
+/// (`/contact/<name>/map/<i>`, [`crate::contact::slip_map`]): E points, N_θ phase angles.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ContactMap {
+    /// The strip's name.
+    pub name: String,
+    /// Friction coefficient μ.
+    pub mu: f64,
+    /// Index of the curve in [`ResultsFile::frfs`].
+    pub curve: usize,
+    /// Index of the point in that curve (the resonance peak).
+    pub point: usize,
+    /// Excitation frequency ω of the point (rad/s).
+    pub omega: f64,
+    /// Position s of each point along the strip (m), \[E\].
+    pub position: Vec<f64>,
+    /// Phase angles τ_j = 2πj/N_θ of the excitation F cos τ (rad), \[N_θ\].
+    pub phase: Vec<f64>,
+    /// State per point and angle, `[e * N_θ + j]`: 0 stick, 1 positive slip, −1 negative slip,
+    /// 2 separation.
+    pub state: Vec<i64>,
+    /// f/(μn) per point and angle, laid out as `state`; NaN where μn = 0.
+    pub friction_ratio: Vec<f64>,
+    /// Point e's transitions are entries `transition_offsets[e]..transition_offsets[e + 1]` of
+    /// `transition_angles` and `transition_states` (E + 1 offsets).
+    pub transition_offsets: Vec<u64>,
+    /// Transition angles τ (rad, in [0, 2π), ascending per point).
+    pub transition_angles: Vec<f64>,
+    /// The state entered at each transition (codes of `state`).
+    pub transition_states: Vec<i64>,
+}
+
+/// Labels of the map state codes −1, 0, 1, 2 (attribute `labels` of `state`, in code order).
+pub const MAP_STATE_LABELS: [&str; 4] = ["slip-", "stick", "slip+", "separated"];
+
 /// A time-marching run.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MarchData {
@@ -222,6 +258,9 @@ pub struct ResultsFile {
     pub contacts: Vec<ContactData>,
     /// The time-marching run, `/march`.
     pub march: Option<MarchData>,
+    /// Stick–slip–separation maps of friction strips, `/contact/<name>/map/<i>` (read back
+    /// sorted by name, then curve).
+    pub maps: Vec<ContactMap>,
 }
 
 /// Writes `results` to `path` atomically. Fails (exit status 1, naming the curve or element) when
@@ -247,6 +286,17 @@ pub fn results_file(results: &ResultsFile) -> Result<H5File> {
         file.root
             .group("contact")
             .set_attr("names", Attr::Strs(names));
+    }
+    for map in &results.maps {
+        map_group(file.root.group("contact"), map, &results.frfs)?;
+    }
+    if !results.maps.is_empty() {
+        let mut names: Vec<String> = results.maps.iter().map(|m| m.name.clone()).collect();
+        names.sort();
+        names.dedup();
+        file.root
+            .group("contact")
+            .set_attr("maps", Attr::Strs(names));
     }
     if let Some(march) = &results.march {
         check_march(march)?;
@@ -527,6 +577,109 @@ fn contact_group(parent: &mut Group, contact: &ContactData, frfs: &[FrfData]) ->
     Ok(())
 }
 
+/// `/contact/<name>/map/<curve>` of one map (with `model = "strip"` and `mu` on a new
+/// `/contact/<name>`).
+fn map_group(parent: &mut Group, m: &ContactMap, frfs: &[FrfData]) -> Result<()> {
+    let (e, n) = (m.position.len(), m.phase.len());
+    let what = format!("/contact/{}/map/{}", m.name, m.curve);
+    let points = frfs.get(m.curve).map(|f| f.points.len());
+    if points.is_none_or(|p| m.point >= p) {
+        return Err(size_error(format!(
+            "{what}: point {} of a curve with {points:?} points",
+            m.point
+        )));
+    }
+    let transitions = m.transition_angles.len();
+    if m.state.len() != e * n
+        || m.friction_ratio.len() != e * n
+        || m.transition_offsets.len() != e + 1
+        || m.transition_offsets.last().copied() != Some(transitions as u64)
+        || m.transition_offsets.windows(2).any(|w| w[1] < w[0])
+        || m.transition_states.len() != transitions
+    {
+        return Err(size_error(format!(
+            "{what}: inconsistent sizes for {e} points and {n} phase angles"
+        )));
+    }
+    let fresh = !parent.groups.contains_key(&m.name);
+    let group = parent.group(&m.name);
+    if fresh {
+        group
+            .set_attr("model", Attr::Str("strip".into()))
+            .set_attr("mu", Attr::F64(m.mu));
+    }
+    let maps = group.group("map");
+    if maps.groups.contains_key(&m.curve.to_string()) {
+        return Err(size_error(format!("{what}: written twice")));
+    }
+    let g = maps.group(&m.curve.to_string());
+    g.set_attr("point", Attr::U64(m.point as u64))
+        .set_attr("omega", Attr::F64(m.omega));
+    g.add(
+        "phase",
+        Dataset::f64s(
+            m.phase.clone(),
+            "rad",
+            "phase angles τ_j = 2πj/N_θ of the excitation F cos τ",
+        ),
+    );
+    g.add(
+        "position",
+        Dataset::f64s(
+            m.position.clone(),
+            "m",
+            "position s of each point along the strip",
+        ),
+    );
+    g.add(
+        "state",
+        Dataset::new(
+            &[e, n],
+            Data::I64(m.state.clone()),
+            "1",
+            "state per point and phase angle: -1 negative slip, 0 stick, 1 positive slip, 2 separation",
+        )
+        .with_attr(
+            "labels",
+            Attr::Strs(MAP_STATE_LABELS.iter().map(|s| s.to_string()).collect()),
+        ),
+    );
+    g.add(
+        "friction_ratio",
+        Dataset::new(
+            &[e, n],
+            Data::F64(m.friction_ratio.clone()),
+            "1",
+            "friction force over its limit f/(μn) per point and phase angle (NaN where μn = 0)",
+        ),
+    );
+    g.add(
+        "transition_offsets",
+        Dataset::u64s(
+            m.transition_offsets.clone(),
+            "1",
+            "point e's transitions are entries offsets[e]..offsets[e+1] of transition_angles and transition_states",
+        ),
+    );
+    g.add(
+        "transition_angles",
+        Dataset::f64s(
+            m.transition_angles.clone(),
+            "rad",
+            "exact transition angles of each point's cycle, ascending per point, in [0, 2π)",
+        ),
+    );
+    g.add(
+        "transition_states",
+        Dataset::i64s(
+            m.transition_states.clone(),
+            "1",
+            "the state entered at each transition (codes of state)",
+        ),
+    );
+    Ok(())
+}
+
 fn check_detail(contact: &ContactData, d: &ContactCurveDetail, i: usize, p: usize) -> Result<()> {
     let e = contact.pairs.len();
     let what = format!("/contact/{}/elements/{i}", contact.name);
@@ -772,19 +925,24 @@ fn march_group(group: &mut Group, m: &MarchData) {
 pub fn read_results(path: &Path) -> Result<ResultsFile> {
     let reader = H5Reader::open(path)?;
     let info = check_file_kind(&reader, RESULTS_KIND)?;
-    let contact_names = if reader.has_group("/contact") {
-        match reader.attr("/contact", "names")? {
-            Attr::Strs(names) => names,
-            other => {
-                return Err(reader.error(
-                    "/contact",
-                    format!("attribute \"names\" should be strings, found {other:?}"),
-                ))
-            }
-        }
+    let contact_attrs = if reader.has_group("/contact") {
+        reader.attrs("/contact")?
     } else {
-        Vec::new()
+        BTreeMap::new()
     };
+    let names_attr = |name: &str| match contact_attrs.get(name) {
+        None => Ok(Vec::new()),
+        Some(Attr::Strs(names)) => Ok(names.clone()),
+        Some(other) => Err(reader.error(
+            "/contact",
+            format!("attribute {name:?} should be strings, found {other:?}"),
+        )),
+    };
+    let contact_names = names_attr("names")?;
+    let map_names = names_attr("maps")?;
+    if reader.has_group("/contact") && contact_names.is_empty() && map_names.is_empty() {
+        return Err(reader.error("/contact", "attribute \"names\" missing"));
+    }
     let mut frfs = Vec::new();
     if reader.has_group("/frf") {
         let count = reader.group_names("/frf")?.len();
@@ -802,11 +960,48 @@ pub fn read_results(path: &Path) -> Result<ResultsFile> {
     } else {
         None
     };
+    let mut maps = Vec::new();
+    for name in &map_names {
+        let mut curves: Vec<usize> = reader
+            .group_names(&format!("/contact/{name}/map"))?
+            .iter()
+            .filter_map(|c| c.parse().ok())
+            .collect();
+        curves.sort_unstable();
+        for curve in curves {
+            maps.push(read_map(&reader, name, curve)?);
+        }
+    }
     Ok(ResultsFile {
         info,
         frfs,
         contacts,
         march,
+        maps,
+    })
+}
+
+fn read_map(reader: &H5Reader, name: &str, curve: usize) -> Result<ContactMap> {
+    let base = format!("/contact/{name}/map/{curve}");
+    let at = |n: &str| format!("{base}/{n}");
+    let position = reader.f64_vector(&at("position"))?;
+    let phase = reader.f64_vector(&at("phase"))?;
+    let (e, n) = (position.len(), phase.len());
+    let transition_angles = reader.f64_vector(&at("transition_angles"))?;
+    let t = transition_angles.len();
+    Ok(ContactMap {
+        name: name.to_string(),
+        mu: reader.attr_f64(&format!("/contact/{name}"), "mu")?,
+        curve,
+        point: reader.attr_u64(&base, "point")? as usize,
+        omega: reader.attr_f64(&base, "omega")?,
+        state: reader.i64s(&at("state"), &[e, n])?,
+        friction_ratio: reader.f64s(&at("friction_ratio"), &[e, n])?,
+        transition_offsets: reader.u64s(&at("transition_offsets"), &[e + 1])?,
+        transition_states: reader.i64s(&at("transition_states"), &[t])?,
+        transition_angles,
+        position,
+        phase,
     })
 }
 

@@ -12,8 +12,8 @@
 //! r_i = |r_i| and e_r = r_i/r_i (taken at the initial position, so the gap holds for any tip shape
 //! under small displacements):
 //!
-//! - gap g_i = g0_i − e_r·u_i (m), g0_i = R − r_i or the given `gap`; G_i = −e_rᵀ on the node's
-//!   free displacement DOF;
+//! - gap g_i = g0_i − e_r·u_i (m), g0_i = R − r_i or the given `gap` (one value, or one per
+//!   node); G_i = −e_rᵀ on the node's free displacement DOF;
 //! - friction along t_i = −sgn(Ω) e_φ, e_φ = a × e_r: the casing slides past the blade at −RΩ e_φ
 //!   and the sliding never reverses (the paper's eq. 3 prints the entry −μRΩ, which is not a
 //!   force; the Coulomb force μλ is used);
@@ -164,6 +164,7 @@ pub fn casing_case(case: &Case, sm: &StructuralModel) -> Result<NonsmoothCase> {
         dof_names,
         x0: vec![0.0; n],
         v0: vec![0.0; n],
+        heat_weights: Vec::new(),
     };
     if let Some(e) = &case.excitation {
         match &e.load {
@@ -191,7 +192,10 @@ pub fn casing_case(case: &Case, sm: &StructuralModel) -> Result<NonsmoothCase> {
         let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
         let a = [d[0] / len, d[1] / len, d[2] / len];
         let sense = cs.speed_rpm.map_or(1.0, f64::signum);
-        for node in mesh.nodes_of(&cs.group)? {
+        let nodes = mesh.nodes_of(&cs.group)?;
+        let mut tags: Vec<u64> = nodes.iter().map(|&i| mesh.node_tags[i as usize]).collect();
+        tags.sort_unstable();
+        for node in nodes {
             let i = node as usize;
             let tag = mesh.node_tags[i];
             let (er, r) = radial(mesh.coords[i], cs.axis.origin, a).ok_or_else(|| {
@@ -215,7 +219,12 @@ pub fn casing_case(case: &Case, sm: &StructuralModel) -> Result<NonsmoothCase> {
                     "{file}: key '{key}.group': node {tag} cannot move radially (clamped), so it cannot touch the casing"
                 )));
             }
-            let g0 = cs.gap.unwrap_or_else(|| cs.radius.unwrap_or(0.0) - r);
+            let g0 = cs.initial_gap(tag, r, &tags).ok_or_else(|| {
+                Error::input(format!(
+                    "{file}: key '{key}.gap': no initial gap for node {tag} of group '{}'",
+                    cs.group
+                ))
+            })?;
             let mut o = Obstacle::new(
                 &format!("{}:{tag}", cs.label(ci)),
                 normal,
