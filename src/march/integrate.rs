@@ -443,48 +443,14 @@ impl<'a> Marcher<'a> {
                 };
                 let (h, mut t1, mut one_off) = end_time(dt, self.t);
                 dt = h;
-                self.excitation.fill(sys, s.omega, t1, true);
-                let ctx = context(
-                    sys,
-                    s,
-                    self.tolerance,
-                    t1,
-                    dt,
-                    self.excitation.view(),
-                    one_off,
-                );
-                let mut its = match step(
-                    s,
-                    &ctx,
-                    &self.cur,
-                    &mut self.cache,
-                    &mut self.ws,
-                    &mut self.next,
-                ) {
+                let mut its = match self.attempt(t1, dt, one_off) {
                     Ok(its) => its as u64,
                     // the standard corrector diverges when the state stiffens within a long
                     // step (Δτ/𝕋 beyond 1/π): re-run with the full-stick step, the shortest
                     Err(_) if dt > self.dt_stick * (1.0 + 1e-12) => {
                         (dt, t1, one_off) = end_time(self.dt_stick, self.t);
                         self.rejected += 1;
-                        self.excitation.fill(sys, s.omega, t1, true);
-                        let ctx = context(
-                            sys,
-                            s,
-                            self.tolerance,
-                            t1,
-                            dt,
-                            self.excitation.view(),
-                            one_off,
-                        );
-                        step(
-                            s,
-                            &ctx,
-                            &self.cur,
-                            &mut self.cache,
-                            &mut self.ws,
-                            &mut self.next,
-                        )? as u64
+                        self.attempt(t1, dt, one_off)? as u64
                     }
                     Err(e) => return Err(e),
                 };
@@ -505,24 +471,7 @@ impl<'a> Marcher<'a> {
                     }
                     (dt, t1, one_off) = end_time(dt_new, self.t);
                     self.rejected += 1;
-                    self.excitation.fill(sys, s.omega, t1, true);
-                    let ctx = context(
-                        sys,
-                        s,
-                        self.tolerance,
-                        t1,
-                        dt,
-                        self.excitation.view(),
-                        one_off,
-                    );
-                    its += step(
-                        s,
-                        &ctx,
-                        &self.cur,
-                        &mut self.cache,
-                        &mut self.ws,
-                        &mut self.next,
-                    )? as u64;
+                    its += self.attempt(t1, dt, one_off)? as u64;
                 }
                 self.total_iterations += its;
                 self.step_range = (self.step_range.0.min(dt), self.step_range.1.max(dt));
@@ -557,6 +506,30 @@ impl<'a> Marcher<'a> {
             self.steady_period = Some(p + 1);
         }
         Ok(steady)
+    }
+
+    /// One adaptive step from the current state to `t1` (step `dt`; `one_off`: a size met once)
+    /// into the next state, with the excitation at `t1`; returns the iterations.
+    fn attempt(&mut self, t1: f64, dt: f64, one_off: bool) -> Result<u32> {
+        let (sys, s) = (self.sys, self.settings);
+        self.excitation.fill(sys, s.omega, t1, true);
+        let ctx = context(
+            sys,
+            s,
+            self.tolerance,
+            t1,
+            dt,
+            self.excitation.view(),
+            one_off,
+        );
+        step(
+            s,
+            &ctx,
+            &self.cur,
+            &mut self.cache,
+            &mut self.ws,
+            &mut self.next,
+        )
     }
 
     /// The outcome: the history, the period summaries and the harmonics of the last period.
