@@ -204,6 +204,17 @@ fn full_example_loads_with_the_right_values() {
 }
 
 #[test]
+fn contact_evaluation_analytic_parses_at_one_harmonic() {
+    let text = full_with("n0 = 113.0 ", "n0 = 113.0\nevaluation = \"analytic\"\n")
+        .replace("harmonics = 3 ", "harmonics = 1 ");
+    let case = Case::from_str(&text, Path::new("case.toml")).unwrap();
+    assert_eq!(
+        case.contact[0].evaluation,
+        nlrom::case::Evaluation::Analytic
+    );
+}
+
+#[test]
 fn matrix_example_parses() {
     let case = Case::from_str(MATRIX, Path::new("/cases/chain/case.toml")).unwrap();
     assert_eq!(case.title, "case");
@@ -339,6 +350,17 @@ fn value_range_errors_name_their_keys() {
                 "model = \"node-to-node\"\ncoupling = \"interpolated\"\n",
             ),
             "contact[0].coupling",
+        ),
+        // the exact single-harmonic cycle needs H = 1, and the 1-D element
+        (
+            full_with("n0 = 113.0 ", "n0 = 113.0\nevaluation = \"analytic\"\n"),
+            "contact[0].evaluation",
+        ),
+        (
+            full_with("n0 = 113.0 ", "n0 = 113.0\nevaluation = \"analytic\"\n")
+                .replace("harmonics = 3 ", "harmonics = 1 ")
+                .replace("element = \"1d\"", "element = \"2d\""),
+            "contact[0].evaluation",
         ),
     ];
     for (text, key) in cases {

@@ -217,6 +217,7 @@ fn contact(coupling: SamaCoupling, misalignment: Option<Misalignment>) -> Contac
         kn: KN,
         n0: N0,
         misalignment,
+        evaluation: Default::default(),
     }
 }
 

@@ -113,6 +113,7 @@ fn contact(model: ContactModel, misalignment: Option<Misalignment>) -> Contact {
         kn: 3.0e6,
         n0: 90.0,
         misalignment,
+        evaluation: Default::default(),
     }
 }
 

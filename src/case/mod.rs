@@ -369,6 +369,11 @@ pub struct Contact {
     /// Static offset of the target face.
     #[serde(default)]
     pub misalignment: Option<Misalignment>,
+    /// How the friction elements are evaluated on harmonic vectors (as `[[element]]
+    /// evaluation`): `aft` (default) or `analytic`, the exact single-harmonic cycle of the 1-D
+    /// law (Cigeroglu, An & Menq 2007), which needs `element = "1d"` and H = 1.
+    #[serde(default)]
+    pub evaluation: Evaluation,
 }
 
 /// How contact nodes are paired with the target surface.

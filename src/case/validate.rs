@@ -195,6 +195,12 @@ impl Case {
                 },
             )?;
             self.check_friction(&key, c.mu, c.kt, c.kn, c.n0, true)?;
+            self.check_evaluation(&format!("{key}.evaluation"), c.evaluation)?;
+            self.require(
+                c.evaluation != Evaluation::Analytic || c.element == ContactElement::OneD,
+                &format!("{key}.evaluation"),
+                || "evaluation = \"analytic\" is the exact cycle of the 1-D friction law; the 2-D (Coulomb disc) element is evaluated by the AFT only (element = \"1d\" or evaluation = \"aft\")",
+            )?;
             self.require(
                 c.coupling.is_none() || c.model == ContactModel::Sama,
                 &format!("{key}.coupling"),

@@ -17,10 +17,11 @@ use std::sync::Arc;
 
 use faer::MatMut;
 
+use crate::case::Evaluation;
 use crate::contact::aft::{check_finite, gather, global_index, Aft, AftCache};
 use crate::contact::assembly::{assemble, Outputs, Slot, SlotStorage, Wanted};
 use crate::contact::element::{
-    evaluate as evaluate_element, ElementReport, HysteresisLoop, LocalElement, Workspace,
+    evaluate_as, ElementReport, HysteresisLoop, LocalElement, Workspace,
 };
 use crate::contact::kinematics::{
     check_frame, node_jacobian, relative_local, relative_transpose, Phases,
@@ -88,6 +89,8 @@ pub struct PairSet {
     slot_dofs: usize,
     aft: AftCache,
     slots: SlotStorage,
+    /// How each pair is evaluated (empty: all by the AFT).
+    evaluations: Vec<Evaluation>,
 }
 
 impl std::fmt::Debug for PairSet {
@@ -181,7 +184,29 @@ impl PairSet {
             slot_dofs: 6,
             aft: AftCache::default(),
             slots: SlotStorage::default(),
+            evaluations: Vec::new(),
         })
+    }
+
+    /// Sets how each pair's friction element is evaluated (one entry per pair, in order; the
+    /// default is [`Evaluation::Aft`] for all). `analytic` (the exact single-harmonic cycle of
+    /// [`crate::contact::microslip`]) needs the 1-D variant, checked here, and H = 1, checked at
+    /// evaluation.
+    pub fn with_evaluations(mut self, evaluations: Vec<Evaluation>) -> Result<Self> {
+        if evaluations.len() != self.pairs.len() {
+            return Err(Error::Compute(format!(
+                "contact pairs: {} evaluation choices for {} pairs",
+                evaluations.len(),
+                self.pairs.len()
+            )));
+        }
+        if self.variant != Variant::OneD && evaluations.contains(&Evaluation::Analytic) {
+            return Err(Error::input(
+                "evaluation = \"analytic\" is the exact cycle of the 1-D friction law; the 2-D (Coulomb disc) element is evaluated by the AFT only",
+            ));
+        }
+        self.evaluations = evaluations;
+        Ok(self)
     }
 
     /// The same pairs reading inner DOFs y = B x ([`LinearMap`]): the rows given to [`PairSet::new`]
@@ -326,7 +351,16 @@ impl PairSet {
             tangential: 2,
             normal: true,
         };
-        evaluate_element(&element, aft, &b.x, slider, &mut b.g, jacobian, &mut b.ws)?;
+        evaluate_as(
+            self.evaluations.get(i).copied().unwrap_or_default(),
+            &element,
+            aft,
+            &b.x,
+            slider,
+            &mut b.g,
+            jacobian,
+            &mut b.ws,
+        )?;
         if forces {
             let (fc, ft) = b.q.split_at_mut(3 * m);
             relative_transpose(

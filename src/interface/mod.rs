@@ -64,7 +64,7 @@ pub mod weights;
 
 use std::collections::HashMap;
 
-use crate::case::{Case, Contact, ContactElement, ContactModel, SamaCoupling};
+use crate::case::{Case, Contact, ContactElement, ContactModel, Evaluation, SamaCoupling};
 use crate::cyclic::{CyclicGeometry, MATCH_TOLERANCE};
 use crate::error::{Error, Result};
 use crate::mesh::faces::group_faces;
@@ -160,6 +160,8 @@ pub struct ContactInterface {
     pub coupling: SamaCoupling,
     /// 1-D or 2-D friction element per pair.
     pub element: ContactElement,
+    /// How the pairs' friction elements are evaluated (AFT or the exact single-harmonic cycle).
+    pub evaluation: Evaluation,
     /// Friction coefficient μ of every pair.
     pub mu: f64,
     /// Sector offset σ of the target surface (0 within one sector).
@@ -299,6 +301,7 @@ pub fn build_interface_with(
         model: c.model,
         coupling: c.coupling.unwrap_or_default(),
         element: c.element,
+        evaluation: c.evaluation,
         mu: c.mu,
         sigma: trial.sigma,
         rotation,

@@ -22,7 +22,7 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use faer::c64;
 
-use crate::case::{Case, ContactElement, ExcitationLoad};
+use crate::case::{Case, ContactElement, Evaluation, ExcitationLoad};
 use crate::contact::law::Variant;
 use crate::contact::mapped::LinearMap;
 use crate::contact::pairs::{PairSet, SectorCoupling};
@@ -273,11 +273,16 @@ fn pair_set(
         rotation: g.rotation(1),
         harmonic_indices: k_n.to_vec(),
     });
+    let evaluations: Vec<Evaluation> = interfaces
+        .iter()
+        .flat_map(|iface| std::iter::repeat_n(iface.evaluation, iface.element_count()))
+        .collect();
     if virtuals.rows.is_empty() {
-        return PairSet::new(n_dofs, variant, pairs, coupling);
+        return PairSet::new(n_dofs, variant, pairs, coupling)?.with_evaluations(evaluations);
     }
     let inner = n_dofs + virtuals.rows.len();
     PairSet::new(inner, variant, pairs, coupling)?
+        .with_evaluations(evaluations)?
         .with_map(LinearMap::identity_and(n_dofs, virtuals.rows)?)
 }
 
