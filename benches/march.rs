@@ -2,6 +2,10 @@
 //! - the underplatform damper (cases/damper.toml, 200 Hz, one period after the static start);
 //! - a one-DOF oscillator with a Jenkins element (m = 1 kg, k = 4 N/m, k_t = 5 N/m, slip force
 //!   0.5 N, F = 2 N at ω = 1 rad/s, below resonance), 10 periods from rest, 300 steps per period;
+//! - the same oscillator with a stiff contact (k_t = 400 N/m) at ω = 0.2 rad/s, a tenth of its
+//!   free natural frequency (inertia negligible: the quasi-static method applies), 5 periods from
+//!   rest, Newmark at the step compatible with full stick, the quasi-static method at 300 steps
+//!   per period;
 //! - the reduced sector of cases/sector8_march.toml (k = 0, shroud contact in micro-slip, 170 Hz),
 //!   two periods from rest with the paper's settings: Newmark at the step compatible with full
 //!   stick (Δτ = 0.15 𝕋_stick, at most 1/300 of the period), the quasi-static method at 300 steps
@@ -64,7 +68,9 @@ fn damper() -> Model {
     }
 }
 
-fn jenkins() -> Model {
+/// The one-DOF oscillator m = 1 kg, k = 4 N/m, c = 0.12 N·s/m with a Jenkins element (tangential
+/// stiffness `kt`, slip force 0.5 N) under 2 N at ω.
+fn oscillator(kt: f64) -> MarchSystem {
     let mut system = MarchSystem {
         n: 1,
         mass: vec![1.0],
@@ -80,7 +86,7 @@ fn jenkins() -> Model {
             },
             normal: None,
             params: FrictionParams {
-                kt: 5.0,
+                kt,
                 kn: 0.0,
                 mu: 1.0,
                 n0: 0.5,
@@ -92,9 +98,13 @@ fn jenkins() -> Model {
         displacement_scale: 1.0,
     };
     system.displacement_scale = system.default_displacement_scale();
+    system
+}
+
+fn jenkins() -> Model {
     Model {
         name: "Jenkins oscillator (1 DOF)",
-        system,
+        system: oscillator(5.0),
         settings: MarchSettings {
             omega: 1.0,
             periods: 10,
@@ -102,6 +112,24 @@ fn jenkins() -> Model {
             ..MarchSettings::default()
         },
         rounds: 40,
+    }
+}
+
+/// The oscillator with a stiff contact (k_t = 400 N/m: full-stick period 0.31 s) driven at
+/// ω = 0.2 rad/s, a tenth of its free natural frequency, where inertia is negligible and the
+/// quasi-static method applies (paper §5): Newmark at the step compatible with full stick
+/// (0.15 𝕋_stick, 670 steps per period), the quasi-static method at 300 steps per period.
+fn jenkins_quasi_static() -> Model {
+    Model {
+        name: "Jenkins oscillator, stiff contact, ω = 0.1 ω_n (1 DOF)",
+        system: oscillator(400.0),
+        settings: MarchSettings {
+            omega: 0.2,
+            periods: 5,
+            steps_per_period: 300,
+            ..MarchSettings::default()
+        },
+        rounds: 20,
     }
 }
 
@@ -211,6 +239,7 @@ fn bench(c: &mut Criterion) {
     let (damper, jenkins) = (damper(), jenkins());
     table(&damper);
     table(&jenkins);
+    table(&jenkins_quasi_static());
     if std::env::var_os("NLROM_BENCH_SECTOR").is_some() {
         table(&sector());
     }

@@ -47,8 +47,8 @@ use faer::Mat;
 
 use crate::error::{Error, Result};
 use crate::nonlinear::{
-    newton_core, norm, solve_fixed, Iterate, Jacobian, LinearSolver, Linearization, NewtonOptions,
-    NewtonOutcome, NewtonSolution, ParameterSystem,
+    newton_core, norm, solve_fixed, Factored, Iterate, Jacobian, LinearSolver, Linearization,
+    NewtonOptions, NewtonOutcome, NewtonSolution, ParameterSystem,
 };
 
 /// Continuation settings (parameter values in the parameter's unit, e.g. rad/s).
@@ -225,6 +225,8 @@ pub fn trace_from<S: ParameterSystem>(
         },
     )?;
     let mut orientation = first.orientation;
+    // the factors of the current point's tangent system: the next corrector starts on them
+    let mut carried = first.factors;
     let mut tangent = first.t;
     let mut step = opts.initial_step / range / tangent[tangent.len() - 1].abs().max(1e-3);
     let min_step = opts.min_step.map_or(step / 1000.0, |m| m / range);
@@ -262,8 +264,11 @@ pub fn trace_from<S: ParameterSystem>(
             (step, allowance),
             &scales,
             opts,
+            // moved, so that the new point's factors replace them without both held; a
+            // retried step factorises again
+            carried.take(),
         );
-        let (sol, new_tangent, length) = match outcome {
+        let (sol, mut new_tangent, length) = match outcome {
             // a forward turn by less than 60° that keeps the orientation σ; at the minimum
             // step σ may change (a branch point, passed straight on)
             Ok((sol, Some(t)))
@@ -323,6 +328,7 @@ pub fn trace_from<S: ParameterSystem>(
             }
         };
         orientation = new_tangent.orientation;
+        carried = new_tangent.factors.take();
         let iterations = sol.iterations;
         let arc = current.arc_length + length;
         let mut next = point_from(sol, arc, new_tangent.t[new_tangent.t.len() - 1]);
@@ -492,10 +498,13 @@ fn initial_tangent(
 /// The orientation is constant along a regular path, through folds and across the corners of
 /// a piecewise-linear path, however sharp (Allgower & Georg 1990, §2.1 and §12.1): it tells the
 /// forward direction where the angle to the previous tangent cannot.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 struct Tangent {
     t: Vec<f64>,
     orientation: f64,
+    /// The factors the tangent was solved on (of its bordered matrix or a nearby one), for the
+    /// next corrector to start from.
+    factors: Option<Factored>,
 }
 
 impl Tangent {
@@ -504,6 +513,7 @@ impl Tangent {
         Tangent {
             t: self.t.iter().map(|v| -v).collect(),
             orientation: -self.orientation,
+            factors: self.factors,
         }
     }
 
@@ -524,15 +534,17 @@ fn tangent_of(matrix: &Jacobian, solver: &LinearSolver) -> Option<Tangent> {
     let mut rhs = vec![0.0; matrix.dim()];
     rhs[matrix.dim() - 1] = 1.0;
     let (t, f) = solver.factor_solve(matrix, &rhs)?;
-    unit_tangent(t, f.sign())
+    let sign = f.sign();
+    unit_tangent(t, sign, Some(f))
 }
 
-/// t / ‖t‖ with its orientation.
-fn unit_tangent(t: Vec<f64>, orientation: f64) -> Option<Tangent> {
+/// t / ‖t‖ with its orientation and the factors it was solved on.
+fn unit_tangent(t: Vec<f64>, orientation: f64, factors: Option<Factored>) -> Option<Tangent> {
     let len = norm(&t);
     (len > 0.0 && len.is_finite()).then(|| Tangent {
         t: t.iter().map(|v| v / len).collect(),
         orientation,
+        factors,
     })
 }
 
@@ -549,7 +561,7 @@ fn unit_tangent(t: Vec<f64>, orientation: f64) -> Option<Tangent> {
 /// the parameter would have to turn twice within one step. This is the jump back to an earlier
 /// part of the same path across a resonance of high amplitude, where the unknowns' scale x_s is
 /// the peak and the path before and after the resonance pass close to each other in (u, μ).
-#[allow(clippy::type_complexity)]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn correct<S: ParameterSystem>(
     system: &S,
     state: &S::State,
@@ -558,8 +570,9 @@ fn correct<S: ParameterSystem>(
     (step, allowance): (f64, f64),
     s: &Scales,
     opts: &ContinuationOptions,
+    initial: Option<Factored>,
 ) -> std::result::Result<(NewtonSolution<S::State>, Option<Tangent>), String> {
-    let done = correct_on(system, state, predicted, tangent, tangent, s, opts)?;
+    let done = correct_on(system, state, predicted, tangent, tangent, s, opts, initial)?;
     let mut y: Vec<f64> = done.0.x.iter().map(|x| x / s.x).collect();
     y.push(done.0.parameter / s.lambda);
     let off: Vec<f64> = y.iter().zip(predicted).map(|(a, b)| a - b).collect();
@@ -582,9 +595,10 @@ fn correct<S: ParameterSystem>(
     }
 }
 
-/// Newton on r(x, λ) = 0, `border` · (y − y_pred) = 0 from the predicted point; the new tangent
-/// is oriented along `tangent`.
-#[allow(clippy::type_complexity)]
+/// Newton on r(x, λ) = 0, `border` · (y − y_pred) = 0 from the predicted point, its first
+/// step on the factors `initial` of a nearby bordered matrix when given ([`newton_core`]); the
+/// new tangent is oriented along `tangent`.
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn correct_on<S: ParameterSystem>(
     system: &S,
     state: &S::State,
@@ -593,6 +607,7 @@ fn correct_on<S: ParameterSystem>(
     tangent: &[f64],
     s: &Scales,
     opts: &ContinuationOptions,
+    initial: Option<Factored>,
 ) -> std::result::Result<(NewtonSolution<S::State>, Option<Tangent>), String> {
     let n = system.dim();
     let solver = LinearSolver::new(system.jacobian_blocks(), opts.newton.linear_solver);
@@ -644,7 +659,15 @@ fn correct_on<S: ParameterSystem>(
         iterate: it,
         iterations,
         factors,
-    } = newton_core(predicted.to_vec(), &mut eval, 1.0, &newton, &solver).map_err(|f| f.message)?;
+    } = newton_core(
+        predicted.to_vec(),
+        &mut eval,
+        1.0,
+        &newton,
+        &solver,
+        initial,
+    )
+    .map_err(|f| f.message)?;
     let residual = norm(&it.g[..n]);
     // the tangent system [G; tangentᵀ] at the solution: the corrector's matrix there with its
     // last row replaced; solved on the factors of the last step's matrix when they are close
@@ -665,7 +688,7 @@ fn correct_on<S: ParameterSystem>(
             .then(|| solver.solve_near(&factors, &m, &rhs))
             .flatten();
         match near {
-            Some((t, sign)) => unit_tangent(t, sign),
+            Some((t, sign)) => unit_tangent(t, sign, Some(factors)),
             None => tangent_of(&m, &solver),
         }
     });
@@ -748,6 +771,7 @@ fn kink_step<S: ParameterSystem>(
                 &beyond.t,
                 s,
                 opts,
+                None,
             ) else {
                 continue;
             };
@@ -829,6 +853,7 @@ fn corner_step<S: ParameterSystem>(
                 &direction,
                 s,
                 opts,
+                None,
             ) else {
                 continue;
             };

@@ -147,14 +147,15 @@ impl<E> Iterate<E> {
 }
 
 /// A converged [`newton_core`]: the iterate, the steps taken and the factors of the last
-/// factorised step matrix (at an earlier iterate: the last when every step was factorised), to
-/// solve nearby systems with ([`LinearSolver::solve_near`]: the continuation tangent).
+/// factorised step matrix (at an earlier iterate: the last when every step was factorised; the
+/// initial factors when no step was), to solve nearby systems with
+/// ([`LinearSolver::solve_near`]: the continuation tangent).
 pub struct NewtonOutcome<E> {
     /// The converged iterate.
     pub iterate: Iterate<E>,
     /// Newton steps taken.
     pub iterations: usize,
-    /// Factors of the last factorised step matrix.
+    /// Factors of the last factorised step matrix (or the initial ones).
     pub factors: Factored,
 }
 
@@ -176,14 +177,17 @@ pub type Evaluate<'a, E> = dyn FnMut(&[f64], bool) -> Result<Iterate<E>> + 'a;
 /// step factorises its matrix; when [`LinearSolver::reuses_factors`], the later ones are solved
 /// by GMRES on the last factors ([`LinearSolver::solve_krylov`], to the backward error of a
 /// direct solve) and factorise only when that fails or the step before needed more than
-/// [`linsolve::KRYLOV_REFRESH`] iterations. Each matrix is handed back to the solver after its
-/// step ([`LinearSolver::recycle`]).
+/// [`linsolve::KRYLOV_REFRESH`] iterations. `initial` are factors of a nearby matrix to start
+/// from (e.g. those of the previous continuation point): then the first step is solved on them
+/// by GMRES as well. Each matrix is handed back to the solver after its step
+/// ([`LinearSolver::recycle`]).
 pub fn newton_core<E>(
     z0: Vec<f64>,
     eval: &mut Evaluate<'_, E>,
     floor: f64,
     opts: &NewtonOptions,
     solver: &LinearSolver,
+    initial: Option<Factored>,
 ) -> std::result::Result<NewtonOutcome<E>, NewtonFailure> {
     let fail = |message: String, iterations: usize| NewtonFailure {
         message,
@@ -194,8 +198,8 @@ pub fn newton_core<E>(
         return Err(fail("the residual at the start is not finite".into(), 0));
     }
     // the last factorisation, and whether the next step must factorise
-    let mut factors: Option<Factored> = None;
-    let mut refresh = true;
+    let mut refresh = initial.is_none();
+    let mut factors: Option<Factored> = initial;
     for it in 1..=opts.max_iterations {
         if current.matrix.is_none() {
             current =
@@ -405,7 +409,7 @@ pub fn solve_fixed<S: ParameterSystem>(
         })
     };
     let floor = norm(x0).max(f64::MIN_POSITIVE);
-    let outcome = newton_core(x0.to_vec(), &mut eval, floor, opts, &solver)?;
+    let outcome = newton_core(x0.to_vec(), &mut eval, floor, opts, &solver, None)?;
     let iterations = outcome.iterations;
     let mut it = outcome.iterate;
     if it.matrix.is_none() {

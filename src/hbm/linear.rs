@@ -8,6 +8,8 @@
 //! in one common order — the DOF order of the [`crate::harmonics::HarmonicForce`] — and the rows
 //! reported as the response. Condensation is dense and done per frequency.
 
+use std::sync::OnceLock;
+
 use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::{c64, Mat, MatRef};
 
@@ -208,23 +210,23 @@ pub struct LinearModel {
     forcing: Vec<Vec<c64>>,
     n_condensed: usize,
     n_outputs: usize,
+    /// D̄⁽⁰⁾ and F̄⁽⁰⁾ of the static harmonic, which do not depend on ω (s = 0·ω): condensed
+    /// once, on first use.
+    static_condensed: OnceLock<(Mat<c64>, Vec<c64>)>,
 }
 
 impl LinearModel {
     /// A model from matrix blocks: harmonic n = 0..H uses `blocks[harmonic_block[n]]` and is
     /// excited by `forcing[n]` (complex amplitude per row of that block, N; empty for none).
     /// Every block must list the same number of nonlinear and output rows, and the block of
-    /// n = 0 must be real (the static coefficient is real).
+    /// n = 0 must be real (the static coefficient is real). The blocks are taken one at a time
+    /// and dropped once split, so that a lazy iterator holds one block's matrices beside the
+    /// model at most.
     pub fn new(
-        blocks: Vec<MatrixBlock>,
+        blocks: impl IntoIterator<Item = MatrixBlock>,
         harmonic_block: Vec<usize>,
         forcing: Vec<Vec<c64>>,
     ) -> Result<LinearModel> {
-        let first = blocks
-            .first()
-            .ok_or_else(|| Error::input("the linear model has no matrix block"))?;
-        let n_condensed = first.nonlinear.len();
-        let n_outputs = first.outputs.len();
         if harmonic_block.is_empty() || forcing.len() != harmonic_block.len() {
             return Err(Error::input(format!(
                 "the linear model needs one block index and one forcing per harmonic 0..H ({} and {} given)",
@@ -232,9 +234,20 @@ impl LinearModel {
                 forcing.len()
             )));
         }
-        let mut parts = Vec::with_capacity(blocks.len());
-        for (b, block) in blocks.iter().enumerate() {
-            parts.push(partition(b, block, n_condensed, n_outputs)?);
+        let mut parts: Vec<Partitioned> = Vec::new();
+        let (mut n_condensed, mut n_outputs) = (0, 0);
+        for (b, block) in blocks.into_iter().enumerate() {
+            if b == 0 {
+                n_condensed = block.nonlinear.len();
+                n_outputs = block.outputs.len();
+            }
+            if b == harmonic_block[0] {
+                check_static_block_real(&block, &forcing[0])?;
+            }
+            parts.push(partition(b, &block, n_condensed, n_outputs)?);
+        }
+        if parts.is_empty() {
+            return Err(Error::input("the linear model has no matrix block"));
         }
         for (n, (&b, f)) in harmonic_block.iter().zip(&forcing).enumerate() {
             let part = parts.get(b).ok_or_else(|| {
@@ -251,13 +264,13 @@ impl LinearModel {
                 )));
             }
         }
-        check_static_block_real(&blocks[harmonic_block[0]], &forcing[0])?;
         Ok(LinearModel {
             blocks: parts,
             harmonic_block,
             forcing,
             n_condensed,
             n_outputs,
+            static_condensed: OnceLock::new(),
         })
     }
 
@@ -349,6 +362,16 @@ impl LinearModel {
     /// (differentiating eq. 16: ∂D̄/∂ω q = D'_NN q − D'_NL v − D_NL D_LL⁻¹(D'_LN q − D'_LL v) with
     /// v = D_LL⁻¹ D_LN q), without the three n_N × n_L × n_N products of the full ∂D̄/∂ω.
     pub fn condense_applied(&self, n: usize, omega: f64, q_n: &[c64]) -> Result<CondensedApplied> {
+        if n == 0 {
+            let (stiffness, force) = self.static_condensed()?;
+            let zero = vec![c64::new(0.0, 0.0); self.n_condensed];
+            return Ok(CondensedApplied {
+                stiffness: stiffness.clone(),
+                force: force.clone(),
+                stiffness_derivative_q: zero.clone(),
+                force_derivative: zero,
+            });
+        }
         let part = &self.blocks[self.harmonic_block[n]];
         let s = n as f64 * omega;
         let nf = n as f64;
@@ -418,6 +441,14 @@ impl LinearModel {
         q_n: &[c64],
         level: f64,
     ) -> Result<Vec<c64>> {
+        if n == 0 {
+            let (stiffness, force) = self.static_condensed()?;
+            let q = MatRef::from_column_major_slice(q_n, q_n.len(), 1);
+            let kq = stiffness * q;
+            return Ok((0..q_n.len())
+                .map(|i| kq[(i, 0)] - force[i] * level)
+                .collect());
+        }
         let part = &self.blocks[self.harmonic_block[n]];
         let s = n as f64 * omega;
         let (f_n, f_l) = self.forcing_parts(n);
@@ -434,6 +465,16 @@ impl LinearModel {
         let nl_t = part.dynamic_times(Part::NL, s, &t);
         r.iter_mut().zip(nl_t).for_each(|(r, v)| *r -= v);
         Ok(r)
+    }
+
+    /// D̄⁽⁰⁾ = K_NN − K_NL K_LL⁻¹ K_LN and F̄⁽⁰⁾ (eqs. 16–17 at s = 0), condensed on the first
+    /// call and kept (the static harmonic does not depend on ω).
+    fn static_condensed(&self) -> Result<&(Mat<c64>, Vec<c64>)> {
+        if let Some(c) = self.static_condensed.get() {
+            return Ok(c);
+        }
+        let c = self.condense(0, 0.0)?;
+        Ok(self.static_condensed.get_or_init(|| (c.stiffness, c.force)))
     }
 
     /// Harmonic n condensed on the nonlinear DOFs at ω (rad/s), with its ω-derivatives and the
@@ -691,6 +732,60 @@ mod tests {
             assert_eq!(alone.len(), 3);
             if h == 1 {
                 assert!(full.force.iter().any(|f| f.norm() > 0.1));
+            }
+        }
+    }
+
+    /// The condensed stiffness of every harmonic (the static one kept from its first use)
+    /// equals the Schur complement found independently as ((D⁻¹)_NN)⁻¹ from the inverse of the
+    /// whole dynamic stiffness D = K − s² M + i s C, at two frequencies (to 1e-10 relative).
+    #[test]
+    fn condensed_stiffness_is_the_inverse_of_the_inverse_block() {
+        let n = 7;
+        let sym = |seed: usize, diag: f64| {
+            Mat::from_fn(n, n, |i, j| {
+                let (a, b) = (i.min(j), i.max(j));
+                noise(seed + 31 * a + b) + if i == j { diag } else { 0.0 }
+            })
+        };
+        let (k, m, c) = (sym(3, 6.0), sym(300, 3.0), sym(700, 0.0));
+        let c = Mat::from_fn(n, n, |i, j| 0.05 * c[(i, j)]);
+        let nonlinear = vec![5, 1, 3];
+        let model = LinearModel::from_real(
+            k.as_ref(),
+            m.as_ref(),
+            Some(c.as_ref()),
+            &[0.0; 7],
+            nonlinear.clone(),
+            vec![0],
+            2,
+        )
+        .unwrap();
+        let q = vec![c64::new(0.3, -0.2), c64::new(-0.1, 0.4), c64::new(0.2, 0.1)];
+        for omega in [0.7, 1.3] {
+            for h in 0..=2 {
+                let s = h as f64 * omega;
+                let d = Mat::from_fn(n, n, |i, j| {
+                    c64::new(k[(i, j)] - s * s * m[(i, j)], s * c[(i, j)])
+                });
+                let inv = d.partial_piv_lu().solve(Mat::<c64>::identity(n, n));
+                let block = Mat::from_fn(3, 3, |i, j| inv[(nonlinear[i], nonlinear[j])]);
+                let expected = block.partial_piv_lu().solve(Mat::<c64>::identity(3, 3));
+                let got = model.condense_applied(h, omega, &q).unwrap().stiffness;
+                let scale = (0..3)
+                    .flat_map(|i| (0..3).map(move |j| (i, j)))
+                    .map(|(i, j)| expected[(i, j)].norm())
+                    .fold(0.0, f64::max);
+                for i in 0..3 {
+                    for j in 0..3 {
+                        assert!(
+                            (got[(i, j)] - expected[(i, j)]).norm() <= 1e-10 * scale,
+                            "ω = {omega}, harmonic {h}, ({i}, {j}): {:?} vs {:?}",
+                            got[(i, j)],
+                            expected[(i, j)]
+                        );
+                    }
+                }
             }
         }
     }

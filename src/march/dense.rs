@@ -2,7 +2,6 @@
 //! reduced models a few hundred at most): matrix–vector products, inverses and spectral radii.
 //! Factorisations and eigenvalues use faer.
 
-use faer::linalg::solvers::DenseSolveCore;
 use faer::Mat;
 
 /// y = A x for row-major `a` (n×n).
@@ -36,30 +35,79 @@ fn to_faer(a: &[f64], n: usize) -> Mat<f64> {
     Mat::from_fn(n, n, |i, j| a[i * n + j])
 }
 
+/// Below this size the march's factorisations run on the calling thread: handing an LU of a few
+/// dozen unknowns to faer's thread pool costs more (tens of µs of wake-ups) than the LU itself.
+const SEQUENTIAL_BELOW: usize = 128;
+
+/// The parallelism of a dense operation of size n: sequential for small matrices, faer's global
+/// setting otherwise.
+fn par_for(n: usize) -> faer::Par {
+    if n < SEQUENTIAL_BELOW {
+        faer::Par::Seq
+    } else {
+        faer::get_global_parallelism()
+    }
+}
+
 /// The inverse of row-major `a` (n×n) by LU with partial pivoting, or `None` when `a` is singular
-/// to working precision (‖A·A⁻¹ − I‖_∞ > 1e-8 or non-finite entries).
+/// to working precision (‖A·A⁻¹ − I‖_max > 1e-8, a zero pivot or non-finite entries).
 pub fn inverse(a: &[f64], n: usize) -> Option<Vec<f64>> {
+    use faer::linalg::lu::partial_pivoting::{factor, solve};
+    use faer::linalg::matmul::matmul;
     if n == 0 {
         return Some(Vec::new());
     }
-    let m = to_faer(a, n);
-    let inv = m.partial_piv_lu().inverse();
+    let par = par_for(n);
+    let mut lu = to_faer(a, n);
+    let (mut perm, mut perm_inv) = (vec![0usize; n], vec![0usize; n]);
+    let req = factor::lu_in_place_scratch::<usize, f64>(n, n, par, Default::default())
+        .or(solve::solve_in_place_scratch::<usize, f64>(n, n, par));
+    let mut stack = faer::dyn_stack::MemBuffer::new(req);
+    factor::lu_in_place(
+        lu.as_mut(),
+        &mut perm,
+        &mut perm_inv,
+        par,
+        faer::dyn_stack::MemStack::new(&mut stack),
+        Default::default(),
+    );
+    if (0..n).any(|i| {
+        let d = lu[(i, i)];
+        !d.is_finite() || d == 0.0
+    }) {
+        return None;
+    }
+    let mut inv = Mat::<f64>::identity(n, n);
+    let p = faer::perm::PermRef::new_checked(&perm, &perm_inv, n);
+    solve::solve_in_place(
+        lu.as_ref(),
+        lu.as_ref(),
+        p,
+        inv.as_mut(),
+        par,
+        faer::dyn_stack::MemStack::new(&mut stack),
+    );
+    // residual check A·A⁻¹ = I (blocked product)
+    let mut id = Mat::<f64>::zeros(n, n);
+    matmul(
+        id.as_mut(),
+        faer::Accum::Replace,
+        to_faer(a, n).as_ref(),
+        inv.as_ref(),
+        1.0,
+        par,
+    );
+    let mut worst: f64 = 0.0;
     let mut out: Vec<f64> = vec![0.0; n * n];
     for i in 0..n {
         for j in 0..n {
-            out[i * n + j] = inv[(i, j)];
-        }
-    }
-    if out.iter().any(|x| !x.is_finite()) {
-        return None;
-    }
-    // residual check A·A⁻¹ = I
-    let mut worst: f64 = 0.0;
-    for i in 0..n {
-        for j in 0..n {
-            let s: f64 = (0..n).map(|k| a[i * n + k] * out[k * n + j]).sum();
+            let x = inv[(i, j)];
+            if !x.is_finite() {
+                return None;
+            }
+            out[i * n + j] = x;
             let target = if i == j { 1.0 } else { 0.0 };
-            worst = worst.max((s - target).abs());
+            worst = worst.max((id[(i, j)] - target).abs());
         }
     }
     (worst <= 1e-8).then_some(out)

@@ -7,7 +7,9 @@ use std::time::Instant;
 
 use super::law::{ContactState, LawSample};
 use super::periodic;
-use super::schemes::{self, Cache, Excitation, Kinematics, Snapshot, StepContext, Workspace};
+use super::schemes::{
+    self, Cache, Excitation, ExcitationAt, Kinematics, Snapshot, StepContext, Workspace,
+};
 use super::system::{InitialCondition, MarchSystem};
 use crate::case::MarchScheme;
 use crate::error::{Error, Result};
@@ -171,7 +173,7 @@ impl MarchHistory {
     }
 
     /// Records the instant `t` (the prescribed parts of the elements from `exc`).
-    fn push(&mut self, sys: &MarchSystem, t: f64, now: &Snapshot, exc: &Excitation, it: u32) {
+    fn push(&mut self, sys: &MarchSystem, t: f64, now: &Snapshot, exc: ExcitationAt, it: u32) {
         self.time.push(t);
         self.q.extend_from_slice(&now.kin.q);
         self.v.extend_from_slice(&now.kin.v);
@@ -272,12 +274,14 @@ pub struct Marcher<'a> {
     t: f64,
     /// The excitation of the current step (adaptive step) or of t = 0.
     excitation: Excitation,
-    /// Fixed step: (end time within the period, step, excitation at the end) of each step.
-    table: Vec<(f64, f64, Excitation)>,
+    /// Fixed step: the steps of one period with the excitation at their ends.
+    table: StepTable,
     tolerance: f64,
     dt_max: f64,
+    /// The adaptive step of full stick, the shortest (adaptive schemes; else the largest step).
+    dt_stick: f64,
     /// Adaptive step per contact-state combination (codes).
-    adaptive_dt: HashMap<Vec<u8>, f64>,
+    adaptive_dt: AdaptiveSteps,
     codes: Vec<u8>,
     history: MarchHistory,
     summaries: Vec<PeriodSummary>,
@@ -318,10 +322,11 @@ impl<'a> Marcher<'a> {
             cur,
             t: 0.0,
             excitation: Excitation::at(sys, settings.omega, 0.0, settings.dynamic()),
-            table: Vec::new(),
+            table: StepTable::default(),
             tolerance: settings.tolerance * sys.displacement_scale,
             dt_max,
-            adaptive_dt: HashMap::new(),
+            dt_stick: dt_max,
+            adaptive_dt: AdaptiveSteps::default(),
             codes: Vec::with_capacity(ne),
             history: MarchHistory::default(),
             summaries: Vec::with_capacity(settings.periods),
@@ -335,10 +340,12 @@ impl<'a> Marcher<'a> {
         let steps_per_period = if settings.adaptive() {
             // the stiffest state (full stick) sets the shortest adaptive step (paper §4.2)
             let dt = m.step_for(&sys.stick_states());
+            m.dt_stick = dt;
             (1.25 * period / dt).ceil() as usize + 2
         } else {
             let dt = fixed_step(sys, settings, dt_max)?;
             let mut t = 0.0;
+            let mut exc = Excitation::new(sys);
             while period - t > 1e-9 * period {
                 let remaining = period - t;
                 let h = if dt > remaining * (1.0 - 1e-9) {
@@ -347,14 +354,14 @@ impl<'a> Marcher<'a> {
                     dt
                 };
                 t = if h == remaining { period } else { t + h };
-                let exc = Excitation::at(sys, settings.omega, t, settings.dynamic());
-                m.table.push((t, h, exc));
+                exc.fill(sys, settings.omega, t, settings.dynamic());
+                m.table.push(t, h, &exc);
             }
             m.table.len()
         };
         m.history
             .reserve(settings.periods * steps_per_period + 1, n, ne);
-        m.history.push(sys, 0.0, &m.cur, &m.excitation, 0);
+        m.history.push(sys, 0.0, &m.cur, m.excitation.view(), 0);
         m.prev_q = m.cur.kin.q.clone();
         m.prev_v = m.cur.kin.v.clone();
         Ok(m)
@@ -395,9 +402,10 @@ impl<'a> Marcher<'a> {
         let t_end = t0 + period;
         let first_index = self.history.len() - 1;
         if !s.adaptive() {
-            for (t_rel, dt, exc) in &self.table {
-                let t1 = if *t_rel == period { t_end } else { t0 + t_rel };
-                let ctx = context(sys, s, self.tolerance, t1, *dt, exc, false);
+            for j in 0..self.table.len() {
+                let (t_rel, dt, exc) = self.table.get(j);
+                let t1 = if t_rel == period { t_end } else { t0 + t_rel };
+                let ctx = context(sys, s, self.tolerance, t1, dt, exc, false);
                 let its = step(
                     s,
                     &ctx,
@@ -407,7 +415,7 @@ impl<'a> Marcher<'a> {
                     &mut self.next,
                 )?;
                 self.total_iterations += its as u64;
-                self.step_range = (self.step_range.0.min(*dt), self.step_range.1.max(*dt));
+                self.step_range = (self.step_range.0.min(dt), self.step_range.1.max(dt));
                 std::mem::swap(&mut self.cur, &mut self.next);
                 self.t = t1;
                 self.history.push(sys, t1, &self.cur, exc, its);
@@ -435,16 +443,17 @@ impl<'a> Marcher<'a> {
                 };
                 let (h, mut t1, mut one_off) = end_time(dt, self.t);
                 dt = h;
-                self.excitation.fill(sys, s.omega, t1, true);
-                let ctx = context(sys, s, self.tolerance, t1, dt, &self.excitation, one_off);
-                let mut its = step(
-                    s,
-                    &ctx,
-                    &self.cur,
-                    &mut self.cache,
-                    &mut self.ws,
-                    &mut self.next,
-                )? as u64;
+                let mut its = match self.attempt(t1, dt, one_off) {
+                    Ok(its) => its as u64,
+                    // the standard corrector diverges when the state stiffens within a long
+                    // step (Δτ/𝕋 beyond 1/π): re-run with the full-stick step, the shortest
+                    Err(_) if dt > self.dt_stick * (1.0 + 1e-12) => {
+                        (dt, t1, one_off) = end_time(self.dt_stick, self.t);
+                        self.rejected += 1;
+                        self.attempt(t1, dt, one_off)? as u64
+                    }
+                    Err(e) => return Err(e),
+                };
                 // paper §4.2: re-run with the smaller step the new state asks for
                 for _ in 0..8 {
                     state_codes_into(&self.next.samples, &mut self.codes);
@@ -462,16 +471,7 @@ impl<'a> Marcher<'a> {
                     }
                     (dt, t1, one_off) = end_time(dt_new, self.t);
                     self.rejected += 1;
-                    self.excitation.fill(sys, s.omega, t1, true);
-                    let ctx = context(sys, s, self.tolerance, t1, dt, &self.excitation, one_off);
-                    its += step(
-                        s,
-                        &ctx,
-                        &self.cur,
-                        &mut self.cache,
-                        &mut self.ws,
-                        &mut self.next,
-                    )? as u64;
+                    its += self.attempt(t1, dt, one_off)? as u64;
                 }
                 self.total_iterations += its;
                 self.step_range = (self.step_range.0.min(dt), self.step_range.1.max(dt));
@@ -481,7 +481,7 @@ impl<'a> Marcher<'a> {
                     sys,
                     t1,
                     &self.cur,
-                    &self.excitation,
+                    self.excitation.view(),
                     its.min(u32::MAX as u64) as u32,
                 );
             }
@@ -506,6 +506,30 @@ impl<'a> Marcher<'a> {
             self.steady_period = Some(p + 1);
         }
         Ok(steady)
+    }
+
+    /// One adaptive step from the current state to `t1` (step `dt`; `one_off`: a size met once)
+    /// into the next state, with the excitation at `t1`; returns the iterations.
+    fn attempt(&mut self, t1: f64, dt: f64, one_off: bool) -> Result<u32> {
+        let (sys, s) = (self.sys, self.settings);
+        self.excitation.fill(sys, s.omega, t1, true);
+        let ctx = context(
+            sys,
+            s,
+            self.tolerance,
+            t1,
+            dt,
+            self.excitation.view(),
+            one_off,
+        );
+        step(
+            s,
+            &ctx,
+            &self.cur,
+            &mut self.cache,
+            &mut self.ws,
+            &mut self.next,
+        )
     }
 
     /// The outcome: the history, the period summaries and the harmonics of the last period.
@@ -547,6 +571,51 @@ impl<'a> Marcher<'a> {
     }
 }
 
+/// The steps of one period of the fixed-step march, with the excitation at their ends, in flat
+/// arrays (filled once by [`Marcher::new`]).
+#[derive(Default)]
+struct StepTable {
+    /// End time of each step within the period (s).
+    t: Vec<f64>,
+    /// Step size (s).
+    dt: Vec<f64>,
+    /// Force per DOF at each step's end, [steps × n].
+    force: Vec<f64>,
+    /// p_t per element, [steps × E].
+    pt: Vec<f64>,
+    /// p_n per element, [steps × E].
+    pn: Vec<f64>,
+}
+
+impl StepTable {
+    fn push(&mut self, t: f64, dt: f64, exc: &Excitation) {
+        self.t.push(t);
+        self.dt.push(dt);
+        self.force.extend_from_slice(&exc.force);
+        self.pt.extend_from_slice(&exc.pt);
+        self.pn.extend_from_slice(&exc.pn);
+    }
+
+    fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// (end time within the period, step, excitation at the end) of step `j`.
+    fn get(&self, j: usize) -> (f64, f64, ExcitationAt<'_>) {
+        let n = self.force.len() / self.len();
+        let ne = self.pt.len() / self.len();
+        (
+            self.t[j],
+            self.dt[j],
+            ExcitationAt {
+                force: &self.force[j * n..(j + 1) * n],
+                pt: &self.pt[j * ne..(j + 1) * ne],
+                pn: &self.pn[j * ne..(j + 1) * ne],
+            },
+        )
+    }
+}
+
 /// The context of a step ending at `t1` after `dt` with the excitation `excitation` there.
 fn context<'b>(
     sys: &'b MarchSystem,
@@ -554,7 +623,7 @@ fn context<'b>(
     tolerance: f64,
     t1: f64,
     dt: f64,
-    excitation: &'b Excitation,
+    excitation: ExcitationAt<'b>,
     one_off: bool,
 ) -> StepContext<'b> {
     StepContext {
@@ -574,24 +643,42 @@ fn state_codes_into(samples: &[LawSample], out: &mut Vec<u8>) {
     schemes::state_codes(samples, out);
 }
 
+/// The adaptive steps met so far, per state combination (codes), with the last one used checked
+/// first without hashing (most steps keep the previous step's states).
+#[derive(Default)]
+struct AdaptiveSteps {
+    map: HashMap<Vec<u8>, f64>,
+    last: Vec<u8>,
+    last_dt: f64,
+}
+
 /// The adaptive step of the state with `codes` (states `states`), from `cache` or computed:
 /// min(r·𝕋(states), largest step) (paper §4.2, eq. 8).
 fn adaptive_step(
-    cache: &mut HashMap<Vec<u8>, f64>,
+    cache: &mut AdaptiveSteps,
     sys: &MarchSystem,
     s: &MarchSettings,
     dt_max: f64,
     codes: &[u8],
     states: impl Iterator<Item = ContactState>,
 ) -> f64 {
-    if let Some(&dt) = cache.get(codes) {
-        return dt;
+    if !cache.last.is_empty() && cache.last.iter().eq(codes.iter()) {
+        return cache.last_dt;
     }
-    let states: Vec<ContactState> = states.collect();
-    let dt = sys
-        .shortest_period(&states)
-        .map_or(dt_max, |t| (s.step_ratio * t).min(dt_max));
-    cache.insert(codes.to_vec(), dt);
+    let dt = match cache.map.get(codes) {
+        Some(&dt) => dt,
+        None => {
+            let states: Vec<ContactState> = states.collect();
+            let dt = sys
+                .shortest_period(&states)
+                .map_or(dt_max, |t| (s.step_ratio * t).min(dt_max));
+            cache.map.insert(codes.to_vec(), dt);
+            dt
+        }
+    };
+    cache.last.clear();
+    cache.last.extend_from_slice(codes);
+    cache.last_dt = dt;
     dt
 }
 
@@ -685,31 +772,30 @@ fn static_start(
         slider: 0.0,
     }));
     let mut next = Snapshot::new(n, ne);
+    // the step matrices K + K_c do not depend on the prescribed motions: one cache for the path
+    let full = Excitation::at(sys, s.omega, 0.0, false);
+    let mut exc = full.clone();
+    let mut ws = Workspace::new(sys);
     for j in 0..=STATIC_LOAD_STEPS {
         let scale = j as f64 / STATIC_LOAD_STEPS as f64;
-        let mut scaled = sys.clone();
-        for e in &mut scaled.elements {
-            for d in std::iter::once(&mut e.tangential).chain(e.normal.as_mut()) {
-                d.prescribed.cos *= scale;
-                d.prescribed.sin *= scale;
-            }
+        for (i, e) in sys.elements.iter().enumerate() {
+            let mean_t = e.tangential.prescribed.mean;
+            let mean_n = e.normal.as_ref().map_or(0.0, |d| d.prescribed.mean);
+            exc.pt[i] = mean_t + scale * (full.pt[i] - mean_t);
+            exc.pn[i] = mean_n + scale * (full.pn[i] - mean_n);
         }
-        let exc = Excitation::at(&scaled, s.omega, 0.0, false);
         let ctx = StepContext {
-            sys: &scaled,
+            sys,
             omega: s.omega,
             t1: 0.0,
             dt: 1.0,
             tolerance: 0.0,
             max_iterations: s.max_iterations,
-            excitation: &exc,
+            excitation: exc.view(),
             one_off: false,
         };
-        let mut fresh = Cache::default();
-        let mut ws = Workspace::new(&scaled);
-        schemes::quasi_static_step(&ctx, &cur, &mut fresh, &mut ws, &mut next)
+        schemes::quasi_static_step(&ctx, &cur, cache, &mut ws, &mut next)
             .map_err(|e| Error::Compute(format!("initial static equilibrium: {e}")))?;
-        cache.factorisations += fresh.factorisations;
         std::mem::swap(&mut cur, &mut next);
         cur.kin.v.iter_mut().for_each(|x| *x = 0.0);
     }

@@ -71,26 +71,39 @@ pub fn harmonics(
     harmonics: usize,
 ) -> Vec<Vec<(f64, f64)>> {
     let span = h.time[last] - h.time[first];
-    (0..n_dof)
-        .map(|d| {
-            (0..=harmonics)
-                .map(|m| {
-                    let value = |k: usize| {
-                        let (s, c) = (m as f64 * omega * h.time[k]).sin_cos();
-                        let q = h.q[k * n_dof + d];
-                        (q * c, -q * s)
-                    };
-                    let (mut re, mut im) = (0.0, 0.0);
-                    for k in first..last {
-                        let dt = h.time[k + 1] - h.time[k];
-                        let (a, b) = (value(k), value(k + 1));
-                        re += 0.5 * dt * (a.0 + b.0);
-                        im += 0.5 * dt * (a.1 + b.1);
-                    }
-                    let scale = if m == 0 { 1.0 } else { 2.0 } / span;
-                    (re * scale, im * scale)
-                })
-                .collect()
-        })
-        .collect()
+    let mut out = vec![vec![(0.0, 0.0); harmonics + 1]; n_dof];
+    // trapezoidal weights of the instants, and e^{−imωt_k} per instant (one sin_cos each)
+    let weight = |k: usize| {
+        let before = if k > first {
+            h.time[k] - h.time[k - 1]
+        } else {
+            0.0
+        };
+        let after = if k < last {
+            h.time[k + 1] - h.time[k]
+        } else {
+            0.0
+        };
+        0.5 * (before + after)
+    };
+    let mut wc = vec![0.0; last + 1 - first];
+    let mut ws = vec![0.0; last + 1 - first];
+    for m in 0..=harmonics {
+        for (j, k) in (first..=last).enumerate() {
+            let (s, c) = (m as f64 * omega * h.time[k]).sin_cos();
+            let w = weight(k);
+            (wc[j], ws[j]) = (w * c, -w * s);
+        }
+        let scale = if m == 0 { 1.0 } else { 2.0 } / span;
+        for (d, row) in out.iter_mut().enumerate() {
+            let (mut re, mut im) = (0.0, 0.0);
+            for (j, k) in (first..=last).enumerate() {
+                let q = h.q[k * n_dof + d];
+                re += wc[j] * q;
+                im += ws[j] * q;
+            }
+            row[m] = (re * scale, im * scale);
+        }
+    }
+    out
 }

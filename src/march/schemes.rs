@@ -94,15 +94,33 @@ impl Excitation {
     }
 
     /// The excitation of `sys` at time `t` (s) for the frequency `omega` (rad/s); `dynamic`
-    /// selects the dynamic force (with the damping force of prescribed velocities).
+    /// selects the dynamic force (with the damping force of prescribed velocities). One sin_cos
+    /// of ωt for every signal.
     pub fn fill(&mut self, sys: &MarchSystem, omega: f64, t: f64, dynamic: bool) {
+        let (s, c) = (omega * t).sin_cos();
+        for (fi, h) in self.force.iter_mut().zip(&sys.force) {
+            *fi = h.at_phase(c, s);
+        }
         if dynamic {
-            sys.dynamic_force(omega, t, &mut self.force);
-        } else {
-            sys.external_force(omega, t, &mut self.force);
+            for (fi, h) in self.force.iter_mut().zip(&sys.damping_force) {
+                *fi += h.at_phase(c, s);
+            }
         }
         for ((e, pt), pn) in sys.elements.iter().zip(&mut self.pt).zip(&mut self.pn) {
-            (*pt, *pn) = e.prescribed_at(omega, t);
+            *pt = e.tangential.prescribed.at_phase(c, s);
+            *pn = e
+                .normal
+                .as_ref()
+                .map_or(0.0, |d| d.prescribed.at_phase(c, s));
+        }
+    }
+
+    /// The excitation as a borrowed view.
+    pub fn view(&self) -> ExcitationAt<'_> {
+        ExcitationAt {
+            force: &self.force,
+            pt: &self.pt,
+            pn: &self.pn,
         }
     }
 
@@ -112,6 +130,18 @@ impl Excitation {
         e.fill(sys, omega, t, dynamic);
         e
     }
+}
+
+/// The excitation at one instant, borrowed (from an [`Excitation`] or a row of a precomputed
+/// table of a period's steps): force per DOF (N), p_t and p_n per element (m).
+#[derive(Clone, Copy, Debug)]
+pub struct ExcitationAt<'a> {
+    /// Force per DOF (N).
+    pub force: &'a [f64],
+    /// p_t(t) per element (m).
+    pub pt: &'a [f64],
+    /// p_n(t) per element (m, 0 without a normal).
+    pub pn: &'a [f64],
 }
 
 /// Every intermediate vector of a step (sized once for the model).
@@ -190,26 +220,86 @@ impl StepFactor {
     }
 }
 
+/// The matrices and factors of one step size Δτ (Δτ bits; 0 for the quasi-static method).
+struct StepSize {
+    bits: u64,
+    /// M/(βΔτ²) + γC/(βΔτ) (the inertia part of every Newmark step matrix).
+    inertia: Option<Vec<f64>>,
+    /// (M/(βΔτ²) + γC/(βΔτ) + K)⁻¹ for the standard corrector.
+    structural: Option<Vec<f64>>,
+    /// Inverse of the all-stick step matrix (the base of the low-rank factors).
+    stick: Option<Vec<f64>>,
+    /// State codes → index into `factors`.
+    index: HashMap<Vec<u8>, usize>,
+    /// The factor of each state met, with its codes.
+    factors: Vec<(Vec<u8>, StepFactor)>,
+    /// f64 entries held by `factors`.
+    held: usize,
+    /// The factor used last (a step's state is most often the previous step's).
+    last: Option<usize>,
+}
+
+impl StepSize {
+    fn new(bits: u64) -> Self {
+        StepSize {
+            bits,
+            inertia: None,
+            structural: None,
+            stick: None,
+            index: HashMap::new(),
+            factors: Vec::new(),
+            held: 0,
+            last: None,
+        }
+    }
+
+    /// The index of the factor of the state `codes`, if held (the last one used is checked
+    /// first, without hashing).
+    fn find(&mut self, codes: &[u8]) -> Option<usize> {
+        if let Some(i) = self.last.filter(|&i| same_codes(&self.factors[i].0, codes)) {
+            return Some(i);
+        }
+        let i = *self.index.get(codes)?;
+        self.last = Some(i);
+        Some(i)
+    }
+}
+
 /// Step matrices and their factors, kept per step size (and per contact state).
 #[derive(Default)]
 pub struct Cache {
-    /// Δτ bits → M/(βΔτ²) + γC/(βΔτ) (the inertia part of every Newmark step matrix).
-    inertia: HashMap<u64, Vec<f64>>,
-    /// Δτ bits → (M/(βΔτ²) + γC/(βΔτ) + K)⁻¹ for the standard corrector.
-    structural: HashMap<u64, Vec<f64>>,
-    /// Δτ bits (0 for the quasi-static method) → state codes → factor of the step matrix, with
-    /// the f64 entries held.
-    piecewise: HashMap<u64, (HashMap<Vec<u8>, StepFactor>, usize)>,
-    /// Δτ bits (0 for the quasi-static method) → inverse of the all-stick step matrix.
-    stick: HashMap<u64, Vec<f64>>,
+    /// One entry per step size met.
+    sizes: Vec<StepSize>,
+    /// Δτ bits → index into `sizes`.
+    index: HashMap<u64, usize>,
+    /// The step size used last (checked first, without hashing).
+    current: Option<usize>,
     /// Number of factorisations made.
     pub factorisations: usize,
 }
 
 impl Cache {
-    /// Makes sure M/(βΔτ²) + γC/(βΔτ) of the step `dt` is held (key Δτ bits).
-    fn ensure_inertia(&mut self, sys: &MarchSystem, dt: f64) {
-        self.inertia.entry(dt.to_bits()).or_insert_with(|| {
+    /// The index of the entry of the step size with key `bits` (made on first use).
+    fn slot(&mut self, bits: u64) -> usize {
+        if let Some(i) = self.current.filter(|&i| self.sizes[i].bits == bits) {
+            return i;
+        }
+        let i = match self.index.get(&bits) {
+            Some(&i) => i,
+            None => {
+                self.sizes.push(StepSize::new(bits));
+                self.index.insert(bits, self.sizes.len() - 1);
+                self.sizes.len() - 1
+            }
+        };
+        self.current = Some(i);
+        i
+    }
+
+    /// Makes sure M/(βΔτ²) + γC/(βΔτ) of the step `dt` is held; returns the step size's slot.
+    fn ensure_inertia(&mut self, sys: &MarchSystem, dt: f64) -> usize {
+        let i = self.slot(dt.to_bits());
+        self.sizes[i].inertia.get_or_insert_with(|| {
             let cm = 1.0 / (BETA * dt * dt);
             let cc = GAMMA / (BETA * dt);
             sys.mass
@@ -218,28 +308,32 @@ impl Cache {
                 .map(|(m, c)| cm * m + cc * c)
                 .collect()
         });
+        i
     }
 
-    /// Makes sure the inverse of the standard corrector's S = M/(βΔτ²) + γC/(βΔτ) + K is held.
-    fn ensure_structural(&mut self, sys: &MarchSystem, dt: f64) -> Result<()> {
-        let key = dt.to_bits();
-        if self.structural.contains_key(&key) {
-            return Ok(());
+    /// Makes sure the inverse of the standard corrector's S = M/(βΔτ²) + γC/(βΔτ) + K is held;
+    /// returns the step size's slot.
+    fn ensure_structural(&mut self, sys: &MarchSystem, dt: f64) -> Result<usize> {
+        let i = self.ensure_inertia(sys, dt);
+        let size = &mut self.sizes[i];
+        if size.structural.is_none() {
+            let s: Vec<f64> = size
+                .inertia
+                .as_ref()
+                .expect("inertia held")
+                .iter()
+                .zip(&sys.stiffness)
+                .map(|(p, k)| p + k)
+                .collect();
+            let inv = dense::inverse(&s, sys.n).ok_or_else(|| {
+                Error::Compute(format!(
+                    "the Newmark matrix M/(βΔτ²) + γC/(βΔτ) + K is singular (Δτ = {dt:e} s): the model needs mass"
+                ))
+            })?;
+            self.factorisations += 1;
+            size.structural = Some(inv);
         }
-        self.ensure_inertia(sys, dt);
-        let s: Vec<f64> = self.inertia[&key]
-            .iter()
-            .zip(&sys.stiffness)
-            .map(|(p, k)| p + k)
-            .collect();
-        let inv = dense::inverse(&s, sys.n).ok_or_else(|| {
-            Error::Compute(format!(
-                "the Newmark matrix M/(βΔτ²) + γC/(βΔτ) + K is singular (Δτ = {dt:e} s): the model needs mass"
-            ))
-        })?;
-        self.factorisations += 1;
-        self.structural.insert(key, inv);
-        Ok(())
+        Ok(i)
     }
 
     /// x = A⁻¹ b for the piecewise-linear step matrix A of the contact `states` (codes `codes`;
@@ -270,59 +364,61 @@ impl Cache {
             lu.solve(b, x);
             return Ok(());
         }
-        let dt_key = if dynamic { ctx.dt.to_bits() } else { 0 };
-        let known = self
-            .piecewise
-            .get(&dt_key)
-            .is_some_and(|(per, _)| per.contains_key(codes));
-        if !known {
-            self.build_factor(ctx, dynamic, states, codes, k)?;
-        }
-        match &self.piecewise[&dt_key].0[codes] {
+        let slot = self.slot(if dynamic { ctx.dt.to_bits() } else { 0 });
+        let f = match self.sizes[slot].find(codes) {
+            Some(f) => f,
+            None => self.build_factor(ctx, dynamic, slot, states, codes, k)?,
+        };
+        let size = &self.sizes[slot];
+        match &size.factors[f].1 {
             StepFactor::Full(inv) => dense::matvec(inv, b, x),
-            StepFactor::LowRank(l) => l.solve_with(&self.stick[&dt_key], b, x, scratch),
+            StepFactor::LowRank(l) => {
+                l.solve_with(size.stick.as_ref().expect("stick held"), b, x, scratch)
+            }
         }
         Ok(())
     }
 
-    /// The factor of a state met for the first time ([`Cache::step_solve`]).
+    /// The factor of a state met for the first time ([`Cache::step_solve`]); returns its index.
     fn build_factor(
         &mut self,
         ctx: &StepContext,
         dynamic: bool,
+        slot: usize,
         states: &[ContactState],
         codes: &[u8],
         k: &mut Vec<f64>,
-    ) -> Result<()> {
+    ) -> Result<usize> {
         let (sys, n) = (ctx.sys, ctx.sys.n);
-        let dt_key = if dynamic { ctx.dt.to_bits() } else { 0 };
         if dynamic {
             self.ensure_inertia(sys, ctx.dt);
         }
-        let inertia = dynamic.then(|| self.inertia[&dt_key].clone());
+        let size = &mut self.sizes[slot];
+        let inertia = size.inertia.as_ref().filter(|_| dynamic);
         let step_matrix = |states: &[ContactState], k: &mut Vec<f64>| {
             k.clear();
             k.extend_from_slice(&sys.stiffness);
             for (e, &s) in sys.elements.iter().zip(states) {
                 e.add_stiffness(s, k, n);
             }
-            if let Some(p) = &inertia {
+            if let Some(p) = inertia {
                 k.iter_mut().zip(p).for_each(|(a, b)| *a += b);
             }
         };
         let cols = lowrank::columns(&sys.elements, states);
         let mut factor = None;
+        let mut made = 0;
         if 2 * cols.len() < n {
-            if let std::collections::hash_map::Entry::Vacant(e) = self.stick.entry(dt_key) {
+            if size.stick.is_none() {
                 step_matrix(&sys.stick_states(), k);
                 if let Some(inv) = dense::inverse(k, n) {
-                    e.insert(inv);
-                    self.factorisations += 1;
+                    size.stick = Some(inv);
+                    made += 1;
                 }
             }
-            factor = self
+            factor = size
                 .stick
-                .get(&dt_key)
+                .as_ref()
                 .and_then(|inv| LowRank::new(inv, n, cols).map(StepFactor::LowRank));
         }
         let factor = match factor {
@@ -335,15 +431,18 @@ impl Cache {
                 )
             }
         };
-        let (per, held) = self.piecewise.entry(dt_key).or_default();
-        if (*held + factor.entries()) * std::mem::size_of::<f64>() > MAX_CACHED_BYTES {
-            per.clear();
-            *held = 0;
+        if (size.held + factor.entries()) * std::mem::size_of::<f64>() > MAX_CACHED_BYTES {
+            size.factors.clear();
+            size.index.clear();
+            size.held = 0;
         }
-        *held += factor.entries();
-        per.insert(codes.to_vec(), factor);
-        self.factorisations += 1;
-        Ok(())
+        size.held += factor.entries();
+        size.factors.push((codes.to_vec(), factor));
+        let i = size.factors.len() - 1;
+        size.index.insert(codes.to_vec(), i);
+        size.last = Some(i);
+        self.factorisations += made + 1;
+        Ok(i)
     }
 }
 
@@ -397,7 +496,7 @@ pub struct StepContext<'a> {
     pub max_iterations: u32,
     /// The excitation at τ_{n+1} (dynamic force for the Newmark schemes, f_e for the
     /// quasi-static method).
-    pub excitation: &'a Excitation,
+    pub excitation: ExcitationAt<'a>,
     /// A step size met once (the adaptive march's step closing a period): its step matrices
     /// are factored in the [`Workspace`] and not cached.
     pub one_off: bool,
@@ -425,7 +524,7 @@ pub fn evaluate_law(
 /// (the samples at τ_n).
 pub fn evaluate_law_with(
     sys: &MarchSystem,
-    exc: &Excitation,
+    exc: ExcitationAt,
     q: &[f64],
     prev: &[LawSample],
     out: &mut Vec<LawSample>,
@@ -435,7 +534,7 @@ pub fn evaluate_law_with(
         sys.elements
             .iter()
             .zip(prev)
-            .zip(exc.pt.iter().zip(&exc.pn))
+            .zip(exc.pt.iter().zip(exc.pn))
             .map(|((e, p), (&pt, &pn))| e.sample(e.local_with(q, pt, pn), p.slider)),
     );
 }
@@ -445,6 +544,12 @@ pub fn add_contact_force(sys: &MarchSystem, samples: &[LawSample], f: &mut [f64]
     for (e, s) in sys.elements.iter().zip(samples) {
         e.add_force(s.f_t, s.f_n, f);
     }
+}
+
+/// Whether two state-code lists are equal, compared inline (a library `memcmp` call costs more
+/// than the comparison for the few elements of small models).
+fn same_codes(a: &[u8], b: &[u8]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x == y)
 }
 
 /// State codes of the samples (the cache key and the state comparison).
@@ -472,11 +577,22 @@ fn newmark_rates(kin: &mut Kinematics, qs: &[f64], vs: &[f64], dt: f64) {
 /// The Newmark right-hand side b = f + M q*/(βΔτ²) + C (γ q*/(βΔτ) − v*) =
 /// f + P q* − C v* with P = M/(βΔτ²) + γC/(βΔτ), into `ws.b` (predictors in `ws.qs`, `ws.vs`).
 fn newmark_rhs(sys: &MarchSystem, p: &[f64], force: &[f64], ws: &mut Workspace) {
-    dense::matvec(p, &ws.qs, &mut ws.b);
+    let n = ws.qs.len();
     if ws.damped {
-        dense::matvec_scaled_add(-1.0, &sys.damping, &ws.vs, &mut ws.b);
+        // one pass over the rows of P and C
+        for (i, bi) in ws.b.iter_mut().enumerate() {
+            let (pr, cr) = (&p[i * n..(i + 1) * n], &sys.damping[i * n..(i + 1) * n]);
+            *bi = force[i]
+                + pr.iter()
+                    .zip(cr)
+                    .zip(ws.qs.iter().zip(&ws.vs))
+                    .map(|((pij, cij), (q, v))| pij * q - cij * v)
+                    .sum::<f64>();
+        }
+    } else {
+        dense::matvec(p, &ws.qs, &mut ws.b);
+        ws.b.iter_mut().zip(force).for_each(|(b, f)| *b += f);
     }
-    ws.b.iter_mut().zip(force).for_each(|(b, f)| *b += f);
 }
 
 /// [`newmark_rhs`] without the cached P: b = f + (M/(βΔτ²) + γC/(βΔτ)) q* − C v*.
@@ -535,7 +651,7 @@ pub fn standard_step(
     let dt = ctx.dt;
     newmark_predictors(&start.kin, dt, &mut ws.qs, &mut ws.vs);
     let sinv = if ctx.one_off {
-        newmark_rhs_direct(sys, dt, &ctx.excitation.force, ws);
+        newmark_rhs_direct(sys, dt, ctx.excitation.force, ws);
         one_off_matrix(sys, dt, &[], &mut ws.k, &mut ws.unused_r);
         if !ws.lu.factor(&ws.k) {
             return Err(Error::Compute(format!(
@@ -544,10 +660,15 @@ pub fn standard_step(
         }
         None
     } else {
-        let key = dt.to_bits();
-        cache.ensure_structural(sys, dt)?;
-        newmark_rhs(sys, &cache.inertia[&key], &ctx.excitation.force, ws);
-        Some(&cache.structural[&key])
+        let i = cache.ensure_structural(sys, dt)?;
+        let size = &cache.sizes[i];
+        newmark_rhs(
+            sys,
+            size.inertia.as_ref().expect("inertia held"),
+            ctx.excitation.force,
+            ws,
+        );
+        size.structural.as_ref()
     };
     // S⁻¹ x into y
     let solve = |lu: &mut dense::ScratchLu, x: &[f64], y: &mut [f64]| match sinv {
@@ -627,7 +748,7 @@ fn state_iteration(
         )?;
         evaluate_law_with(sys, exc, &out.kin.q, &start.samples, &mut out.samples);
         state_codes(&out.samples, &mut ws.law_codes);
-        if ws.law_codes == ws.codes {
+        if same_codes(&ws.law_codes, &ws.codes) {
             return Ok(Ok(it));
         }
         ws.seen.extend_from_slice(&ws.codes);
@@ -659,13 +780,13 @@ pub fn piecewise_linear_step(
     let dt = ctx.dt;
     newmark_predictors(&start.kin, dt, &mut ws.qs, &mut ws.vs);
     if ctx.one_off {
-        newmark_rhs_direct(sys, dt, &ctx.excitation.force, ws);
+        newmark_rhs_direct(sys, dt, ctx.excitation.force, ws);
     } else {
-        cache.ensure_inertia(sys, dt);
+        let i = cache.ensure_inertia(sys, dt);
         newmark_rhs(
             sys,
-            &cache.inertia[&dt.to_bits()],
-            &ctx.excitation.force,
+            cache.sizes[i].inertia.as_ref().expect("inertia held"),
+            ctx.excitation.force,
             ws,
         );
     }
@@ -687,7 +808,7 @@ pub fn quasi_static_step(
     ws: &mut Workspace,
     out: &mut Snapshot,
 ) -> Result<u32> {
-    ws.b.copy_from_slice(&ctx.excitation.force);
+    ws.b.copy_from_slice(ctx.excitation.force);
     let iterations = match state_iteration(ctx, false, start, cache, ws, out)? {
         Ok(it) => it,
         Err(tried) => tried + damped_newton(ctx, false, start, cache, ws, out)?,

@@ -34,6 +34,12 @@ impl Harmonic {
     /// The value at time `t` (s) for the excitation frequency `omega` (rad/s).
     pub fn at(&self, omega: f64, t: f64) -> f64 {
         let (s, c) = (omega * t).sin_cos();
+        self.at_phase(c, s)
+    }
+
+    /// The value at the phase ωt given by its cosine `c` and sine `s` (one sin_cos shared by
+    /// every signal of an instant).
+    pub fn at_phase(&self, c: f64, s: f64) -> f64 {
         self.mean + self.cos * c + self.sin * s
     }
 

@@ -38,8 +38,9 @@
 //! differs from F by the stiffness of the few contact elements that changed regime, F⁻¹A is the
 //! identity plus a matrix of low rank and GMRES converges in about as many iterations as that
 //! rank; each costs one solve on F and one product with A (the block-stored A is not factorised
-//! again). Newton ([`super::newton_core`]) solves its steps after the first this way and
-//! factorises again only when GMRES needs more than [`KRYLOV_ITERATIONS`] iterations (or more than
+//! again). Newton ([`super::newton_core`]) solves its steps after the first this way (a
+//! continuation corrector its first as well, on the factors of the previous point's tangent
+//! system) and factorises again only when GMRES needs more than [`KRYLOV_ITERATIONS`] iterations (or more than
 //! [`KRYLOV_REFRESH`] at the step before); every Krylov solution is checked by the same backward
 //! error as a direct one.
 //!
@@ -186,9 +187,11 @@ impl Clone for LinearSolver {
 }
 
 /// Factors of a matrix from [`LinearSolver::factor_solve`], to solve further right-hand sides
-/// with ([`Factored::solve`], [`LinearSolver::solve_near`]).
+/// with ([`Factored::solve`], [`LinearSolver::solve_near`], [`LinearSolver::solve_krylov`]).
+/// A clone shares the factors.
+#[derive(Clone)]
 pub struct Factored {
-    kind: FactorKind,
+    kind: std::sync::Arc<FactorKind>,
     n: usize,
 }
 
@@ -200,7 +203,7 @@ enum FactorKind {
 impl Factored {
     /// sign det A (±1).
     pub fn sign(&self) -> f64 {
-        match &self.kind {
+        match self.kind.as_ref() {
             FactorKind::Dense { sign, .. } => *sign,
             FactorKind::Structured(w) => w.sign,
         }
@@ -208,7 +211,7 @@ impl Factored {
 
     /// The path of these factors.
     pub fn path(&self) -> SolvePath {
-        match &self.kind {
+        match self.kind.as_ref() {
             FactorKind::Dense { .. } => SolvePath::Dense,
             FactorKind::Structured(w) => SolvePath::Structured { rank: w.rank() },
         }
@@ -216,7 +219,7 @@ impl Factored {
 
     /// x = A⁻¹ b on the factors (no refinement); `None` if x is not finite.
     pub fn solve(&self, b: &[f64]) -> Option<Vec<f64>> {
-        let x = match &self.kind {
+        let x = match self.kind.as_ref() {
             FactorKind::Dense { lu, .. } => {
                 let mut x = faer::Col::from_fn(b.len(), |i| b[i]);
                 lu.solve_in_place(x.as_mut());
@@ -438,7 +441,7 @@ impl LinearSolver {
                     let view = View::of(a);
                     if let Some(x) = w.solve_checked(view, view.norm_1(), b) {
                         let f = Factored {
-                            kind: FactorKind::Structured(w),
+                            kind: std::sync::Arc::new(FactorKind::Structured(w)),
                             n,
                         };
                         count(f.path(), n);
@@ -456,7 +459,7 @@ impl LinearSolver {
         };
         let sign = lu_sign(&lu)?;
         let f = Factored {
-            kind: FactorKind::Dense { lu, sign },
+            kind: std::sync::Arc::new(FactorKind::Dense { lu, sign }),
             n,
         };
         let x = f.solve(b)?;

@@ -107,7 +107,9 @@ impl SectorProblem {
             .collect::<BTreeSet<_>>()
             .into_iter()
             .collect();
-        let mut blocks = Vec::with_capacity(distinct.len());
+        // the rows of every block first; its matrices are copied one block at a time as the
+        // linear model splits them (one block's copy beside the model at most)
+        let mut rows = Vec::with_capacity(distinct.len());
         for &k in &distinct {
             let h = rom.harmonic(k).ok_or_else(|| {
                 Error::input(format!(
@@ -115,8 +117,19 @@ impl SectorProblem {
                     case.path.display()
                 ))
             })?;
-            blocks.push(block(h, &nonlinear, &dofs.outputs)?);
+            rows.push((
+                h,
+                rows_of(h, &nonlinear, "contact/target")?,
+                rows_of(h, &dofs.outputs, "response")?,
+            ));
         }
+        let blocks = rows.into_iter().map(|(h, nonlinear, outputs)| MatrixBlock {
+            stiffness: h.stiffness.clone(),
+            mass: h.mass.clone(),
+            damping: h.damping.clone(),
+            nonlinear,
+            outputs,
+        });
         let harmonic_block: Vec<usize> = k_n
             .iter()
             .map(|k| distinct.binary_search(k).unwrap_or(0))
@@ -352,15 +365,4 @@ fn missing_node(h: &HarmonicRom, tag: u64, what: &str) -> Error {
          frontier when `gsi_modes` reduces it, has no physical coordinate: choose nodes off the frontiers)",
         h.harmonic_index
     ))
-}
-
-/// The matrix block of one harmonic index with the rows of the nonlinear and output DOFs.
-fn block(h: &HarmonicRom, nonlinear: &[DofLabel], outputs: &[DofLabel]) -> Result<MatrixBlock> {
-    Ok(MatrixBlock {
-        stiffness: h.stiffness.clone(),
-        mass: h.mass.clone(),
-        damping: h.damping.clone(),
-        nonlinear: rows_of(h, nonlinear, "contact/target")?,
-        outputs: rows_of(h, outputs, "response")?,
-    })
 }

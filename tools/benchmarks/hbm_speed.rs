@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cargo run --release --example hbm_speed -- sector CASE.toml [H] [POINTS] [KEY=VALUE ...]
-//! cargo run --release --example hbm_speed -- synthetic [CONTACT_DOFS] [H] [SAMPLES] [EVERY]
+//! cargo run --release --example hbm_speed -- synthetic [CONTACT_DOFS] [H] [SAMPLES] [EVERY] [nodense]
 //! ```
 //!
 //! `sector`: the case's sector problem (reduction, SAMA interfaces, preload balance) with H
@@ -20,7 +20,8 @@
 //! (C = 0.01 K), every DOF nonlinear, forced on harmonic 1 so that the pairs stick, slip and
 //! separate; H (default 3) and SAMPLES (default 4(H+1) rounded up to a power of two): the split
 //! of one Newton iteration. With EVERY > 1 only one pair in EVERY moves that much, the others 50
-//! times less and stick all period (microslip of the interface).
+//! times less and stick all period (microslip of the interface). `nodense` leaves out the dense
+//! Jacobian and its LU (whose n² memory and n³ time are out of reach beyond about 15 000 unknowns).
 //!
 //! The split (best of `REPEAT` runs, wall clock, `faer::get_global_parallelism` threads):
 //! condensation of the linear part at ω; AFT = contact forces alone (inverse DFT, contact law
@@ -82,10 +83,11 @@ fn main() -> Result<()> {
         Some("synthetic") => {
             let h = num(2, 3);
             let samples = num(3, (4 * (h + 1)).next_power_of_two());
-            synthetic(num(1, 1500), h, samples, num(4, 1))
+            let dense = args.get(5).map(String::as_str) != Some("nodense");
+            synthetic(num(1, 1500), h, samples, num(4, 1), dense)
         }
         _ => {
-            eprintln!("usage: hbm_speed sector CASE.toml [H] [POINTS] | synthetic [CONTACT_DOFS] [H] [SAMPLES] [EVERY]");
+            eprintln!("usage: hbm_speed sector CASE.toml [H] [POINTS] | synthetic [CONTACT_DOFS] [H] [SAMPLES] [EVERY] [nodense]");
             Ok(())
         }
     }
@@ -235,7 +237,7 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
         }
         last = Some(points);
         if let Some(p) = path.points.last() {
-            split(&fp, &system, &p.x, p.parameter, &p.state)?;
+            split(&fp, &system, &p.x, p.parameter, &p.state, true)?;
         }
     }
     Ok(())
@@ -284,6 +286,7 @@ fn split<F: HarmonicForce>(
     x: &[f64],
     omega: f64,
     state: &F::State,
+    dense: bool,
 ) -> Result<()> {
     let layout = system.layout();
     let force = system.force();
@@ -337,6 +340,44 @@ fn split<F: HarmonicForce>(
     });
     drop(lin_blocks);
     drop(blocks);
+    let row = |what: &str, t: (f64, f64), total: f64| {
+        println!(
+            "  {what:<52} {:>9.4} s {:>5.1} %  (CPU {:.2} s)",
+            t.0,
+            100.0 * t.0 / total,
+            t.1
+        )
+    };
+    let minus = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0, a.1 - b.1);
+    if !dense {
+        let total = whole_blocks.0 + structured_solve.0;
+        println!("one Newton iteration, {nf} unknowns (best of {REPEAT}, wall; % of the block-stored + structured iteration {total:.4} s):");
+        row("condensation of the linear part", condense, total);
+        row("AFT: contact forces", aft, total);
+        row(
+            "contact Jacobian, block-stored",
+            minus(aft_blocks, aft),
+            total,
+        );
+        row(
+            "linear assembly, block-stored",
+            minus(minus(whole_blocks, aft_blocks), condense),
+            total,
+        );
+        row("residual alone (a damping trial)", residual, total);
+        row(
+            "structured factorisation + solve (block-stored)",
+            structured_solve,
+            total,
+        );
+        row("automatic choice: factorisation + solve", auto_solve, total);
+        println!("  structured path: {path:?}; automatic choice: {auto_path:?}");
+        println!(
+            "  iteration: block-stored + structured {total:.4} s (CPU {:.2} s)",
+            whole_blocks.1 + structured_solve.1
+        );
+        return Ok(());
+    }
     let mut jac = Mat::<f64>::zeros(nf, nf);
     let aft_jac = best(|| {
         let mut s = state.clone();
@@ -352,15 +393,7 @@ fn split<F: HarmonicForce>(
     let dense = lin.jacobian.as_dense().expect("a dense Jacobian");
     let lu = best(|| solve_dense(dense, &lin.residual).unwrap());
     let total = whole.0 + lu.0;
-    let row = |what: &str, t: (f64, f64)| {
-        println!(
-            "  {what:<52} {:>9.4} s {:>5.1} %  (CPU {:.2} s)",
-            t.0,
-            100.0 * t.0 / total,
-            t.1
-        )
-    };
-    let minus = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0, a.1 - b.1);
+    let row = |what: &str, t: (f64, f64)| row(what, t, total);
     println!("one Newton iteration, {nf} unknowns (best of {REPEAT}, wall; % of the dense iteration {total:.4} s):");
     row("condensation of the linear part", condense);
     row("AFT: contact forces", aft);
@@ -393,7 +426,13 @@ fn split<F: HarmonicForce>(
     Ok(())
 }
 
-fn synthetic(contact_dofs: usize, h: usize, samples: usize, every: usize) -> Result<()> {
+fn synthetic(
+    contact_dofs: usize,
+    h: usize,
+    samples: usize,
+    every: usize,
+    dense: bool,
+) -> Result<()> {
     let slipping = (every > 1).then(|| 1.0 / every as f64);
     let (linear, set, layout, x) = synthetic_interface(contact_dofs, h, samples, slipping)?;
     let n = linear.n_condensed();
@@ -407,5 +446,5 @@ fn synthetic(contact_dofs: usize, h: usize, samples: usize, every: usize) -> Res
         "synthetic: {pairs} pairs ({} moving), {n} contact DOF, H = {h}, N_t = {samples}",
         pairs.div_ceil(every.max(1))
     );
-    split(&fp, &system, &x, 0.8, &set.initial_state())
+    split(&fp, &system, &x, 0.8, &set.initial_state(), dense)
 }
