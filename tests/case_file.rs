@@ -351,11 +351,7 @@ fn value_range_errors_name_their_keys() {
             ),
             "contact[0].coupling",
         ),
-        // the exact single-harmonic cycle needs H = 1, and the 1-D element
-        (
-            full_with("n0 = 113.0 ", "n0 = 113.0\nevaluation = \"analytic\"\n"),
-            "contact[0].evaluation",
-        ),
+        // the exact cycle needs the 1-D element
         (
             full_with("n0 = 113.0 ", "n0 = 113.0\nevaluation = \"analytic\"\n")
                 .replace("harmonics = 3 ", "harmonics = 1 ")
