@@ -194,19 +194,23 @@ impl Exit {
 }
 
 /// The exits of a phase.
-fn exits(phase: Phase, normal: bool) -> ([Option<Exit>; 3], usize) {
-    let sep = normal.then_some(Exit::Separate);
+fn exits(phase: Phase, normal: bool) -> ([Exit; 3], usize) {
+    // separation (listed last) only with normal kinematics; unused slots are never read
+    let sep = usize::from(normal);
     match phase {
         Phase::Stick { slider, .. } => (
             [
-                Some(Exit::StickToPositive(slider)),
-                Some(Exit::StickToNegative(slider)),
-                sep,
+                Exit::StickToPositive(slider),
+                Exit::StickToNegative(slider),
+                Exit::Separate,
             ],
-            3,
+            2 + sep,
         ),
-        Phase::Slip { sign } => ([Some(Exit::SlipEnd(sign)), sep, None], 2),
-        Phase::Separation => ([Some(Exit::Contact), None, None], 1),
+        Phase::Slip { sign } => (
+            [Exit::SlipEnd(sign), Exit::Separate, Exit::Contact],
+            1 + sep,
+        ),
+        Phase::Separation => ([Exit::Contact; 3], 1),
     }
 }
 
@@ -291,10 +295,13 @@ fn next_event(
     e: &mut [f64],
 ) -> Option<(f64, Exit)> {
     let p = &motion.params;
-    let (list, count) = exits(phase, motion.v.is_some());
-    let list: Vec<Exit> = list[..count].iter().flatten().copied().collect();
+    let (all, count) = exits(phase, motion.v.is_some());
+    let list = &all[..count];
     let start = motion.at(from, e);
-    let mut before: Vec<f64> = list.iter().map(|x| x.value(p, &start)).collect();
+    let mut before = [0.0; 3];
+    for (b, x) in before.iter_mut().zip(list) {
+        *b = x.value(p, &start);
+    }
     let mut before_at = start;
     let mut t_before = from;
     let n = grid.len();
