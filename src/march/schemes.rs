@@ -222,7 +222,7 @@ enum StepFactor {
     /// Its inverse (n × n).
     Full(Vec<f64>),
     /// A low-rank change of the all-stick step matrix ([`LowRank`]), when the rank is below n.
-    LowRank(LowRank),
+    LowRank(Box<LowRank>),
 }
 
 impl StepFactor {
@@ -459,7 +459,7 @@ impl Cache {
                         self.factorisations += made + 1;
                         return Ok(Held::Working);
                     }
-                    factor = Some(StepFactor::LowRank(w.clone()));
+                    factor = Some(StepFactor::LowRank(Box::new(w.clone())));
                 }
             }
         }
