@@ -1085,7 +1085,7 @@ fn the_temperature_runaway_is_the_thermoelastic_instability_of_the_blade_held_on
                 * s.step
         })
         .collect();
-    assert!(last_touch.iter().all(|&e| e < 0.5), "{last_touch:?}");
+    assert!(last_touch.iter().all(|&e| e < 0.6), "{last_touch:?}");
     let fitted = (hottest(last) / hottest(last - 3 * per)).ln() / (3.0 * per as f64 * s.step);
     let sigma = instability_rate(&rom.system, &held);
     let full = instability_rate(&surrogate("").system, &held);
