@@ -14,6 +14,8 @@
 //! recovered from the modal coordinates equals the full model's, and so do the
 //! stick–slip–separation maps of the strip, with separation, stick and both slips present.
 
+mod support;
+
 use std::f64::consts::{PI, TAU};
 use std::path::Path;
 
@@ -22,6 +24,7 @@ use nlrom::commands::progress::Reporter;
 use nlrom::commands::solve::{solve_case, SolveOptions};
 use nlrom::output::{ContactMap, ResultsFile};
 use nlrom::problem::rom_store::RomPolicy;
+use support::chain::{self, list, spring_for, stiffness, write_mtx};
 
 /// Nodes per chain.
 const N: usize = 10;
@@ -34,34 +37,12 @@ const MAP_HZ: [f64; 2] = [1.0, 1.061];
 
 /// The chains' spring stiffness k, so that ω₁ = 2π rad/s.
 fn spring() -> f64 {
-    (PI / (PI / (2 * (2 * N + 1)) as f64).sin()).powi(2)
+    spring_for(N, TAU)
 }
 
 /// Mass-normalised mode r ≥ 1 of a chain at node j ∈ 1..=N.
 fn mode(r: usize, j: usize) -> f64 {
-    let m = (2 * N + 1) as f64;
-    2.0 / m.sqrt() * ((2 * r - 1) as f64 * PI * j as f64 / m).sin()
-}
-
-/// ω_r² of a chain.
-fn omega2(r: usize) -> f64 {
-    let s = ((2 * r - 1) as f64 * PI / (2 * (2 * N + 1)) as f64).sin();
-    4.0 * spring() * s * s
-}
-
-fn write_mtx(path: &Path, n: usize, entries: &[(usize, usize, f64)]) {
-    let mut t = format!(
-        "%%MatrixMarket matrix coordinate real symmetric\n{n} {n} {}\n",
-        entries.len()
-    );
-    for (i, j, v) in entries {
-        t.push_str(&format!("{} {} {v:e}\n", i + 1, j + 1));
-    }
-    std::fs::write(path, t).unwrap();
-}
-
-fn list(v: impl IntoIterator<Item = String>) -> String {
-    format!("[{}]", v.into_iter().collect::<Vec<_>>().join(", "))
+    chain::mode(N, r, j)
 }
 
 /// The case text of the full model (`modal` false) or the modal model.
@@ -72,19 +53,12 @@ fn case(dir: &Path, modal: bool) -> Case {
     if modal {
         for c in 0..2 {
             for r in 1..=N {
-                k.push((c * N + r - 1, c * N + r - 1, omega2(r)));
+                k.push((c * N + r - 1, c * N + r - 1, chain::omega2(N, spring(), r)));
             }
         }
     } else {
-        let kk = spring();
         for c in 0..2 {
-            for j in 0..N {
-                let row = c * N + j;
-                k.push((row, row, if j + 1 < N { 2.0 * kk } else { kk }));
-                if j + 1 < N {
-                    k.push((row + 1, row, -kk));
-                }
-            }
+            k.extend(stiffness(N, spring(), c * N));
         }
     }
     for i in 0..n2 {
