@@ -213,7 +213,7 @@ enum OperatorKind {
     /// there are none).
     Dynamic {
         d_nn: Mat<c64>,
-        coupling: Option<Coupling>,
+        coupling: Option<Box<Coupling>>,
     },
 }
 
@@ -640,9 +640,10 @@ impl LinearModel {
     /// ∂D̄⁽ⁿ⁾/∂ω q_n, ∂F̄⁽ⁿ⁾/∂ω of [`LinearModel::condense_applied`] by matrix–vector products
     /// on one LU of D_LL (eqs. 16–17: D̄ q = D_NN q − D_NL v with v = D_LL⁻¹ D_LN q; the
     /// derivative as in [`LinearModel::condense_applied`]), and the [`HarmonicOperator`] that
-    /// applies D̄⁽ⁿ⁾ to further vectors on the same LU, or forms it. That costs (8/3) n_L³ + O(n_N²
-    /// + n_L²) flops against the 8 n_N² n_L of the product D_NL D_LL⁻¹ D_LN, which is left to
-    /// the evaluations whose matrix is factorised. Fails as [`LinearModel::condense`].
+    /// applies D̄⁽ⁿ⁾ to further vectors on the same LU, or forms it. That costs (8/3) n_L³ flops
+    /// and products of order n_N² and n_L², against the 8 n_N² n_L of the product
+    /// D_NL D_LL⁻¹ D_LN, which is left to the evaluations whose matrix is factorised. Fails as
+    /// [`LinearModel::condense`].
     pub fn condense_deferred(
         &self,
         n: usize,
@@ -736,7 +737,7 @@ impl LinearModel {
         let op = HarmonicOperator {
             kind: OperatorKind::Dynamic {
                 d_nn,
-                coupling: Some(Coupling { d_nl, d_ln, lu }),
+                coupling: Some(Box::new(Coupling { d_nl, d_ln, lu })),
             },
             norm: slot,
         };

@@ -151,7 +151,7 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
                 let q_n = self.harmonic_of(q, n);
                 if deferred {
                     let (a, op) = self.linear.condense_deferred(n, omega, &q_n)?;
-                    Ok((a, Linear::Operator(op)))
+                    Ok((a, Linear::Operator(Box::new(op))))
                 } else {
                     let c = self.linear.condense_applied(n, omega, &q_n)?;
                     Ok((applied_of(&c, &q_n), Linear::Matrix(c.stiffness)))
@@ -183,7 +183,7 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
             self.add_harmonic(n, &a, level, &mut out);
             match l {
                 Linear::Matrix(d) => self.add_stiffness(n, &d, &mut out),
-                Linear::Operator(op) => operators.push(op),
+                Linear::Operator(op) => operators.push(*op),
             }
         }
         if let Some(Jacobian::Blocks(b)) = out.jacobian {
@@ -323,7 +323,7 @@ fn applied_of(c: &CondensedApplied, q_n: &[c64]) -> Applied {
 /// The linear part of one harmonic for the Jacobian: formed, or as an operator.
 enum Linear {
     Matrix(Mat<c64>),
-    Operator(HarmonicOperator),
+    Operator(Box<HarmonicOperator>),
 }
 
 /// D̄(ω) of every harmonic as the pending term of a block-stored Jacobian (block n = harmonic n;
