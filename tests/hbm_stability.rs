@@ -274,3 +274,98 @@ fn duffing_middle_branch_is_unstable_between_the_folds() {
     assert!(unstable >= 3, "{unstable} unstable points");
     assert!(frf.points.iter().all(|p| p.stable.is_some()));
 }
+
+/// The amplitudes A > 0 of the single-harmonic Duffing response at ω (closed form):
+/// A²[(K − Mω² + ¾K₃A²)² + (Cω)²] = F², a cubic in z = A², real positive roots by bisection
+/// between the cubic's stationary points.
+fn duffing_h1_amplitudes(omega: f64) -> Vec<f64> {
+    let (a, b) = (0.75 * K3, K - M * omega * omega);
+    let g = |z: f64| z * ((b + a * z).powi(2) + (C * omega).powi(2)) - F * F;
+    // g' = 3a²z² + 4abz + b² + C²ω²: stationary points of g
+    let (qa, qb, qc) = (3.0 * a * a, 4.0 * a * b, b * b + (C * omega).powi(2));
+    let disc = qb * qb - 4.0 * qa * qc;
+    let mut cuts = vec![0.0];
+    if disc > 0.0 {
+        for s in [-1.0, 1.0] {
+            let z = (-qb + s * disc.sqrt()) / (2.0 * qa);
+            if z > 0.0 {
+                cuts.push(z);
+            }
+        }
+    }
+    cuts.push(10.0 * F.max(1.0));
+    let mut roots = Vec::new();
+    for w in cuts.windows(2) {
+        let (mut lo, mut hi) = (w[0], w[1]);
+        if g(lo) * g(hi) > 0.0 {
+            continue;
+        }
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if g(lo) * g(mid) <= 0.0 {
+                hi = mid
+            } else {
+                lo = mid
+            }
+        }
+        roots.push((0.5 * (lo + hi)).sqrt());
+    }
+    roots
+}
+
+/// `land_at` inside the Duffing fold (H = 1): the traced path crosses a frequency between its
+/// folds three times; the added points lie exactly at that frequency, their amplitudes are the
+/// three closed-form single-harmonic amplitudes (large, middle, small in path order, to 1e-7),
+/// and Hill marks the middle one unstable. A frequency outside the range gives no point.
+#[test]
+fn landing_inside_the_fold_gives_the_three_closed_form_branches() {
+    use nlrom::hbm::frf::land_at;
+    let model = duffing_model(1);
+    let force = PolynomialSprings {
+        k1: vec![0.0],
+        k3: vec![K3],
+    };
+    let system = HbmSystem::new(HarmonicLayout::new(1, 16).unwrap(), &model, &force).unwrap();
+    // a frequency with three closed-form amplitudes, in the middle of that interval
+    let three: Vec<f64> = (0..3000)
+        .map(|i| 1.0 + 1e-3 * i as f64)
+        .filter(|&w| duffing_h1_amplitudes(w).len() == 3)
+        .collect();
+    assert!(three.len() > 20, "no fold interval found");
+    let w = 0.5 * (three[0] + three[three.len() - 1]);
+    let want = duffing_h1_amplitudes(w);
+    let mut opts = ContinuationOptions::new(0.5, 2.0, 0.01);
+    opts.max_step = Some(0.02);
+    let response = ResponseOptions {
+        stability: true,
+        ..ResponseOptions::default()
+    };
+    let mut frf = frequency_response(&system, &opts, &response, &mut |_| {}).unwrap();
+    let traced = frf.points.len();
+    let landed = land_at(&system, &mut frf, &[w, 3.0], &opts.newton, &response).unwrap();
+    assert!(landed.failed.is_empty(), "{:?}", landed.failed);
+    assert_eq!(landed.points[1], Vec::<usize>::new());
+    let at = &landed.points[0];
+    assert_eq!(at.len(), 3, "{at:?}");
+    assert_eq!(frf.points.len(), traced + 3);
+    assert!(frf
+        .points
+        .windows(2)
+        .all(|p| p[1].arc_length >= p[0].arc_length));
+    let mut got: Vec<(f64, Option<bool>)> = at
+        .iter()
+        .map(|&k| {
+            let p = &frf.points[k];
+            assert_eq!(p.omega, w);
+            (p.response.amplitude[0], p.stable)
+        })
+        .collect();
+    println!("ω = {w}: landed {got:?}, closed form {want:?}");
+    // path order: up the large branch, back along the middle one, out along the small one
+    assert!(got[0].0 > got[1].0 && got[1].0 > got[2].0, "{got:?}");
+    got.reverse();
+    for ((a, stable), (i, b)) in got.iter().zip(want.iter().enumerate()) {
+        assert!((a - b).abs() <= 1e-7 * b, "{a} vs {b}");
+        assert_eq!(*stable, Some(i != 1), "branch {i} at amplitude {a}");
+    }
+}

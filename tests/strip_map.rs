@@ -365,3 +365,120 @@ fn map_with_more_than_one_harmonic_is_a_keyed_error() {
     );
     case(dir.path(), 0.06, "", 1, "aft").unwrap();
 }
+
+/// First-harmonic force F₁ of a Jenkins point (stiffness k, slip force f_s) under
+/// u = Re(U e^{iτ}), in the same layout: stuck below k|U| = f_s, else, with θ = τ + arg U and
+/// cos β = 1 − 2f_s/(k|U|) (stick on [0, β] from f = f_s, negative slip on [β, π], half-wave
+/// symmetric), a₁ = (2/π)[(f_s − k|U|) sin β + k|U|(β/2 + sin 2β/4) + f_s sin β] and
+/// b₁ = (2/π)[(f_s − k|U|)(1 − cos β) + k|U| sin²β/2 − f_s(1 + cos β)] of
+/// f = a₁ cos θ + b₁ sin θ, so F₁ = (a₁ − i b₁) e^{i arg U}.
+fn jenkins_first_harmonic(k: f64, fs: f64, u: (f64, f64)) -> (f64, f64) {
+    let a = u.0.hypot(u.1);
+    if k * a <= fs {
+        return (k * u.0, k * u.1);
+    }
+    let beta = (1.0 - 2.0 * fs / (k * a)).acos();
+    let (s, c) = beta.sin_cos();
+    let a1 =
+        2.0 / PI * ((fs - k * a) * s + k * a * (beta / 2.0 + (2.0 * beta).sin() / 4.0) + fs * s);
+    let b1 = 2.0 / PI * ((fs - k * a) * (1.0 - c) + k * a * s * s / 2.0 - fs * (1.0 + c));
+    // (a₁ − i b₁) U / |U|
+    ((a1 * u.0 + b1 * u.1) / a, (a1 * u.1 - b1 * u.0) / a)
+}
+
+/// `map_hz`: maps at chosen frequencies instead of the resonance peak. The curve gets a point at
+/// exactly each frequency it crosses, which is an H = 1 solution there (the modal equation
+/// (ω₁² − ω² + 2iζω₁ω) Q₁ + Σ_p φ_p F₁,p = F with each point's Jenkins force in closed form),
+/// and each map has the closed-form transition angles of every point at that point's Q₁; a
+/// frequency the curve does not reach gives no map.
+#[test]
+fn maps_at_chosen_frequencies_match_the_closed_form() {
+    let dir = tempfile::tempdir().unwrap();
+    let hz = [1.08, 1.065, 2.0];
+    let extra = "map_hz = [1.08, 1.065, 2.0]";
+    let case = case(dir.path(), 0.06, extra, 1, "analytic").unwrap();
+    let out = solve_case(
+        &case,
+        &SolveOptions::new(RomPolicy::ReadIfMatching),
+        &Reporter::silent(),
+    )
+    .unwrap();
+    let path = dir.path().join("bar.h5");
+    write_results(&path, &out.results).unwrap();
+    let back = read_results(&path).unwrap();
+    assert_eq!(back.maps, out.results.maps, "the maps read back as written");
+    // one crossing each of 1.065 and 1.08 Hz (either side of the peak at 1.074 Hz), in path
+    // order; none of 2 Hz; no peak map
+    let got: Vec<f64> = back.maps.iter().map(|m| m.omega / TAU).collect();
+    assert_eq!(back.maps.len(), 2, "{got:?}");
+    assert_eq!(back.maps[0].omega, TAU * hz[1]);
+    assert_eq!(back.maps[1].omega, TAU * hz[0]);
+    let points = &back.frfs[0].points;
+    let h = 1.0 / (STATIONS - 1) as f64;
+    for map in &back.maps {
+        assert_eq!((map.name.as_str(), map.curve), ("bar", 0));
+        let p = &points[map.point];
+        assert_eq!(
+            p.omega, map.omega,
+            "the map's point is at the chosen frequency"
+        );
+        let (re, im) = (p.harmonics[1].re, p.harmonics[1].im);
+        // the added point solves the harmonic balance: residual of the modal equation with the
+        // closed-form Jenkins force of every integration point (2-point Gauss, weight h/2)
+        let w = p.omega;
+        let (k1, c1) = (TAU * TAU, 2.0 * 0.02 * TAU);
+        let mut r = (
+            (k1 - w * w) * re - c1 * w * im,
+            (k1 - w * w) * im + c1 * w * re,
+        );
+        for &x in &map.position {
+            let ph = phi_strip(x);
+            let (fr, fi) =
+                jenkins_first_harmonic(KU * h / 2.0, MU * 1.0 * h / 2.0, (ph * re, ph * im));
+            r.0 += ph * fr;
+            r.1 += ph * fi;
+        }
+        r.0 -= 0.06;
+        let rel = r.0.hypot(r.1) / 0.06;
+        eprintln!(
+            "map at {} Hz: modal residual {rel:.3e} of the force",
+            w / TAU
+        );
+        assert!(rel < 1e-6, "residual {rel:e} at {} Hz", w / TAU);
+        // the neighbours are traced points at other frequencies on either side
+        let (a, b) = (&points[map.point - 1], &points[map.point + 1]);
+        assert!((a.omega - w) * (b.omega - w) < 0.0);
+        let nbar = check_against_closed_form(map, re, im, &|_| 1.0);
+        assert!(check_front(map, re, im, &nbar) <= 1);
+    }
+    // the plotting tool reads the second map
+    let out = support::python::run_python(
+        "import sys, runpy; sys.argv = ['plot_map.py'] + sys.argv[1:]; \
+         runpy.run_path('tools/post/plot_map.py', run_name='__main__')",
+        &[
+            &path,
+            Path::new("--map"),
+            Path::new("1"),
+            Path::new("--out"),
+            dir.path(),
+        ],
+    );
+    let report: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    assert_eq!(report["disagreeing_samples"], 0, "{report}");
+    assert!(dir.path().join("map_bar_1.png").exists());
+}
+
+/// `map_hz` without `map`, or a frequency ≤ 0, is refused naming the key.
+#[test]
+fn map_frequencies_are_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = |extra: &str| {
+        case(dir.path(), 0.06, extra, 1, "analytic")
+            .unwrap_err()
+            .to_string()
+    };
+    let e = text("map_hz = [1.0, -2.0]");
+    assert!(e.contains("strip[0].map_hz[1]") && e.contains("-2"), "{e}");
+    let e = text("map_hz = []");
+    assert!(e.contains("strip[0].map_hz"), "{e}");
+}

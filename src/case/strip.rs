@@ -83,11 +83,16 @@ pub struct Strip {
     /// index in file order.
     #[serde(default)]
     pub name: Option<String>,
-    /// Phase angles N_θ of a stick–slip–separation map (`/contact/<name>/map/<i>`) at the
-    /// resonance peak of every curve; none: no map. Needs H = 1 (the map is built from the exact
-    /// single-harmonic cycle, [`crate::contact::slip_map`]).
+    /// Phase angles N_θ of a stick–slip–separation map (`/contact/<name>/map/<k>`) at the
+    /// resonance peak of every curve, or at `map_hz`; none: no map. Needs H = 1 (the map is built
+    /// from the exact single-harmonic cycle, [`crate::contact::slip_map`]).
     #[serde(default)]
     pub map: Option<usize>,
+    /// Excitation frequencies (Hz) at which to take the maps instead of the resonance peak: one
+    /// map at every crossing of each curve with each frequency (one per branch inside a fold),
+    /// at a solution added to the curve there ([`crate::hbm::frf::land_at`]).
+    #[serde(default)]
+    pub map_hz: Option<Vec<f64>>,
 }
 
 fn default_gauss() -> usize {
@@ -99,6 +104,9 @@ pub const MAX_GAUSS: usize = 8;
 
 /// The most phase angles of a map.
 pub const MAX_MAP_PHASES: usize = 100_000;
+
+/// The most frequencies of `map_hz`.
+pub const MAX_MAP_FREQUENCIES: usize = 100;
 
 impl Strip {
     /// The strip's name: `name`, else `strip<index>`.

@@ -19,11 +19,20 @@ pub(super) const FRICTION_PARAMS: [(&str, FrictionParam); 4] = [
     ("n0", FrictionParam::N0),
 ];
 
+/// The sweepable parameters of a `[[strip]]` (its total preload is `preload`).
+pub(super) const STRIP_PARAMS: [(&str, FrictionParam); 4] = [
+    ("mu", FrictionParam::Mu),
+    ("kt", FrictionParam::Kt),
+    ("kn", FrictionParam::Kn),
+    ("preload", FrictionParam::N0),
+];
+
 /// What a sweep path sets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum SweepTarget {
     Contact(usize, FrictionParam),
     Element(usize, FrictionParam),
+    Strip(usize, FrictionParam),
     DampingModal,
     ForceScale,
 }
@@ -36,6 +45,7 @@ impl Case {
     /// - `contact.<name>.mu|kt|kn|n0` — a `[[contact]]` by name;
     /// - `element.<index>.mu|kt|kn|n0` — an `[[element]]` by 0-based index (the parameters of
     ///   its kind: all four for `friction`, `mu` and `n0` for `tanh_friction`);
+    /// - `strip.<name>.mu|kt|kn|preload` — a `[[strip]]` by its name (`strip<s>` when unnamed);
     /// - `model.damping.modal` — the modal damping ratio (the case must use modal damping);
     /// - `excitation.force_scale` — a factor on the excitation forces.
     ///
@@ -107,6 +117,10 @@ impl Case {
                 .filter(|i| *i < self.element.len() && self.element[*i].sweepable(p))
                 .zip(param(p))
                 .map(|(i, f)| SweepTarget::Element(i, f)),
+            ["strip", name, p] => (0..self.strip.len())
+                .find(|&s| self.strip[s].label(s) == *name)
+                .zip(STRIP_PARAMS.iter().find(|(n, _)| n == p).map(|(_, f)| *f))
+                .map(|(s, f)| SweepTarget::Strip(s, f)),
             ["model", "damping", "modal"]
                 if matches!(self.model.damping, Some(Damping::Modal(_))) =>
             {
@@ -146,6 +160,14 @@ impl Case {
                     .map(|(p, _)| format!("element.{i}.{p}")),
             );
         }
+        for (s, strip) in self.strip.iter().enumerate() {
+            let label = strip.label(s);
+            out.extend(
+                STRIP_PARAMS
+                    .iter()
+                    .map(|(p, _)| format!("strip.{label}.{p}")),
+            );
+        }
         if matches!(self.model.damping, Some(Damping::Modal(_))) {
             out.push("model.damping.modal".into());
         }
@@ -153,7 +175,10 @@ impl Case {
             out.push("excitation.force_scale".into());
         }
         if out.is_empty() {
-            out.push("none (the case has no contact, element, modal damping or excitation)".into());
+            out.push(
+                "none (the case has no contact, element, strip, modal damping or excitation)"
+                    .into(),
+            );
         }
         out
     }
@@ -180,6 +205,10 @@ impl Case {
                     FrictionParam::Kn => e.kn = v,
                     FrictionParam::N0 => e.n0 = Some(v),
                 }
+            }
+            SweepTarget::Strip(s, f) => {
+                let st = &mut self.strip[s];
+                set(f, &mut st.mu, &mut st.kt, &mut st.kn, &mut st.preload);
             }
             SweepTarget::DampingModal => self.model.damping = Some(Damping::Modal(v)),
             SweepTarget::ForceScale => {

@@ -405,6 +405,25 @@ impl Case {
                     )
                 })?;
             }
+            if let Some(hz) = &s.map_hz {
+                self.require(s.map.is_some(), &k("map_hz"), || {
+                    "maps at chosen frequencies need `map` (the number of phase angles)"
+                })?;
+                self.require(
+                    !hz.is_empty() && hz.len() <= strip::MAX_MAP_FREQUENCIES,
+                    &k("map_hz"),
+                    || {
+                        format!(
+                            "give 1 to {} frequencies (found {})",
+                            strip::MAX_MAP_FREQUENCIES,
+                            hz.len()
+                        )
+                    },
+                )?;
+                for (j, &f) in hz.iter().enumerate() {
+                    self.positive(&format!("{}[{j}]", k("map_hz")), f)?;
+                }
+            }
         }
         Ok(())
     }

@@ -33,7 +33,7 @@ use crate::contact::slip_map::slip_map;
 use crate::continuation::PathEnd;
 use crate::error::{Error, Result};
 use crate::harmonics::{HarmonicForce, HarmonicLayout};
-use crate::hbm::frf::frequency_response;
+use crate::hbm::frf::{frequency_response, land_at};
 use crate::hbm::{HbmSystem, ResponseOptions};
 use crate::interface::{build_interfaces, ContactInterface};
 use crate::mesh::Mesh;
@@ -265,25 +265,37 @@ fn matrix_curve(
         .iter()
         .map(|&r| ResponseDof::Row(r as u64))
         .collect();
-    let maps =
-        |q: &[f64], state: &Vec<f64>| strip_maps(case, &elements, &system.layout(), q, state);
+    let maps = |q: &[f64], state: &Vec<f64>, at: Option<f64>| {
+        strip_maps(case, &elements, &system.layout(), q, state, at)
+    };
+    let mut map_hz: Vec<f64> = case
+        .strip
+        .iter()
+        .filter(|s| s.map.is_some())
+        .flat_map(|s| s.map_hz.iter().flatten().copied())
+        .collect();
+    map_hz.sort_by(f64::total_cmp);
+    map_hz.dedup();
     let probe = ContactProbe {
         sizes: Vec::new(),
         evaluate: &|_: &[f64], _: &_, _| Ok(Vec::new()),
         maps: case.strip.iter().any(|s| s.map.is_some()).then_some(&maps),
+        map_hz,
     };
     trace_curve(case, &system, dofs, &probe, stability, rep)
 }
 
 /// The maps of the `[[strip]]` entries that ask for one (`map = N_θ`), at the harmonics `q` with
 /// slider states `state` of the friction elements `elements` (the strips' points follow the
-/// friction `[[element]]` entries, in file order).
+/// friction `[[element]]` entries, in file order): with `at` = None the strips without `map_hz`
+/// (a resonance peak), with `at` = Some(f) those whose `map_hz` lists f (Hz).
 fn strip_maps(
     case: &Case,
     elements: &DofElements,
     layout: &HarmonicLayout,
     q: &[f64],
     state: &[f64],
+    at: Option<f64>,
 ) -> Result<Vec<ContactMap>> {
     let mut start = case
         .element
@@ -296,6 +308,14 @@ fn strip_maps(
         let range = start..start + points.len();
         start = range.end;
         let Some(phases) = strip.map else { continue };
+        let wanted = match (at, &strip.map_hz) {
+            (None, None) => true,
+            (Some(f), Some(hz)) => hz.contains(&f),
+            _ => false,
+        };
+        if !wanted {
+            continue;
+        }
         let map = slip_map(&elements.map_points(layout, q, state, range)?, phases)?;
         maps.push(ContactMap {
             name: strip.label(s),
@@ -371,6 +391,7 @@ fn sector_curve(
         sizes,
         evaluate: &evaluate,
         maps: None,
+        map_hz: Vec::new(),
     };
     let dofs = problem
         .outputs
@@ -425,16 +446,18 @@ pub fn unprojected_warning(iface: &ContactInterface, hint: &str) -> Option<Strin
 type ElementReports<'a, S> =
     dyn Fn(&[f64], &S, bool) -> Result<Vec<(ElementReport, Option<HysteresisLoop>)>> + Sync + 'a;
 
-/// The stick–slip–separation maps at a solution (harmonic vector `q`, force memory `state`).
-type PeakMaps<'a, S> = dyn Fn(&[f64], &S) -> Result<Vec<ContactMap>> + Sync + 'a;
+/// The stick–slip–separation maps at a solution (harmonic vector `q`, force memory `state`): at a
+/// resonance peak (None) or at a chosen frequency (Some(f), Hz).
+type PeakMaps<'a, S> = dyn Fn(&[f64], &S, Option<f64>) -> Result<Vec<ContactMap>> + Sync + 'a;
 
 /// How the contact state of a curve's points is recorded: the element reports, and the number of
 /// elements of each interface (consecutive in the pair set; empty without contact interfaces),
-/// and the maps taken at the resonance peak, if any.
+/// and the maps taken at the resonance peak or at the frequencies `map_hz` (Hz), if any.
 struct ContactProbe<'a, S> {
     sizes: Vec<usize>,
     evaluate: &'a ElementReports<'a, S>,
     maps: Option<&'a PeakMaps<'a, S>>,
+    map_hz: Vec<f64>,
 }
 
 impl<S> ContactProbe<'_, S> {
@@ -546,7 +569,24 @@ fn trace_curve<F: HarmonicForce>(
                 opts.start / (2.0 * PI)
             )),
         ),
-        Ok(traced) => {
+        Ok(mut traced) => {
+            let landed = land_at(
+                system,
+                &mut traced,
+                &contact
+                    .map_hz
+                    .iter()
+                    .map(|f| 2.0 * PI * f)
+                    .collect::<Vec<_>>(),
+                &opts.newton,
+                &response,
+            )?;
+            for (w, why) in &landed.failed {
+                rep.warn(&format!(
+                    "{label}: no map at {:.6} Hz: Newton at that frequency failed from the neighbouring points ({why})",
+                    w / (2.0 * PI)
+                ));
+            }
             if let Some(level) = traced.start_level {
                 rep.info(&format!(
                     "{label}: Newton from the linear solution missed the start point at {:.6} Hz; it was reached by continuation in the excitation level from {level} × the force",
@@ -573,8 +613,25 @@ fn trace_curve<F: HarmonicForce>(
                         contact.record_loops(peak.peak_point, &p.q, &p.state, &mut details)?;
                     }
                     if let Some(at_peak) = contact.maps {
-                        for mut m in at_peak(&p.q, &p.state)? {
+                        for mut m in at_peak(&p.q, &p.state, None)? {
                             m.point = peak.peak_point;
+                            m.omega = p.omega;
+                            maps.push(m);
+                        }
+                    }
+                }
+            }
+            if let Some(at) = contact.maps {
+                for (&f, points) in contact.map_hz.iter().zip(&landed.points) {
+                    if points.is_empty() {
+                        rep.warn(&format!(
+                            "{label}: the curve does not reach {f} Hz: no map there"
+                        ));
+                    }
+                    for &k in points {
+                        let p = &traced.points[k];
+                        for mut m in at(&p.q, &p.state, Some(f))? {
+                            m.point = k;
                             m.omega = p.omega;
                             maps.push(m);
                         }

@@ -7,7 +7,7 @@ use super::system::{FrequencyPath, HbmSystem, LevelPath};
 use crate::continuation::{trace, trace_from, ContinuationOptions, PathEnd, PathPoint};
 use crate::error::{Error, Result};
 use crate::harmonics::HarmonicForce;
-use crate::nonlinear::{solve_fixed, NewtonSolution, ParameterSystem};
+use crate::nonlinear::{solve_fixed, NewtonOptions, NewtonSolution, ParameterSystem};
 
 /// One point of a frequency response.
 #[derive(Clone, Debug)]
@@ -97,6 +97,95 @@ pub fn frequency_response<F: HarmonicForce>(
         retries: path.retries,
         start_level,
     })
+}
+
+/// The points of a traced response at chosen frequencies ([`land_at`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Landed {
+    /// Per requested frequency, the indices in [`Frf::points`] of the points at exactly that ω,
+    /// in path order (several inside a fold, none where the path does not reach it).
+    pub points: Vec<Vec<usize>>,
+    /// Crossings where Newton at the fixed frequency did not converge (ω in rad/s, why).
+    pub failed: Vec<(f64, String)>,
+}
+
+/// Adds to `frf` a point at every crossing of its path with each of the frequencies `omegas`
+/// (rad/s), so that a traced response has exact solutions there (inside a fold, one per branch).
+///
+/// Where ω* lies strictly between the frequencies of consecutive points i and i + 1, Newton at
+/// the fixed ω* starts from Q interpolated linearly in ω between them, with the force memory of
+/// point i; the solution is inserted between them, its arc length interpolated the same way and
+/// its outputs (and Hill stability when `response.stability`) recovered as for the traced points.
+/// A point already at ω* is kept as it is. A crossing whose Newton fails is left out and listed in
+/// [`Landed::failed`].
+pub fn land_at<F: HarmonicForce>(
+    system: &HbmSystem<'_, F>,
+    frf: &mut Frf<F::State>,
+    omegas: &[f64],
+    newton: &NewtonOptions,
+    response: &ResponseOptions,
+) -> Result<Landed> {
+    let fp = FrequencyPath { system, level: 1.0 };
+    let mut failed = Vec::new();
+    // (insert after point i, the new point), in path order
+    let mut inserted: Vec<(usize, FrfPoint<F::State>)> = Vec::new();
+    for i in 0..frf.points.len().saturating_sub(1) {
+        let (a, b) = (&frf.points[i], &frf.points[i + 1]);
+        let mut between: Vec<f64> = omegas
+            .iter()
+            .copied()
+            .filter(|&w| (a.omega - w) * (b.omega - w) < 0.0)
+            .collect();
+        // in path order between the two points
+        between.sort_by(|x, y| ((x - a.omega).abs()).total_cmp(&(y - a.omega).abs()));
+        between.dedup();
+        for w in between {
+            let t = (w - a.omega) / (b.omega - a.omega);
+            let x0: Vec<f64> = a.q.iter().zip(&b.q).map(|(p, q)| p + t * (q - p)).collect();
+            match solve_fixed(&fp, &x0, w, &a.state, newton) {
+                Ok(sol) => {
+                    let stable = if response.stability {
+                        Some(is_stable(system, &sol.x, w, &sol.state)?)
+                    } else {
+                        None
+                    };
+                    inserted.push((
+                        i,
+                        FrfPoint {
+                            omega: w,
+                            response: output_response(system, &sol.x, w, 1.0, response)?,
+                            arc_length: a.arc_length + t * (b.arc_length - a.arc_length),
+                            iterations: sol.iterations,
+                            residual: sol.residual,
+                            q: sol.x,
+                            state: sol.state,
+                            stable,
+                        },
+                    ))
+                }
+                Err(f) => failed.push((w, f.message)),
+            }
+        }
+    }
+    if !inserted.is_empty() {
+        let old = std::mem::take(&mut frf.points);
+        let mut extra = inserted.into_iter().peekable();
+        for (i, p) in old.into_iter().enumerate() {
+            frf.points.push(p);
+            while let Some((_, q)) = extra.next_if(|(j, _)| *j == i) {
+                frf.points.push(q);
+            }
+        }
+    }
+    let points = omegas
+        .iter()
+        .map(|&w| {
+            (0..frf.points.len())
+                .filter(|&k| frf.points[k].omega == w)
+                .collect()
+        })
+        .collect();
+    Ok(Landed { points, failed })
 }
 
 /// The smallest fraction of the excitation the level continuation of [`start_point`] starts from

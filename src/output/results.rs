@@ -29,7 +29,7 @@
 //! | `/contact/<name>/elements/<i>/dissipated_energy` | f64 [P, E] | J | energy dissipated per cycle by each element |
 //! | `/contact/<name>/elements/<i>/loop_u`, `loop_force` | f64 [E, N_t, 2] | m, N | hysteresis loops at point `loop_point` (attribute; the resonance peak): u1, u2 and f1, f2 over the last period |
 //! | `/contact/<name>/elements/<i>/loop_approach`, `loop_normal_force` | f64 [E, N_t] | m, N | normal approach v and normal force f_n at the same point |
-//! | `/contact/<name>/map/<i>` | group | | stick–slip–separation map of a `[[strip]]` at the peak of curve i ([`ContactMap`]): `phase` \[N_θ\], `position` \[E\], `state` and `friction_ratio` [E, N_θ], `transition_offsets` \[E + 1\], `transition_angles` and `transition_states` \[T\] |
+//! | `/contact/<name>/map/<k>` | group | | stick–slip–separation map k of a `[[strip]]` at the peak of a curve or at a chosen frequency ([`ContactMap`]): `phase` \[N_θ\], `position` \[E\], `state` and `friction_ratio` [E, N_θ], `transition_offsets` \[E + 1\], `transition_angles` and `transition_states` \[T\] |
 //! | `/march` attributes | | | `scheme`, `wall_seconds`, `omega` (rad/s), `frequency_hz`, `steps` |
 //! | `/march/time` | f64 \[T\] | s | instants |
 //! | `/march/response` | f64 [T, R] | m | response DOFs (`/march/response_dofs`) |
@@ -180,7 +180,7 @@ pub struct ContactData {
 }
 
 /// A stick–slip–separation map of a friction strip at one point of a curve
-/// (`/contact/<name>/map/<i>`, [`crate::contact::slip_map`]): E points, N_θ phase angles.
+/// (`/contact/<name>/map/<k>`, [`crate::contact::slip_map`]): E points, N_θ phase angles.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ContactMap {
     /// The strip's name.
@@ -189,7 +189,7 @@ pub struct ContactMap {
     pub mu: f64,
     /// Index of the curve in [`ResultsFile::frfs`].
     pub curve: usize,
-    /// Index of the point in that curve (the resonance peak).
+    /// Index of the point in that curve (the resonance peak, or a point at a chosen frequency).
     pub point: usize,
     /// Excitation frequency ω of the point (rad/s).
     pub omega: f64,
@@ -258,7 +258,7 @@ pub struct ResultsFile {
     pub contacts: Vec<ContactData>,
     /// The time-marching run, `/march`.
     pub march: Option<MarchData>,
-    /// Stick–slip–separation maps of friction strips, `/contact/<name>/map/<i>` (read back
+    /// Stick–slip–separation maps of friction strips, `/contact/<name>/map/<k>` (read back
     /// sorted by name, then curve).
     pub maps: Vec<ContactMap>,
 }
@@ -577,11 +577,16 @@ fn contact_group(parent: &mut Group, contact: &ContactData, frfs: &[FrfData]) ->
     Ok(())
 }
 
-/// `/contact/<name>/map/<curve>` of one map (with `model = "strip"` and `mu` on a new
-/// `/contact/<name>`).
+/// `/contact/<name>/map/<k>` of one map, k the number of maps of `<name>` written before it
+/// (with `model = "strip"` and `mu` on a new `/contact/<name>`).
 fn map_group(parent: &mut Group, m: &ContactMap, frfs: &[FrfData]) -> Result<()> {
     let (e, n) = (m.position.len(), m.phase.len());
-    let what = format!("/contact/{}/map/{}", m.name, m.curve);
+    let k = parent
+        .groups
+        .get(&m.name)
+        .and_then(|g| g.groups.get("map"))
+        .map_or(0, |g| g.groups.len());
+    let what = format!("/contact/{}/map/{k} (curve {})", m.name, m.curve);
     let points = frfs.get(m.curve).map(|f| f.points.len());
     if points.is_none_or(|p| m.point >= p) {
         return Err(size_error(format!(
@@ -608,12 +613,9 @@ fn map_group(parent: &mut Group, m: &ContactMap, frfs: &[FrfData]) -> Result<()>
             .set_attr("model", Attr::Str("strip".into()))
             .set_attr("mu", Attr::F64(m.mu));
     }
-    let maps = group.group("map");
-    if maps.groups.contains_key(&m.curve.to_string()) {
-        return Err(size_error(format!("{what}: written twice")));
-    }
-    let g = maps.group(&m.curve.to_string());
-    g.set_attr("point", Attr::U64(m.point as u64))
+    let g = group.group("map").group(&k.to_string());
+    g.set_attr("curve", Attr::U64(m.curve as u64))
+        .set_attr("point", Attr::U64(m.point as u64))
         .set_attr("omega", Attr::F64(m.omega));
     g.add(
         "phase",
@@ -962,14 +964,14 @@ pub fn read_results(path: &Path) -> Result<ResultsFile> {
     };
     let mut maps = Vec::new();
     for name in &map_names {
-        let mut curves: Vec<usize> = reader
+        let mut keys: Vec<usize> = reader
             .group_names(&format!("/contact/{name}/map"))?
             .iter()
             .filter_map(|c| c.parse().ok())
             .collect();
-        curves.sort_unstable();
-        for curve in curves {
-            maps.push(read_map(&reader, name, curve)?);
+        keys.sort_unstable();
+        for k in keys {
+            maps.push(read_map(&reader, name, k)?);
         }
     }
     Ok(ResultsFile {
@@ -981,8 +983,15 @@ pub fn read_results(path: &Path) -> Result<ResultsFile> {
     })
 }
 
-fn read_map(reader: &H5Reader, name: &str, curve: usize) -> Result<ContactMap> {
-    let base = format!("/contact/{name}/map/{curve}");
+/// `/contact/<name>/map/<k>`; its curve is the attribute `curve` (files without it have one map
+/// per curve, k = the curve).
+fn read_map(reader: &H5Reader, name: &str, k: usize) -> Result<ContactMap> {
+    let base = format!("/contact/{name}/map/{k}");
+    let curve = if reader.attrs(&base)?.contains_key("curve") {
+        reader.attr_u64(&base, "curve")? as usize
+    } else {
+        k
+    };
     let at = |n: &str| format!("{base}/{n}");
     let position = reader.f64_vector(&at("position"))?;
     let phase = reader.f64_vector(&at("phase"))?;

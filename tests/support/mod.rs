@@ -5,6 +5,7 @@
 #![allow(dead_code)]
 
 pub mod batch;
+pub mod chain;
 pub mod cli;
 pub mod contact;
 pub mod cyclic;

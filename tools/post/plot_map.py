@@ -1,14 +1,14 @@
 #!/usr/bin/env python3
 """Stick–slip–separation map of a friction strip from an nlrom results file.
 
-    python3 tools/post/plot_map.py RESULT.h5 [--strip NAME] [--curve I] [--out DIR]
+    python3 tools/post/plot_map.py RESULT.h5 [--strip NAME] [--map K] [--out DIR]
 
-Reads (h5py only, through tools/post/nlrom_results.py) `/contact/<name>/map/<i>` written by
+Reads (h5py only, through tools/post/nlrom_results.py) `/contact/<name>/map/<k>` written by
 `nlrom solve` for a `[[strip]]` with `map = N` (docs/results-file.md) and draws, as Cigeroglu,
-An & Menq (2007) Figs 4–8, the map over (position along the strip, phase angle of the excitation):
+An & Menq (2007) Figs 4–8 and 14–15, the map over (position along the strip, phase angle of the excitation):
 colour f/(μn) (+1 positive slip, −1 negative slip, in between stick), separation in grey, and the
 exact transition angles of every point as black dots (the stick–slip boundaries). Writes
-`map_<name>_<i>.png` into DIR.
+`map_<name>_<k>.png` into DIR.
 
 Also checks the stored samples against the stored transitions (the state at τ_j is the state
 entered at the last transition at or before τ_j) and prints, as JSON, the number of points, angles,
@@ -56,7 +56,7 @@ def check(m):
     return bad
 
 
-def plot(m, name, curve, out):
+def plot(m, name, k, out):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -76,10 +76,11 @@ def plot(m, name, curve, out):
     ax.set_ylabel("phase angle of the excitation τ (deg)")
     ax.set_ylim(0, 360)
     freq = m["attrs"]["omega"] / (2 * np.pi)
+    curve = m["attrs"].get("curve", k)
     ax.set_title(f"{name}, curve {curve}, {freq:.6g} Hz (grey: separated)")
     ax.legend(loc="upper right", fontsize=8)
     fig.tight_layout()
-    path = out / f"map_{name}_{curve}.png"
+    path = out / f"map_{name}_{k}.png"
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
@@ -89,7 +90,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("results")
     ap.add_argument("--strip", help="strip name (default: the first with a map)")
-    ap.add_argument("--curve", type=int, default=0)
+    ap.add_argument("--map", type=int, default=0, help="the map k of the strip (default 0)")
     ap.add_argument("--out", default=".")
     args = ap.parse_args(argv)
     tree = nlrom_results.load(args.results)
@@ -100,12 +101,12 @@ def main(argv=None):
     if name not in names:
         raise SystemExit(f"no map of strip {name!r}; the file has {names}")
     maps = tree["contact"][name]["map"]
-    if str(args.curve) not in maps:
-        raise SystemExit(f"strip {name!r} has no map of curve {args.curve}; it has {sorted(maps)}")
-    m = maps[str(args.curve)]
+    if str(args.map) not in maps:
+        raise SystemExit(f"strip {name!r} has no map {args.map}; it has {sorted(maps)}")
+    m = maps[str(args.map)]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    path = plot(m, name, args.curve, out)
+    path = plot(m, name, args.map, out)
     report = {
         "png": str(path),
         "points": int(m["state"].shape[0]),
