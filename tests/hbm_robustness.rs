@@ -7,8 +7,6 @@
 mod corpus;
 
 use nlrom::continuation::PathEnd;
-use nlrom::hbm::frf::frequency_response;
-use nlrom::hbm::{HbmSystem, ResponseOptions};
 
 const TOLERANCE: f64 = 1e-8;
 
@@ -100,14 +98,7 @@ fn the_exact_cycle_passes_where_the_sampled_law_stops() {
 fn a_sharp_bend_far_past_a_high_resonance_is_followed() {
     let case = corpus::evaluated(corpus::case(17, 256), corpus::Evaluation::Analytic);
     assert!(case.label.contains("chain n=5 H=5"), "{}", case.label);
-    let system = HbmSystem::new(case.layout, &case.model, &case.force).expect("valid system");
-    let frf = frequency_response(
-        &system,
-        &case.options,
-        &ResponseOptions::default(),
-        &mut |_| {},
-    )
-    .expect("a path");
+    let frf = corpus::trace(&case).expect("a path");
     assert_eq!(frf.end, PathEnd::ReachedEnd, "{}", case.label);
     let size = |q: &[f64]| q.iter().map(|v| v * v).sum::<f64>().sqrt();
     let largest = frf.points.iter().map(|p| size(&p.q)).fold(0.0, f64::max);
@@ -143,14 +134,7 @@ fn a_sharp_bend_far_past_a_high_resonance_is_followed() {
 fn a_resonance_of_high_amplitude_is_passed_once() {
     let case = corpus::case(9, 256);
     assert!(case.label.contains("chain n=5"), "{}", case.label);
-    let system = HbmSystem::new(case.layout, &case.model, &case.force).expect("valid system");
-    let frf = frequency_response(
-        &system,
-        &case.options,
-        &ResponseOptions::default(),
-        &mut |_| {},
-    )
-    .expect("a path");
+    let frf = corpus::trace(&case).expect("a path");
     assert_eq!(frf.end, PathEnd::ReachedEnd, "{}", case.label);
     let size: Vec<f64> = frf
         .points
