@@ -46,14 +46,14 @@ fn scale(c: &mut Criterion) {
     fp.evaluate(&x, 0.8, &fp.initial_state(), &mut lin_blocks)
         .unwrap();
     let b = lin.residual.clone();
-    let time = |s: &LinearSolver, a: &Linearization| {
+    let time = |s: &LinearSolver, a: &mut Linearization| {
         let t = Instant::now();
-        let (x, f) = s.factor_solve(&a.jacobian, &b).unwrap();
+        let (x, f) = s.factor_solve(&mut a.jacobian, &b).unwrap();
         (t.elapsed().as_secs_f64(), x, f.path())
     };
-    let (td, xd, _) = time(&dense, &lin);
-    let (ts, xs, path) = time(&structured, &lin_blocks);
-    let (_, _, auto_path) = time(&auto, &lin_blocks);
+    let (td, xd, _) = time(&dense, &mut lin);
+    let (ts, xs, path) = time(&structured, &mut lin_blocks);
+    let (_, _, auto_path) = time(&auto, &mut lin_blocks);
     let diff = xd
         .iter()
         .zip(&xs)
@@ -72,13 +72,17 @@ fn scale(c: &mut Criterion) {
     let mut g = c.benchmark_group("hbm_scale");
     g.sample_size(10).measurement_time(Duration::from_secs(8));
     g.bench_function("dense_lu", |bench| {
-        bench.iter(|| dense.factor_solve(&lin.jacobian, &b).unwrap())
+        bench.iter(|| dense.factor_solve(&mut lin.jacobian, &b).unwrap())
     });
     g.bench_function("structured", |bench| {
-        bench.iter(|| structured.factor_solve(&lin_blocks.jacobian, &b).unwrap())
+        bench.iter(|| {
+            structured
+                .factor_solve(&mut lin_blocks.jacobian, &b)
+                .unwrap()
+        })
     });
     g.bench_function("auto", |bench| {
-        bench.iter(|| auto.factor_solve(&lin_blocks.jacobian, &b).unwrap())
+        bench.iter(|| auto.factor_solve(&mut lin_blocks.jacobian, &b).unwrap())
     });
     g.bench_function("evaluate_dense", |bench| {
         bench.iter(|| fp.evaluate(&x, 0.8, &fp.initial_state(), &mut lin).unwrap())

@@ -521,7 +521,10 @@ fn initial_tangent(
     let mut border = vec![0.0; n + 1];
     border[n] = direction;
     let jacobian = std::mem::take(&mut lin.jacobian);
-    tangent_of(&bordered(jacobian, &lin.d_parameter, s, &border), solver)
+    tangent_of(
+        &mut bordered(jacobian, &lin.d_parameter, s, &border),
+        solver,
+    )
 }
 
 /// A unit tangent and its orientation: the sign (±1) of det [∂r/∂u ∂r/∂μ; tᵀ].
@@ -561,7 +564,7 @@ impl Tangent {
 /// Solves [∂r/∂u ∂r/∂μ; bᵀ] t = [0; 1] (`matrix`, from [`bordered`]) and normalises t (so
 /// that t·b > 0). det [J; tᵀ] has the sign of det [J; bᵀ]: with c the cofactor vector of J
 /// (J c = 0), det [J; vᵀ] = v · c and t ∥ c / (b · c).
-fn tangent_of(matrix: &Jacobian, solver: &LinearSolver) -> Option<Tangent> {
+fn tangent_of(matrix: &mut Jacobian, solver: &LinearSolver) -> Option<Tangent> {
     let mut rhs = vec![0.0; matrix.dim()];
     rhs[matrix.dim() - 1] = 1.0;
     let (t, f) = solver.factor_solve(matrix, &rhs)?;
@@ -708,7 +711,7 @@ fn correct_on<S: ParameterSystem>(
         None => eval(&it.z, true).ok().and_then(|e| e.matrix),
     };
     let new_tangent = matrix.and_then(|m| {
-        let m = if border == tangent {
+        let mut m = if border == tangent {
             m
         } else {
             rebordered(m, tangent)
@@ -720,7 +723,11 @@ fn correct_on<S: ParameterSystem>(
             .flatten();
         match near {
             Some((t, sign)) => unit_tangent(t, sign, Some(factors)),
-            None => tangent_of(&m, &solver),
+            None => {
+                // the new factors replace the old ones, which are dropped first
+                drop(factors);
+                tangent_of(&mut m, &solver)
+            }
         }
     });
     let z = it.z;
@@ -774,8 +781,10 @@ fn kink_step<S: ParameterSystem>(
             .ok()?;
         let along = scaled_jacobian_times(&lin, s, tangent);
         let jacobian = std::mem::take(&mut lin.jacobian);
-        let Some(beyond) = tangent_of(&bordered(jacobian, &lin.d_parameter, s, tangent), &solver)
-        else {
+        let Some(beyond) = tangent_of(
+            &mut bordered(jacobian, &lin.d_parameter, s, tangent),
+            &solver,
+        ) else {
             continue;
         };
         let beyond = beyond.oriented(orientation);

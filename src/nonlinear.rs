@@ -205,7 +205,7 @@ pub fn newton_core<E>(
             current =
                 eval(&current.z, true).map_err(|e| fail(format!("iteration {it}: {e}"), it))?;
         }
-        let matrix = current
+        let mut matrix = current
             .matrix
             .take()
             .ok_or_else(|| fail(format!("no Jacobian at iteration {it}"), it))?;
@@ -222,8 +222,10 @@ pub fn newton_core<E>(
                 step
             }
             None => {
+                // the older factors are not needed any more: dropped before the new ones exist
+                drop(factors.take());
                 let (step, f) = solver
-                    .factor_solve(&matrix, &rhs)
+                    .factor_solve(&mut matrix, &rhs)
                     .ok_or_else(|| fail(format!("singular Jacobian at iteration {it}"), it))?;
                 factors = Some(f);
                 refresh = false;
@@ -422,6 +424,7 @@ pub fn solve_fixed<S: ParameterSystem>(
     let residual = it.norm();
     let (mut linearization, end) = it.extra;
     linearization.jacobian = it.matrix.unwrap_or_default();
+    linearization.jacobian.materialize();
     Ok(NewtonSolution {
         x: it.z,
         parameter: lambda,

@@ -539,7 +539,7 @@ fn small_mesh(names: &[&str]) -> Mesh {
         kind: ElementType::Tetra4,
         entity: 1,
         physicals: vec![1],
-        tags: vec![1],
+        tags: vec![1].into(),
         connectivity: vec![0, 1, 2, 3],
     }];
     for (i, n) in names.iter().enumerate() {
@@ -553,7 +553,7 @@ fn small_mesh(names: &[&str]) -> Mesh {
             kind: ElementType::Triangle3,
             entity: tag,
             physicals: vec![tag],
-            tags: vec![2 + i as u64],
+            tags: vec![2 + i as u64].into(),
             connectivity: vec![0, 1, 2],
         });
     }

@@ -394,7 +394,7 @@ fn brute_force(mesh: &Mesh, order: usize, x: [f64; 3], coincident: f64, face: u6
         let xs: Vec<[f64; 3]> = conn.iter().map(|&n| mesh.coords[n as usize]).collect();
         let (uv, d) = nearest_on_face(order, &xs, x);
         distance = distance.min(d.sqrt());
-        if tris.tags[e] == face {
+        if tris.tags.at(e) == face {
             chosen = Some((e, uv, d));
         }
     }

@@ -290,7 +290,7 @@ fn swap_v41_binary(bytes: &[u8]) -> Vec<u8> {
         out.extend_from_slice(&b.kind.gmsh_id().to_be_bytes());
         out.extend_from_slice(&(b.len() as u64).to_be_bytes());
         for (e, nodes) in b.elements().enumerate() {
-            out.extend_from_slice(&b.tags[e].to_be_bytes());
+            out.extend_from_slice(&b.tags.at(e).to_be_bytes());
             for &i in nodes {
                 out.extend_from_slice(&m.node_tags[i as usize].to_be_bytes());
             }

@@ -8,7 +8,7 @@
 mod support;
 
 use nlrom::mesh::msh::{parse_msh, read_msh};
-use nlrom::mesh::Mesh;
+use nlrom::mesh::{ElementTags, Mesh};
 use support::cli::{nlrom, stderr};
 
 /// Nodes of an n × n × n lattice (tags from 1, coordinates with 17 significant digits, some
@@ -65,7 +65,8 @@ fn num(k: usize, v: f64) -> String {
     }
 }
 
-fn msh41(m: &Lattice, sep: &str) -> String {
+/// Element tags 1, 2, … as Gmsh writes them, or with a jump of 1000 after element `jump`.
+fn msh41(m: &Lattice, sep: &str, jump: Option<usize>) -> String {
     let (nn, ne) = (m.nodes.len(), m.tets.len());
     let mut s = String::from(
         "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n1\n3 1 \"volume\"\n$EndPhysicalNames\n\
@@ -85,9 +86,14 @@ fn msh41(m: &Lattice, sep: &str) -> String {
     }
     s += &format!("$EndNodes\n$Elements\n1 {ne} 1 {ne}\n3 1 4 {ne}\n");
     for (e, t) in m.tets.iter().enumerate() {
-        s += &format!("{} {} {} {} {}{sep}\n", e + 1, t[0], t[1], t[2], t[3]);
+        let tag = element_tag(e, jump);
+        s += &format!("{tag} {} {} {} {}{sep}\n", t[0], t[1], t[2], t[3]);
     }
     s + "$EndElements\n"
+}
+
+fn element_tag(e: usize, jump: Option<usize>) -> u64 {
+    e as u64 + 1 + if jump.is_some_and(|j| e > j) { 1000 } else { 0 }
 }
 
 fn msh22(m: &Lattice, sep: &str, tri_every: usize) -> String {
@@ -129,8 +135,10 @@ fn same(a: &Mesh, b: &Mesh) {
 #[test]
 fn parallel_blocks_read_as_the_sequential_reader_does() {
     let m = lattice(26); // 17 576 nodes, 93 750 tetrahedra: several chunks per block
+    let jump = Some(m.tets.len() * 2 / 3); // in a middle chunk
     for (name, fast, slow) in [
-        ("4.1", msh41(&m, ""), msh41(&m, "\n")),
+        ("4.1", msh41(&m, "", None), msh41(&m, "\n", None)),
+        ("4.1 tag jump", msh41(&m, "", jump), msh41(&m, "\n", jump)),
         ("2.2", msh22(&m, "", 4999), msh22(&m, "\n", 4999)),
     ] {
         let a = parse_msh(fast.as_bytes()).unwrap();
@@ -145,6 +153,14 @@ fn parallel_blocks_read_as_the_sequential_reader_does() {
             let want: [f64; 3] = std::array::from_fn(|c| num(k + c, x[c]).parse().unwrap());
             assert_eq!(a.coords[k], want, "{name}: node {t}");
         }
+    }
+    // Element tags: a run as Gmsh writes them, the list of the file's tags otherwise.
+    for j in [None, jump] {
+        let a = parse_msh(msh41(&m, "", j).as_bytes()).unwrap();
+        let tags = &a.blocks[0].tags;
+        assert_eq!(matches!(tags, ElementTags::Run { .. }), j.is_none());
+        let want: Vec<u64> = (0..m.tets.len()).map(|e| element_tag(e, j)).collect();
+        assert_eq!(tags.iter().collect::<Vec<_>>(), want);
     }
     // 2.2: the triangles split the tetrahedra into runs; blocks alternate as in the file.
     let a = parse_msh(msh22(&m, "", 4999).as_bytes()).unwrap();
@@ -162,10 +178,22 @@ fn a_bad_token_deep_in_a_large_block_is_reported_at_its_line() {
     let cases: Vec<(String, &str, &str, &str)> = vec![
         // (file, token to break, its replacement, expected message part)
         (
-            msh41(&m, ""),
+            msh41(&m, "", None),
             "\n13000\n",
             "\n13x00\n",
             "expected an unsigned integer, found '13x00'",
+        ),
+        (
+            msh41(&m, "", None),
+            "\n50001 ",
+            "\n5000y ",
+            "expected an unsigned integer, found '5000y'",
+        ),
+        (
+            msh41(&m, "", Some(1000)),
+            "\n61001 ",
+            "\n61001 7z ",
+            "expected an unsigned integer, found '7z'",
         ),
         (
             msh22(&m, "", 4999),
@@ -182,7 +210,7 @@ fn a_bad_token_deep_in_a_large_block_is_reported_at_its_line() {
         assert_eq!(e.line, line_of(&broken, at), "{e}");
     }
     // A coordinate that is not a number, in the 12 000th coordinate line of the 4.1 block.
-    let text = msh41(&m, "");
+    let text = msh41(&m, "", None);
     let start = text.find("$Nodes").unwrap();
     let line_start =
         (0..12_000 + m.nodes.len() + 3).fold(start, |p, _| text[p..].find('\n').unwrap() + p + 1);
@@ -221,7 +249,7 @@ fn a_bad_line_in_a_parallel_chunk_names_the_file_and_the_line() {
         // (file name, text, record to break, its replacement, section, expected message part)
         (
             "elements41.msh",
-            msh41(&m, ""),
+            msh41(&m, "", None),
             format!("\n60000 {} ", m.tets[59_999][0]),
             "\n60000 987654321 ".to_string(),
             "$Elements",

@@ -279,7 +279,7 @@ fn check_indices(mesh: &Mesh, block: &ElementBlock, describe: &dyn Fn() -> Strin
         Some(p) => Err(Error::input(format!(
             "{}: element {} refers to node index {}, but the mesh has {n} nodes",
             describe(),
-            block.tags[p / block.kind.num_nodes()],
+            block.tags.at(p / block.kind.num_nodes()),
             block.connectivity[p]
         ))),
     }
@@ -420,7 +420,7 @@ fn bad_jacobian_error(
         "{}: {} element {} (volume entity {}) has a non-positive Jacobian determinant ({detail}): it is inverted or degenerate{others}; check its node order and regenerate or repair the mesh",
         mesh.source_name(),
         vol.block.kind,
-        vol.block.tags[i],
+        vol.block.tags.at(i),
         vol.block.entity
     ))
 }

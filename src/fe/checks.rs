@@ -48,7 +48,7 @@ pub fn mesh_volume(mesh: &Mesh, quad: &Quadrature) -> Result<f64> {
                         "{}: {} element {} has a non-positive Jacobian determinant ({}){}",
                         mesh.source_name(),
                         block.kind,
-                        block.tags[e],
+                        block.tags.at(e),
                         b.describe(),
                         if nodes.iter().any(|&i| i as usize >= n) {
                             " (node index out of range)"

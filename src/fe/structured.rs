@@ -20,7 +20,9 @@
 use std::path::PathBuf;
 
 use crate::error::{Error, Result};
-use crate::mesh::{ElementBlock, ElementType, Mesh, MshFormat, MshVersion, PhysicalGroup};
+use crate::mesh::{
+    ElementBlock, ElementTags, ElementType, Mesh, MshFormat, MshVersion, PhysicalGroup,
+};
 
 use super::shape::node_parents;
 
@@ -321,7 +323,10 @@ impl NodeSet {
             kind: spec.kind,
             entity: 1,
             physicals: vec![1],
-            tags: (1..=n_vol as u64).collect(),
+            tags: ElementTags::Run {
+                first: 1,
+                len: n_vol,
+            },
             connectivity: volume.iter().map(|&k| index[k]).collect(),
         }];
         let mut next_tag = n_vol as u64 + 1;
@@ -329,7 +334,10 @@ impl NodeSet {
             let Some(&(face_kind, _)) = faces.first() else {
                 continue;
             };
-            let tags: Vec<u64> = (next_tag..next_tag + faces.len() as u64).collect();
+            let tags = ElementTags::Run {
+                first: next_tag,
+                len: faces.len(),
+            };
             next_tag += faces.len() as u64;
             blocks.push(ElementBlock {
                 kind: face_kind,

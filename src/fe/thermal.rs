@@ -171,7 +171,7 @@ pub fn assemble_thermal(
                     Error::input(format!(
                         "{}: element {} has a node index out of range",
                         mesh.source_name(),
-                        block.tags[e]
+                        block.tags.at(e)
                     ))
                 })?;
             let el =
@@ -179,7 +179,7 @@ pub fn assemble_thermal(
                     Error::input(format!(
                         "{}: element {}: {err}",
                         mesh.source_name(),
-                        block.tags[e]
+                        block.tags.at(e)
                     ))
                 })?;
             for (a, &i) in nodes.iter().enumerate() {

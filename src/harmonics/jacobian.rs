@@ -9,15 +9,35 @@
 //! (2H + 1)² of it (10 % at H = 3, 5 % at H = 7).
 
 use std::ops::{Index, IndexMut};
+use std::sync::Arc;
 
 use faer::{Mat, MatMut, MatRef};
 
 /// The value of an entry that is not stored.
 static ZERO: f64 = 0.0;
 
+/// A matrix that is block-diagonal over the partition of a [`BlockJacobian`] and is applied to
+/// vectors without being formed (e.g. the condensed dynamic stiffness D̄(ω) of the harmonic
+/// balance, whose matrix costs a product of order n_N² n_L per harmonic and frequency, against
+/// products of order n_N² + n_L² per vector once D_LL is factorised). A [`BlockJacobian`] holds
+/// one as a pending term of its diagonal blocks ([`BlockJacobian::set_pending`]): products and
+/// norms include it, and [`BlockJacobian::materialize`] adds it to the blocks before they are
+/// factorised.
+pub trait PendingBlocks: Send + Sync + std::fmt::Debug {
+    /// y += A_b x on diagonal block `b` (`x` and `y` over the block's rows).
+    fn apply(&self, b: usize, x: &[f64], y: &mut [f64]);
+
+    /// out += A_b (the block's order).
+    fn add_to(&self, b: usize, out: MatMut<'_, f64>);
+
+    /// ‖A_b‖₁ (max column sum) or an estimate of it, for the scale of backward errors.
+    fn norm_1(&self, b: usize) -> f64;
+}
+
 /// A square matrix stored as dense diagonal blocks over a partition of its leading rows and
 /// columns, the entries outside the blocks as a list of (row, column, value), and at most one
-/// border row and column after the blocks (module documentation).
+/// border row and column after the blocks (module documentation); optionally a block-diagonal
+/// term not yet added to the blocks ([`PendingBlocks`]).
 #[derive(Clone, Debug, Default)]
 pub struct BlockJacobian {
     /// First row of each block, then the number of block rows.
@@ -32,6 +52,8 @@ pub struct BlockJacobian {
     /// The border: its column (length of the block rows + 1, the corner last) and its row over
     /// the block columns.
     border: Option<(Vec<f64>, Vec<f64>)>,
+    /// c A of a block-diagonal term not yet in `blocks` (A and the factor c).
+    pending: Option<(Arc<dyn PendingBlocks>, f64)>,
 }
 
 impl BlockJacobian {
@@ -50,6 +72,7 @@ impl BlockJacobian {
             off: Vec::new(),
             coalesced: true,
             border: None,
+            pending: None,
         }
     }
 
@@ -73,9 +96,48 @@ impl BlockJacobian {
         &self.starts
     }
 
-    /// Diagonal block `b`.
+    /// Diagonal block `b` as stored: without a pending term ([`BlockJacobian::materialize`]
+    /// first to read the whole block).
     pub fn block(&self, b: usize) -> MatRef<'_, f64> {
         self.blocks[b].as_ref()
+    }
+
+    /// Sets the block-diagonal term A, added to the diagonal blocks only by
+    /// [`BlockJacobian::materialize`] (until then applied in products); replaces a pending one.
+    pub fn set_pending(&mut self, a: Arc<dyn PendingBlocks>) {
+        self.pending = Some((a, 1.0));
+    }
+
+    /// Drops a pending term without adding it (e.g. storage kept for reuse).
+    pub fn drop_pending(&mut self) {
+        self.pending = None;
+    }
+
+    /// Whether a block-diagonal term is pending.
+    pub fn has_pending(&self) -> bool {
+        self.pending.is_some()
+    }
+
+    /// Adds the pending block-diagonal term (if any) to the diagonal blocks, in parallel over
+    /// them.
+    pub fn materialize(&mut self) {
+        use rayon::prelude::*;
+        let Some((a, c)) = self.pending.take() else {
+            return;
+        };
+        self.blocks.par_iter_mut().enumerate().for_each(|(b, m)| {
+            if c == 1.0 {
+                a.add_to(b, m.as_mut());
+            } else {
+                let mut t = Mat::<f64>::zeros(m.nrows(), m.ncols());
+                a.add_to(b, t.as_mut());
+                for j in 0..m.ncols() {
+                    for i in 0..m.nrows() {
+                        m[(i, j)] += c * t[(i, j)];
+                    }
+                }
+            }
+        });
     }
 
     /// Diagonal block `b`, to write.
@@ -88,12 +150,13 @@ impl BlockJacobian {
         self.starts.partition_point(|&s| s <= i) - 1
     }
 
-    /// Sets every entry to zero and removes the border.
+    /// Sets every entry to zero and removes the border and any pending term.
     pub fn clear(&mut self) {
         self.blocks.iter_mut().for_each(|b| b.fill(0.0));
         self.off.clear();
         self.coalesced = true;
         self.border = None;
+        self.pending = None;
     }
 
     /// Adds `v` at (i, j) of the block rows and columns.
@@ -178,6 +241,9 @@ impl BlockJacobian {
             }
         }
         self.off.iter_mut().for_each(|e| e.2 *= c);
+        if let Some(p) = &mut self.pending {
+            p.1 *= c;
+        }
     }
 
     /// Appends the border: `column` (length [`BlockJacobian::inner`] + 1, the corner last) and
@@ -219,6 +285,16 @@ impl BlockJacobian {
                 faer::get_global_parallelism(),
             );
         }
+        if let Some((a, c)) = &self.pending {
+            for (b, w) in self.starts.windows(2).enumerate() {
+                let mut t = vec![0.0; w[1] - w[0]];
+                a.apply(b, &x[w[0]..w[1]], &mut t);
+                y[w[0]..w[1]]
+                    .iter_mut()
+                    .zip(t)
+                    .for_each(|(y, t)| *y += c * t);
+            }
+        }
         for &(i, j, v) in &self.off {
             y[i] += v * x[j];
         }
@@ -232,12 +308,20 @@ impl BlockJacobian {
         y
     }
 
-    /// max_j Σ_i |a_ij|.
+    /// max_j Σ_i |a_ij|; with a pending term c A, the bound from the triangle inequality
+    /// (the stored entries' column sums plus |c| ‖A_b‖₁ of the column's block, or its
+    /// estimate, [`PendingBlocks::norm_1`]).
     pub fn norm_1(&self) -> f64 {
         let mut sums = vec![0.0; self.dim()];
         for (b, w) in self.blocks.iter().zip(self.starts.windows(2)) {
             for j in 0..b.ncols() {
                 sums[w[0] + j] = b.col(j).iter().map(|v| v.abs()).sum();
+            }
+        }
+        if let Some((a, c)) = &self.pending {
+            for (b, w) in self.starts.windows(2).enumerate() {
+                let add = c.abs() * a.norm_1(b);
+                sums[w[0]..w[1]].iter_mut().for_each(|s| *s += add);
             }
         }
         for &(_, j, v) in &self.off {
@@ -253,14 +337,22 @@ impl BlockJacobian {
         sums.into_iter().fold(0.0, f64::max)
     }
 
-    /// The dense matrix.
+    /// The dense matrix (with the pending term).
     pub fn to_dense(&self) -> Mat<f64> {
         let n = self.dim();
         let mut a = Mat::<f64>::zeros(n, n);
-        for (b, w) in self.blocks.iter().zip(self.starts.windows(2)) {
-            a.as_mut()
-                .submatrix_mut(w[0], w[0], b.nrows(), b.ncols())
-                .copy_from(b);
+        for (k, (b, w)) in self.blocks.iter().zip(self.starts.windows(2)).enumerate() {
+            let mut sub = a.as_mut().submatrix_mut(w[0], w[0], b.nrows(), b.ncols());
+            if let Some((p, c)) = &self.pending {
+                p.add_to(k, sub.as_mut());
+                for j in 0..b.ncols() {
+                    for i in 0..b.nrows() {
+                        sub[(i, j)] = c * sub[(i, j)] + b[(i, j)];
+                    }
+                }
+            } else {
+                sub.copy_from(b);
+            }
         }
         for &(i, j, v) in &self.off {
             a[(i, j)] += v;
@@ -278,7 +370,8 @@ impl BlockJacobian {
     }
 
     /// A reference to entry (i, j): stored, or [`ZERO`]. Off-block entries are found by binary
-    /// search once coalesced (by a scan for the first match otherwise).
+    /// search once coalesced (by a scan for the first match otherwise). A pending term is not
+    /// included ([`BlockJacobian::materialize`] first).
     fn entry(&self, i: usize, j: usize) -> &f64 {
         let inner = self.inner();
         if let Some((col, row)) = &self.border {
@@ -342,6 +435,14 @@ impl Jacobian {
         match self {
             Jacobian::Dense(a) => a.clone(),
             Jacobian::Blocks(b) => b.to_dense(),
+        }
+    }
+
+    /// Adds a block-stored matrix's pending term to its blocks
+    /// ([`BlockJacobian::materialize`]); nothing for a dense one.
+    pub fn materialize(&mut self) {
+        if let Jacobian::Blocks(b) = self {
+            b.materialize();
         }
     }
 

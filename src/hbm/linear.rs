@@ -8,7 +8,7 @@
 //! in one common order — the DOF order of the [`crate::harmonics::HarmonicForce`] — and the rows
 //! reported as the response. Condensation is dense and done per frequency.
 
-use std::sync::OnceLock;
+use std::sync::{Arc, Mutex, OnceLock};
 
 use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::{c64, Mat, MatRef};
@@ -127,6 +127,22 @@ impl Partitioned {
             .collect()
     }
 
+    /// ∂D⁽ⁿ⁾/∂ω v = −2 n² ω M v + i n C v on one partition, by matrix–vector products.
+    fn dynamic_derivative_times(&self, part: Part, n: f64, omega: f64, v: &[c64]) -> Vec<c64> {
+        let v = MatRef::from_column_major_slice(v, v.len(), 1);
+        let m = self.m.part(part) * v;
+        let c = self.c.as_ref().map(|c| c.part(part) * v);
+        (0..m.nrows())
+            .map(|i| {
+                let mut d = m[(i, 0)] * (-2.0 * n * n * omega);
+                if let Some(c) = &c {
+                    d += c[(i, 0)] * c64::new(0.0, n);
+                }
+                d
+            })
+            .collect()
+    }
+
     /// ∂D⁽ⁿ⁾/∂ω = −2 n² ω M + i n C on one partition.
     fn dynamic_derivative(&self, part: Part, n: f64, omega: f64) -> Mat<c64> {
         let m = self.m.part(part);
@@ -167,6 +183,141 @@ pub struct CondensedApplied {
     pub force_derivative: Vec<c64>,
 }
 
+/// The products of one harmonic n condensed at one frequency with the harmonic q_n of one
+/// evaluation ([`LinearModel::condense_deferred`]).
+#[derive(Clone, Debug)]
+pub struct Applied {
+    /// D̄⁽ⁿ⁾ q_n (N), length n_N.
+    pub stiffness_q: Vec<c64>,
+    /// F̄_e⁽ⁿ⁾ (N), length n_N.
+    pub force: Vec<c64>,
+    /// ∂D̄⁽ⁿ⁾/∂ω q_n (N·s), length n_N.
+    pub stiffness_derivative_q: Vec<c64>,
+    /// ∂F̄_e⁽ⁿ⁾/∂ω (N·s), length n_N.
+    pub force_derivative: Vec<c64>,
+}
+
+/// D̄⁽ⁿ⁾(ω) of one harmonic at one frequency, applied to vectors without being formed
+/// (D_NN q − D_NL D_LL⁻¹ D_LN q on the LU of D_LL) or formed on demand
+/// ([`LinearModel::condense_deferred`]). It shares the model's matrices.
+pub struct HarmonicOperator {
+    kind: OperatorKind,
+    /// The model's ‖D̄⁽ⁿ⁾‖₁ per harmonic and this harmonic's n.
+    norm: (Arc<Mutex<Vec<f64>>>, usize),
+}
+
+enum OperatorKind {
+    /// The static harmonic: D̄⁽⁰⁾ (formed once by the model) and F̄⁽⁰⁾.
+    Static(Arc<(Mat<c64>, Vec<c64>)>),
+    /// A harmonic n ≥ 1 at s = nω: D_NN(s), and the coupling to the linear DOFs (`None` when
+    /// there are none).
+    Dynamic {
+        d_nn: Mat<c64>,
+        coupling: Option<Box<Coupling>>,
+    },
+}
+
+/// D_NL(s), D_LN(s) and the LU of D_LL(s) of one harmonic.
+struct Coupling {
+    d_nl: Mat<c64>,
+    d_ln: Mat<c64>,
+    lu: PartialPivLu<c64>,
+}
+
+impl std::fmt::Debug for HarmonicOperator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.kind {
+            OperatorKind::Static(c) => write!(f, "HarmonicOperator(static, {} DOFs)", c.0.nrows()),
+            OperatorKind::Dynamic { d_nn, coupling } => write!(
+                f,
+                "HarmonicOperator({} + {} DOFs)",
+                d_nn.nrows(),
+                coupling.as_ref().map_or(0, |c| c.d_ln.nrows())
+            ),
+        }
+    }
+}
+
+impl HarmonicOperator {
+    /// D̄⁽ⁿ⁾ q (N) for a harmonic q of the nonlinear DOFs (m).
+    pub fn apply(&self, q: &[c64]) -> Vec<c64> {
+        match &self.kind {
+            OperatorKind::Static(c) => times(&c.0, q),
+            OperatorKind::Dynamic { d_nn, coupling } => {
+                let mut r = times(d_nn, q);
+                if let Some(c) = coupling {
+                    let ln_q = times(&c.d_ln, q);
+                    let mut v = Mat::from_fn(ln_q.len(), 1, |i, _| ln_q[i]);
+                    c.lu.solve_in_place(v.as_mut());
+                    let nl_v = &c.d_nl * &v;
+                    r.iter_mut()
+                        .enumerate()
+                        .for_each(|(i, r)| *r -= nl_v[(i, 0)]);
+                }
+                r
+            }
+        }
+    }
+
+    /// D̄⁽ⁿ⁾ = D_NN − D_NL D_LL⁻¹ D_LN (N/m), n_N × n_N (eq. 16); records its ‖·‖₁ in the real
+    /// layout for [`HarmonicOperator::norm_1`].
+    pub fn matrix(&self) -> Mat<c64> {
+        let d = match &self.kind {
+            OperatorKind::Static(c) => c.0.clone(),
+            OperatorKind::Dynamic { d_nn, coupling } => match coupling {
+                None => d_nn.clone(),
+                Some(c) => {
+                    let mut x = c.d_ln.clone();
+                    c.lu.solve_in_place(x.as_mut());
+                    let nl_x = &c.d_nl * &x;
+                    Mat::from_fn(d_nn.nrows(), d_nn.ncols(), |i, j| {
+                        d_nn[(i, j)] - nl_x[(i, j)]
+                    })
+                }
+            },
+        };
+        let norm = real_layout_norm_1(&d);
+        if let Ok(mut norms) = self.norm.0.lock() {
+            norms[self.norm.1] = norm;
+        }
+        d
+    }
+
+    /// ‖D̄⁽ⁿ⁾‖₁ in the real layout (max over columns of Σ |Re| + |Im|; for the static harmonic
+    /// Σ |Re|) at the frequency this harmonic was last formed at by any operator of the model
+    /// (an estimate of this operator's: the scale of backward errors); formed now if never.
+    pub fn norm_1(&self) -> f64 {
+        let known = self
+            .norm
+            .0
+            .lock()
+            .map(|n| n[self.norm.1])
+            .unwrap_or(f64::NAN);
+        if known.is_finite() {
+            known
+        } else {
+            real_layout_norm_1(&self.matrix())
+        }
+    }
+}
+
+/// a v for a complex matrix and vector.
+fn times(a: &Mat<c64>, v: &[c64]) -> Vec<c64> {
+    let av = a * MatRef::from_column_major_slice(v, v.len(), 1);
+    (0..av.nrows()).map(|i| av[(i, 0)]).collect()
+}
+
+/// max_j Σ_i (|Re a_ij| + |Im a_ij|): the 1-norm of the real 2×2-block form of a complex matrix.
+fn real_layout_norm_1(a: &Mat<c64>) -> f64 {
+    (0..a.ncols())
+        .map(|j| {
+            (0..a.nrows())
+                .map(|i| a[(i, j)].re.abs() + a[(i, j)].im.abs())
+                .sum::<f64>()
+        })
+        .fold(0.0, f64::max)
+}
+
 /// One harmonic n condensed on the nonlinear DOFs at one frequency (eqs. 16–18).
 #[derive(Clone, Debug)]
 pub struct Condensed {
@@ -203,7 +354,7 @@ impl Condensed {
 /// and excitation.
 #[derive(Clone, Debug)]
 pub struct LinearModel {
-    blocks: Vec<Partitioned>,
+    blocks: Vec<Arc<Partitioned>>,
     /// Block used by harmonic n (length H+1).
     harmonic_block: Vec<usize>,
     /// F_e⁽ⁿ⁾ over the rows of the harmonic's block (N); empty = no excitation on harmonic n.
@@ -212,7 +363,10 @@ pub struct LinearModel {
     n_outputs: usize,
     /// D̄⁽⁰⁾ and F̄⁽⁰⁾ of the static harmonic, which do not depend on ω (s = 0·ω): condensed
     /// once, on first use.
-    static_condensed: OnceLock<(Mat<c64>, Vec<c64>)>,
+    static_condensed: OnceLock<Arc<(Mat<c64>, Vec<c64>)>>,
+    /// ‖D̄⁽ⁿ⁾‖₁ of the real layout per harmonic n at the last frequency D̄⁽ⁿ⁾ was formed at by a
+    /// [`HarmonicOperator`] (NaN before): the scale of backward errors of products with it.
+    norms: Arc<Mutex<Vec<f64>>>,
 }
 
 impl LinearModel {
@@ -234,7 +388,7 @@ impl LinearModel {
                 forcing.len()
             )));
         }
-        let mut parts: Vec<Partitioned> = Vec::new();
+        let mut parts: Vec<Arc<Partitioned>> = Vec::new();
         let (mut n_condensed, mut n_outputs) = (0, 0);
         for (b, block) in blocks.into_iter().enumerate() {
             if b == 0 {
@@ -244,7 +398,7 @@ impl LinearModel {
             if b == harmonic_block[0] {
                 check_static_block_real(&block, &forcing[0])?;
             }
-            parts.push(partition(b, &block, n_condensed, n_outputs)?);
+            parts.push(Arc::new(partition(b, &block, n_condensed, n_outputs)?));
         }
         if parts.is_empty() {
             return Err(Error::input("the linear model has no matrix block"));
@@ -264,6 +418,7 @@ impl LinearModel {
                 )));
             }
         }
+        let norms = Arc::new(Mutex::new(vec![f64::NAN; harmonic_block.len()]));
         Ok(LinearModel {
             blocks: parts,
             harmonic_block,
@@ -271,6 +426,7 @@ impl LinearModel {
             n_condensed,
             n_outputs,
             static_condensed: OnceLock::new(),
+            norms,
         })
     }
 
@@ -363,7 +519,7 @@ impl LinearModel {
     /// v = D_LL⁻¹ D_LN q), without the three n_N × n_L × n_N products of the full ∂D̄/∂ω.
     pub fn condense_applied(&self, n: usize, omega: f64, q_n: &[c64]) -> Result<CondensedApplied> {
         if n == 0 {
-            let (stiffness, force) = self.static_condensed()?;
+            let (stiffness, force) = &**self.static_condensed()?;
             let zero = vec![c64::new(0.0, 0.0); self.n_condensed];
             return Ok(CondensedApplied {
                 stiffness: stiffness.clone(),
@@ -442,7 +598,7 @@ impl LinearModel {
         level: f64,
     ) -> Result<Vec<c64>> {
         if n == 0 {
-            let (stiffness, force) = self.static_condensed()?;
+            let (stiffness, force) = &**self.static_condensed()?;
             let q = MatRef::from_column_major_slice(q_n, q_n.len(), 1);
             let kq = stiffness * q;
             return Ok((0..q_n.len())
@@ -469,12 +625,123 @@ impl LinearModel {
 
     /// D̄⁽⁰⁾ = K_NN − K_NL K_LL⁻¹ K_LN and F̄⁽⁰⁾ (eqs. 16–17 at s = 0), condensed on the first
     /// call and kept (the static harmonic does not depend on ω).
-    fn static_condensed(&self) -> Result<&(Mat<c64>, Vec<c64>)> {
+    fn static_condensed(&self) -> Result<&Arc<(Mat<c64>, Vec<c64>)>> {
         if let Some(c) = self.static_condensed.get() {
             return Ok(c);
         }
         let c = self.condense(0, 0.0)?;
-        Ok(self.static_condensed.get_or_init(|| (c.stiffness, c.force)))
+        Ok(self
+            .static_condensed
+            .get_or_init(|| Arc::new((c.stiffness, c.force))))
+    }
+
+    /// Harmonic n at ω (rad/s) for one evaluation of the residual at the harmonic `q_n` of the
+    /// nonlinear DOFs, without forming D̄⁽ⁿ⁾: D̄⁽ⁿ⁾ q_n, F̄⁽ⁿ⁾ and the ω-derivatives
+    /// ∂D̄⁽ⁿ⁾/∂ω q_n, ∂F̄⁽ⁿ⁾/∂ω of [`LinearModel::condense_applied`] by matrix–vector products
+    /// on one LU of D_LL (eqs. 16–17: D̄ q = D_NN q − D_NL v with v = D_LL⁻¹ D_LN q; the
+    /// derivative as in [`LinearModel::condense_applied`]), and the [`HarmonicOperator`] that
+    /// applies D̄⁽ⁿ⁾ to further vectors on the same LU, or forms it. That costs (8/3) n_L³ flops
+    /// and products of order n_N² and n_L², against the 8 n_N² n_L of the product
+    /// D_NL D_LL⁻¹ D_LN, which is left to the evaluations whose matrix is factorised. Fails as
+    /// [`LinearModel::condense`].
+    pub fn condense_deferred(
+        &self,
+        n: usize,
+        omega: f64,
+        q_n: &[c64],
+    ) -> Result<(Applied, HarmonicOperator)> {
+        let slot = (self.norms.clone(), n);
+        if n == 0 {
+            let c = self.static_condensed()?.clone();
+            let zero = vec![c64::new(0.0, 0.0); self.n_condensed];
+            let q = MatRef::from_column_major_slice(q_n, q_n.len(), 1);
+            let kq = &c.0 * q;
+            let applied = Applied {
+                stiffness_q: (0..q_n.len()).map(|i| kq[(i, 0)]).collect(),
+                force: c.1.clone(),
+                stiffness_derivative_q: zero.clone(),
+                force_derivative: zero,
+            };
+            let op = HarmonicOperator {
+                kind: OperatorKind::Static(c),
+                norm: slot,
+            };
+            return Ok((applied, op));
+        }
+        let part = &self.blocks[self.harmonic_block[n]];
+        let s = n as f64 * omega;
+        let nf = n as f64;
+        let (f_n, f_l) = self.forcing_parts(n);
+        let n_n = part.nonlinear.len();
+        // D_NN, D_NL, D_LN formed once: the operator's products read them (one complex matrix
+        // each instead of K, M and C)
+        let d_nn = part.dynamic(Part::NN, s);
+        let mut stiffness_q = times(&d_nn, q_n);
+        let mut stiffness_derivative_q = part.dynamic_derivative_times(Part::NN, nf, omega, q_n);
+        if part.linear.is_empty() {
+            let applied = Applied {
+                stiffness_q,
+                force: f_n,
+                stiffness_derivative_q,
+                force_derivative: vec![c64::new(0.0, 0.0); n_n],
+            };
+            let op = HarmonicOperator {
+                kind: OperatorKind::Dynamic {
+                    d_nn,
+                    coupling: None,
+                },
+                norm: slot,
+            };
+            return Ok((applied, op));
+        }
+        let n_l = part.linear.len();
+        let lu = factor(&part.dynamic(Part::LL, s), n, omega)?;
+        let (d_nl, d_ln) = (part.dynamic(Part::NL, s), part.dynamic(Part::LN, s));
+        // [v | w] = D_LL⁻¹ [D_LN q | F_L]
+        let ln_q = times(&d_ln, q_n);
+        let mut vw = Mat::from_fn(n_l, 2, |i, j| if j == 0 { ln_q[i] } else { f_l[i] });
+        lu.solve_in_place(vw.as_mut());
+        let col =
+            |m: &Mat<c64>, j: usize| -> Vec<c64> { (0..m.nrows()).map(|i| m[(i, j)]).collect() };
+        let (v, w) = (col(&vw, 0), col(&vw, 1));
+        let nl_v = times(&d_nl, &v);
+        let nl_w = times(&d_nl, &w);
+        stiffness_q.iter_mut().zip(&nl_v).for_each(|(a, b)| *a -= b);
+        let force: Vec<c64> = f_n.iter().zip(&nl_w).map(|(a, b)| a - b).collect();
+        // t = D_LL⁻¹ [D'_LN q − D'_LL v | −D'_LL w]
+        let dln_q = part.dynamic_derivative_times(Part::LN, nf, omega, q_n);
+        let dll_v = part.dynamic_derivative_times(Part::LL, nf, omega, &v);
+        let dll_w = part.dynamic_derivative_times(Part::LL, nf, omega, &w);
+        let mut t = Mat::from_fn(n_l, 2, |i, j| {
+            if j == 0 {
+                dln_q[i] - dll_v[i]
+            } else {
+                -dll_w[i]
+            }
+        });
+        lu.solve_in_place(t.as_mut());
+        let nl_t0 = times(&d_nl, &col(&t, 0));
+        let nl_t1 = times(&d_nl, &col(&t, 1));
+        let dnl_v = part.dynamic_derivative_times(Part::NL, nf, omega, &v);
+        let dnl_w = part.dynamic_derivative_times(Part::NL, nf, omega, &w);
+        for i in 0..n_n {
+            stiffness_derivative_q[i] -= dnl_v[i] + nl_t0[i];
+        }
+        let force_derivative = (0..n_n).map(|i| -dnl_w[i] - nl_t1[i]).collect();
+        let applied = Applied {
+            stiffness_q,
+            force,
+            stiffness_derivative_q,
+            force_derivative,
+        };
+        let op = HarmonicOperator {
+            kind: OperatorKind::Dynamic {
+                d_nn,
+                coupling: Some(Box::new(Coupling { d_nl, d_ln, lu })),
+            },
+            norm: slot,
+        };
+        Ok((applied, op))
     }
 
     /// Harmonic n condensed on the nonlinear DOFs at ω (rad/s), with its ω-derivatives and the
@@ -733,6 +1000,80 @@ mod tests {
             if h == 1 {
                 assert!(full.force.iter().any(|f| f.norm() > 0.1));
             }
+        }
+    }
+
+    /// The deferred condensation ([`LinearModel::condense_deferred`]: products on the LU of
+    /// D_LL) gives what the formed one gives ([`LinearModel::condense_applied`]) on a damped
+    /// 7-DOF model with 3 nonlinear DOFs forced on linear and nonlinear rows, for every
+    /// harmonic 0..2: D̄ q, F̄, ∂D̄/∂ω q and ∂F̄/∂ω, the operator's product with another vector
+    /// and its formed matrix (to 1e-12 relative to the largest entry), and the matrix's real-
+    /// layout 1-norm as the operator's norm.
+    #[test]
+    fn deferred_condensation_matches_the_formed_one() {
+        let n = 7;
+        let sym = |seed: usize, diag: f64| {
+            Mat::from_fn(n, n, |i, j| {
+                let (a, b) = (i.min(j), i.max(j));
+                noise(seed + 31 * a + b) + if i == j { diag } else { 0.0 }
+            })
+        };
+        let (k, m, c) = (sym(11, 6.0), sym(600, 3.0), sym(800, 0.0));
+        let c = Mat::from_fn(n, n, |i, j| 0.05 * c[(i, j)]);
+        let force: Vec<f64> = (0..n).map(|i| noise(90 + i)).collect();
+        let model = LinearModel::from_real(
+            k.as_ref(),
+            m.as_ref(),
+            Some(c.as_ref()),
+            &force,
+            vec![4, 0, 2],
+            vec![1],
+            2,
+        )
+        .unwrap();
+        let omega = 0.91;
+        let close = |a: &[c64], b: &[c64], what: &str| {
+            let scale = b.iter().map(|v| v.norm()).fold(1e-300, f64::max);
+            for (x, y) in a.iter().zip(b) {
+                assert!((x - y).norm() <= 1e-12 * scale, "{what}: {x:?} vs {y:?}");
+            }
+            assert_eq!(a.len(), b.len(), "{what}");
+        };
+        for h in 0..=2 {
+            let vec_of = |seed: usize| -> Vec<c64> {
+                (0..3)
+                    .map(|i| {
+                        let im = if h == 0 { 0.0 } else { noise(seed + 7 + i) };
+                        c64::new(noise(seed + i), im)
+                    })
+                    .collect()
+            };
+            let (q, p) = (vec_of(20), vec_of(50));
+            let full = model.condense_applied(h, omega, &q).unwrap();
+            let (applied, op) = model.condense_deferred(h, omega, &q).unwrap();
+            let times = |v: &[c64]| -> Vec<c64> {
+                (0..3)
+                    .map(|i| (0..3).map(|j| full.stiffness[(i, j)] * v[j]).sum())
+                    .collect()
+            };
+            close(&applied.stiffness_q, &times(&q), "D̄ q");
+            close(&applied.force, &full.force, "F̄");
+            close(
+                &applied.stiffness_derivative_q,
+                &full.stiffness_derivative_q,
+                "∂D̄/∂ω q",
+            );
+            close(&applied.force_derivative, &full.force_derivative, "∂F̄/∂ω");
+            close(&op.apply(&p), &times(&p), "operator product");
+            let formed = op.matrix();
+            let flat = |a: &Mat<c64>| -> Vec<c64> {
+                (0..3)
+                    .flat_map(|j| (0..3).map(move |i| a[(i, j)]))
+                    .collect()
+            };
+            close(&flat(&formed), &flat(&full.stiffness), "formed D̄");
+            let norm = real_layout_norm_1(&full.stiffness);
+            assert!((op.norm_1() - norm).abs() <= 1e-12 * norm, "{norm}");
         }
     }
 

@@ -3,11 +3,14 @@
 //! sign convention of [`HarmonicForce`]) and its derivative with respect to the continuation
 //! parameter (ω, the excitation level λ, or the force's own parameter such as the preload n0).
 
-use faer::{c64, MatMut};
+use std::sync::Arc;
+
+use faer::{c64, Mat, MatMut};
 use rayon::prelude::*;
 
-use super::linear::{Condensed, CondensedApplied, LinearModel};
+use super::linear::{Applied, Condensed, CondensedApplied, HarmonicOperator, LinearModel};
 use crate::error::{Error, Result};
+use crate::harmonics::jacobian::PendingBlocks;
 use crate::harmonics::{HarmonicForce, HarmonicLayout, Jacobian};
 use crate::nonlinear::{Linearization, ParameterSystem};
 
@@ -107,7 +110,9 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
 
     /// Evaluates at (Q, ω) with excitation factor `level`: `out.residual` = r,
     /// `out.jacobian` = ∂r/∂Q (dense or block-stored as `out` is; block-stored, its off-block
-    /// entries are coalesced), `out.d_parameter` = ∂r/∂ω (with ∂F_nl/∂ω of a force that reads
+    /// entries are coalesced and D̄(ω) is left pending on the LU factors of D_LL
+    /// ([`LinearModel::condense_deferred`], [`crate::harmonics::BlockJacobian::materialize`]:
+    /// formed only if the matrix is factorised)), `out.d_parameter` = ∂r/∂ω (with ∂F_nl/∂ω of a force that reads
     /// velocities, [`HarmonicForce::evaluate_at`]); and `level_derivative` (if given) =
     /// ∂r/∂level = −F̄_e. Returns the end-of-period force state.
     pub fn evaluate(
@@ -137,7 +142,22 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         state: &F::State,
         mut out: Parts<'_>,
     ) -> Result<F::State> {
-        let condensed = self.condense_all_applied(q, omega)?;
+        let deferred = matches!(out.jacobian, Some(Jacobian::Blocks(_)));
+        // per harmonic: the products of the evaluation, and D̄⁽ⁿ⁾ formed (dense Jacobian) or
+        // its operator (block-stored)
+        let linear: Vec<(Applied, Linear)> = (0..=self.layout.harmonics)
+            .into_par_iter()
+            .map(|n| {
+                let q_n = self.harmonic_of(q, n);
+                if deferred {
+                    let (a, op) = self.linear.condense_deferred(n, omega, &q_n)?;
+                    Ok((a, Linear::Operator(Box::new(op))))
+                } else {
+                    let c = self.linear.condense_applied(n, omega, &q_n)?;
+                    Ok((applied_of(&c, &q_n), Linear::Matrix(c.stiffness)))
+                }
+            })
+            .collect::<Result<_>>()?;
         out.residual.iter_mut().for_each(|v| *v = 0.0);
         if let Some(d) = out.d_omega.as_deref_mut() {
             d.iter_mut().for_each(|v| *v = 0.0);
@@ -158,11 +178,19 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         if let Some(d) = out.d_level.as_deref_mut() {
             d.iter_mut().for_each(|v| *v = 0.0);
         }
-        for (n, c) in condensed.iter().enumerate() {
-            self.add_harmonic(n, c, q, level, &mut out);
+        let mut operators = Vec::new();
+        for (n, (a, l)) in linear.into_iter().enumerate() {
+            self.add_harmonic(n, &a, level, &mut out);
+            match l {
+                Linear::Matrix(d) => self.add_stiffness(n, &d, &mut out),
+                Linear::Operator(op) => operators.push(*op),
+            }
         }
         if let Some(Jacobian::Blocks(b)) = out.jacobian {
             b.coalesce();
+            if deferred {
+                b.set_pending(Arc::new(CondensedBlocks { operators }));
+            }
         }
         Ok(end_state)
     }
@@ -206,83 +234,129 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         Ok(end_state)
     }
 
-    /// Adds harmonic n's linear terms: D̄ Q − level·F̄ to the residual, D̄ to the Jacobian,
-    /// D̄' Q − level·F̄' to ∂r/∂ω (real 2×2 blocks of eq. 24), −F̄ to ∂r/∂level.
-    fn add_harmonic(
-        &self,
-        n: usize,
-        c: &CondensedApplied,
-        q: &[f64],
-        level: f64,
-        out: &mut Parts<'_>,
-    ) {
+    /// Adds harmonic n's linear terms: D̄ Q − level·F̄ to the residual, D̄' Q − level·F̄' to
+    /// ∂r/∂ω (real 2×2 blocks of eq. 24), −F̄ to ∂r/∂level.
+    fn add_harmonic(&self, n: usize, c: &Applied, level: f64, out: &mut Parts<'_>) {
         let nd = self.linear.n_condensed();
-        // D̄ is written into its harmonic's diagonal block: `jac` and the offset of its rows
-        let (mut jac, offset): (Option<MatMut<'_, f64>>, usize) = match out.jacobian.as_deref_mut()
-        {
-            None => (None, 0),
-            Some(Jacobian::Dense(a)) => (Some(a.as_mut()), 0),
-            Some(Jacobian::Blocks(b)) => {
-                let offset = b.starts()[n];
-                (Some(b.block_mut(n)), offset)
-            }
-        };
-        if n == 0 {
-            for i in 0..nd {
-                let ri = self.layout.static_index(i);
-                for j in 0..nd {
-                    let cj = self.layout.static_index(j);
-                    if let Some(a) = jac.as_mut() {
-                        a[(ri - offset, cj - offset)] += c.stiffness[(i, j)].re;
-                    }
-                    out.residual[ri] += c.stiffness[(i, j)].re * q[cj];
-                }
-                if let Some(d) = out.d_omega.as_deref_mut() {
-                    d[ri] += c.stiffness_derivative_q[i].re;
-                    d[ri] -= level * c.force_derivative[i].re;
-                }
-                out.residual[ri] -= level * c.force[i].re;
-            }
-            if let Some(d) = out.d_level.as_deref_mut() {
-                for i in 0..nd {
-                    d[self.layout.static_index(i)] -= c.force[i].re;
-                }
-            }
-            return;
-        }
         for i in 0..nd {
-            let ri = self.layout.cos_index(n, i, nd);
-            let mut dq = c64::new(0.0, 0.0);
-            let ddq = c.stiffness_derivative_q[i];
-            for j in 0..nd {
-                let cj = self.layout.cos_index(n, j, nd);
-                let d = c.stiffness[(i, j)];
-                if let Some(a) = jac.as_mut() {
-                    let (r, k) = (ri - offset, cj - offset);
-                    a[(r, k)] += d.re;
-                    a[(r, k + 1)] -= d.im;
-                    a[(r + 1, k)] += d.im;
-                    a[(r + 1, k + 1)] += d.re;
-                }
-                let qj = c64::new(q[cj], q[cj + 1]);
-                dq += d * qj;
-            }
             let f = c.force[i] * level;
-            let df = c.force_derivative[i] * level;
-            out.residual[ri] += dq.re - f.re;
-            out.residual[ri + 1] += dq.im - f.im;
-            if let Some(d) = out.d_omega.as_deref_mut() {
-                d[ri] += ddq.re - df.re;
-                d[ri + 1] += ddq.im - df.im;
-            }
-        }
-        if let Some(d) = out.d_level.as_deref_mut() {
-            for i in 0..nd {
+            let r = c.stiffness_q[i] - f;
+            let d = c.stiffness_derivative_q[i] - c.force_derivative[i] * level;
+            if n == 0 {
+                let ri = self.layout.static_index(i);
+                out.residual[ri] += r.re;
+                if let Some(dw) = out.d_omega.as_deref_mut() {
+                    dw[ri] += d.re;
+                }
+                if let Some(dl) = out.d_level.as_deref_mut() {
+                    dl[ri] -= c.force[i].re;
+                }
+            } else {
                 let ri = self.layout.cos_index(n, i, nd);
-                d[ri] -= c.force[i].re;
-                d[ri + 1] -= c.force[i].im;
+                out.residual[ri] += r.re;
+                out.residual[ri + 1] += r.im;
+                if let Some(dw) = out.d_omega.as_deref_mut() {
+                    dw[ri] += d.re;
+                    dw[ri + 1] += d.im;
+                }
+                if let Some(dl) = out.d_level.as_deref_mut() {
+                    dl[ri] -= c.force[i].re;
+                    dl[ri + 1] -= c.force[i].im;
+                }
             }
         }
+    }
+
+    /// Adds D̄⁽ⁿ⁾ to the Jacobian (real 2×2 blocks of eq. 24 for n ≥ 1) on harmonic n's
+    /// diagonal block.
+    fn add_stiffness(&self, n: usize, d: &Mat<c64>, out: &mut Parts<'_>) {
+        let nd = self.linear.n_condensed();
+        let block = match out.jacobian.as_deref_mut() {
+            None => return,
+            Some(Jacobian::Dense(a)) => {
+                let (start, size) = if n == 0 {
+                    (0, nd)
+                } else {
+                    (self.layout.cos_index(n, 0, nd), 2 * nd)
+                };
+                a.as_mut().submatrix_mut(start, start, size, size)
+            }
+            Some(Jacobian::Blocks(b)) => b.block_mut(n),
+        };
+        add_block(n == 0, d, block);
+    }
+}
+
+/// Adds the complex n_N × n_N matrix `d` to a diagonal block of the real layout: the static
+/// block (`real`: Re d) or a harmonic's (rows and columns Re, Im interleaved per DOF: the real
+/// 2×2 block [Re −Im; Im Re] of each entry).
+fn add_block(real: bool, d: &Mat<c64>, mut a: MatMut<'_, f64>) {
+    let nd = d.nrows();
+    for j in 0..nd {
+        for i in 0..nd {
+            let v = d[(i, j)];
+            if real {
+                a[(i, j)] += v.re;
+            } else {
+                let (r, k) = (2 * i, 2 * j);
+                a[(r, k)] += v.re;
+                a[(r, k + 1)] -= v.im;
+                a[(r + 1, k)] += v.im;
+                a[(r + 1, k + 1)] += v.re;
+            }
+        }
+    }
+}
+
+/// The products of a harmonic condensed with its matrix: D̄ q_n by a matrix–vector product.
+fn applied_of(c: &CondensedApplied, q_n: &[c64]) -> Applied {
+    let q = faer::MatRef::from_column_major_slice(q_n, q_n.len(), 1);
+    let dq = &c.stiffness * q;
+    Applied {
+        stiffness_q: (0..q_n.len()).map(|i| dq[(i, 0)]).collect(),
+        force: c.force.clone(),
+        stiffness_derivative_q: c.stiffness_derivative_q.clone(),
+        force_derivative: c.force_derivative.clone(),
+    }
+}
+
+/// The linear part of one harmonic for the Jacobian: formed, or as an operator.
+enum Linear {
+    Matrix(Mat<c64>),
+    Operator(Box<HarmonicOperator>),
+}
+
+/// D̄(ω) of every harmonic as the pending term of a block-stored Jacobian (block n = harmonic n;
+/// the static block over the n_N static coefficients, harmonic n ≥ 1 over Re, Im interleaved:
+/// [`HarmonicLayout`]).
+#[derive(Debug)]
+struct CondensedBlocks {
+    operators: Vec<HarmonicOperator>,
+}
+
+impl PendingBlocks for CondensedBlocks {
+    fn apply(&self, b: usize, x: &[f64], y: &mut [f64]) {
+        let op = &self.operators[b];
+        if b == 0 {
+            let q: Vec<c64> = x.iter().map(|&v| c64::new(v, 0.0)).collect();
+            for (y, v) in y.iter_mut().zip(op.apply(&q)) {
+                *y += v.re;
+            }
+        } else {
+            let q: Vec<c64> = x.chunks_exact(2).map(|p| c64::new(p[0], p[1])).collect();
+            for (y, v) in y.chunks_exact_mut(2).zip(op.apply(&q)) {
+                y[0] += v.re;
+                y[1] += v.im;
+            }
+        }
+    }
+
+    fn add_to(&self, b: usize, out: MatMut<'_, f64>) {
+        add_block(b == 0, &self.operators[b].matrix(), out);
+    }
+
+    fn norm_1(&self, b: usize) -> f64 {
+        self.operators[b].norm_1()
     }
 }
 

@@ -258,6 +258,133 @@ pub fn uint(i: &[u8]) -> Option<(&[u8], u64)> {
     (n > 0 && ends_token(&i[n..])).then(|| (&i[n..], value))
 }
 
+/// An unsigned decimal integer at `i[*p..]` on the current line, `*p` moved past it (and past
+/// one following space): [`uint`] for a position instead of a slice, with the usual token of
+/// 1–7 digits and its separator taken from one 8-byte word ([`leading_digits`]).
+#[inline(always)]
+fn uint_at(i: &[u8], p: &mut usize) -> Option<u64> {
+    if let Some(word) = i.get(*p..*p + 8) {
+        let x = u64::from_le_bytes(word.try_into().expect("8 bytes"));
+        let (n, v) = leading_digits(x);
+        if (1..8).contains(&n) {
+            let sep = (x >> (8 * n)) as u8;
+            let value = eight_digit_values(v << (64 - 8 * n as u32));
+            return match sep {
+                b' ' => {
+                    *p += n + 1;
+                    Some(value)
+                }
+                c if c.is_ascii_whitespace() => {
+                    *p += n;
+                    Some(value)
+                }
+                _ => None,
+            };
+        }
+    }
+    let rest = &i[*p..];
+    let (r, v) = uint(rest)?;
+    *p += rest.len() - r.len();
+    Some(v)
+}
+
+/// The end of the line at `i[p..]` (blanks, then `\n`): the position after the `\n`.
+#[inline(always)]
+fn line_end_at(i: &[u8], p: usize) -> Option<usize> {
+    if i.get(p) == Some(&b'\n') {
+        return Some(p + 1);
+    }
+    Some(i.len() - line_end(&i[p..])?.len())
+}
+
+/// Where [`element_records`] puts the element tags.
+pub enum TagsOut<'t> {
+    /// Nowhere: the tags must be `first, first + 1, …` (Gmsh's numbering within a block), which
+    /// is checked.
+    Run(u64),
+    /// Into the slice, one per record.
+    Store(&'t mut [u64]),
+}
+
+/// One chunk of element records `tag node_1 … node_nn` (one per line, starting at `i[p..]`),
+/// `conn.len() / nn` of them: the node tags mapped by `index` into `conn`, the element tags
+/// into `tags` or, without it, checked to run on from `next_tag`. `NN` is `nn` as a constant
+/// for the common element sizes (the node loop unrolled), 0 otherwise.
+#[inline(always)]
+fn element_chunk<const NN: usize>(
+    i: &[u8],
+    mut p: usize,
+    (mut tags, mut next_tag): (Option<&mut [u64]>, u64),
+    (conn, nn): (&mut [u32], usize),
+    index: &impl Fn(u64) -> Option<u32>,
+) -> Option<()> {
+    let nn = if NN > 0 { NN } else { nn };
+    for (k, nodes) in conn.chunks_exact_mut(nn).enumerate() {
+        let tag = uint_at(i, &mut p)?;
+        match tags.as_deref_mut() {
+            Some(t) => t[k] = tag,
+            None if tag != next_tag => return None,
+            None => next_tag = next_tag.wrapping_add(1),
+        }
+        for c in nodes.iter_mut() {
+            *c = index(uint_at(i, &mut p)?)?;
+        }
+        p = line_end_at(i, p)?;
+    }
+    Some(())
+}
+
+/// Reads `n` element records `tag node_1 … node_nn` starting at `i`, one per line, in parallel
+/// (as [`read_records`]): node tags mapped to indices by `index` into `conn` (`nn` per record),
+/// element tags as `tags` says. Returns the input after the n-th line, or `None` if a record is
+/// not exactly one such line, names a node `index` does not know, or (with [`TagsOut::Run`])
+/// breaks the run of tags.
+pub fn element_records<'a>(
+    i: &'a [u8],
+    n: usize,
+    tags: TagsOut<'_>,
+    conn: &mut [u32],
+    nn: usize,
+    index: impl Fn(u64) -> Option<u32> + Sync,
+) -> Option<&'a [u8]> {
+    debug_assert_eq!(conn.len(), n * nn);
+    if nn == 0 || n == 0 {
+        return None;
+    }
+    let per = lines_per_chunk(n);
+    let (chunks, end) = line_chunks(i, n, per)?;
+    let chunk = |tags: (Option<&mut [u64]>, u64), conn: &mut [u32], start: usize| {
+        let out = (conn, nn);
+        match nn {
+            3 => element_chunk::<3>(i, start, tags, out, &index),
+            4 => element_chunk::<4>(i, start, tags, out, &index),
+            6 => element_chunk::<6>(i, start, tags, out, &index),
+            8 => element_chunk::<8>(i, start, tags, out, &index),
+            10 => element_chunk::<10>(i, start, tags, out, &index),
+            _ => element_chunk::<0>(i, start, tags, out, &index),
+        }
+        .is_some()
+    };
+    let ok = match (tags, chunks.as_slice()) {
+        // One chunk: on the calling thread.
+        (TagsOut::Run(first), [(start, _)]) => chunk((None, first), conn, *start),
+        (TagsOut::Store(t), [(start, _)]) => chunk((Some(t), 0), conn, *start),
+        (TagsOut::Run(first), _) => conn
+            .par_chunks_mut(per * nn)
+            .zip(chunks.par_iter())
+            .enumerate()
+            .all(|(c, (conn, &(start, _)))| {
+                chunk((None, first.wrapping_add((c * per) as u64)), conn, start)
+            }),
+        (TagsOut::Store(tags), _) => tags
+            .par_chunks_mut(per)
+            .zip(conn.par_chunks_mut(per * nn))
+            .zip(chunks.par_iter())
+            .all(|((t, conn), &(start, _))| chunk((Some(t), 0), conn, start)),
+    };
+    ok.then(|| &i[end..])
+}
+
 /// A signed integer that fits an `i32`, on the current line.
 #[inline(always)]
 pub fn int32(i: &[u8]) -> Option<(&[u8], i32)> {
@@ -627,6 +754,74 @@ mod tests {
         assert!(float(b"nan ").is_none());
         assert_eq!(line_end(b" \r\nnext"), Some(&b"next"[..]));
         assert!(line_end(b" 3\n").is_none());
+    }
+
+    #[test]
+    fn element_records_check_a_run_of_tags_or_store_them() {
+        // Several chunks of records `tag n1 .. nn`, nn = 4 (unrolled) and 5 (generic), with the
+        // separators Gmsh and other writers use (trailing blank, tab, CR).
+        for (nn, tail) in [(4usize, " "), (5, ""), (4, "\t\r")] {
+            let n = 3 * CHUNK_LINES + 17;
+            let node = |k: usize, j: usize| ((k * 7 + j * 13) % 1000 + 1) as u64;
+            let text = |tag: &dyn Fn(usize) -> u64| {
+                let mut t = String::new();
+                for k in 0..n {
+                    t += &tag(k).to_string();
+                    for j in 0..nn {
+                        t += &format!(" {}", node(k, j));
+                    }
+                    t += tail;
+                    t += "\n";
+                }
+                t + "$End"
+            };
+            let index = |tag: u64| (tag <= 1000).then(|| tag as u32 - 1);
+            let mut conn = vec![0u32; n * nn];
+            let run = text(&|k| 41 + k as u64);
+            let rest =
+                element_records(run.as_bytes(), n, TagsOut::Run(41), &mut conn, nn, index).unwrap();
+            assert_eq!(rest, b"$End");
+            for k in 0..n {
+                for j in 0..nn {
+                    assert_eq!(u64::from(conn[k * nn + j]), node(k, j) - 1);
+                }
+            }
+            // A run that starts elsewhere, or breaks in a middle chunk: refused; stored instead.
+            assert!(
+                element_records(run.as_bytes(), n, TagsOut::Run(40), &mut conn, nn, index)
+                    .is_none()
+            );
+            let jump = |k: usize| 41 + k as u64 + if k > 2 * CHUNK_LINES { 5 } else { 0 };
+            let broken = text(&jump);
+            assert!(
+                element_records(broken.as_bytes(), n, TagsOut::Run(41), &mut conn, nn, index)
+                    .is_none()
+            );
+            let mut tags = vec![0u64; n];
+            let rest = element_records(
+                broken.as_bytes(),
+                n,
+                TagsOut::Store(&mut tags),
+                &mut conn,
+                nn,
+                index,
+            )
+            .unwrap();
+            assert_eq!(rest, b"$End");
+            assert!((0..n).all(|k| tags[k] == jump(k)));
+            // A record over two lines, an unknown node, a missing node: refused.
+            let store = |text: &str, tags: &mut [u64], conn: &mut [u32]| {
+                element_records(text.as_bytes(), n, TagsOut::Store(tags), conn, nn, index).is_some()
+            };
+            let two_lines = run.replacen(&format!("\n{} ", 41 + 2 * CHUNK_LINES), "\n0\n", 1);
+            assert!(!store(&two_lines, &mut tags, &mut conn));
+            let unknown = run.replacen(" 8 ", " 1001 ", 1);
+            assert_ne!(unknown, run);
+            assert!(!store(&unknown, &mut tags, &mut conn));
+            let missing = run.replacen(&format!("{tail}\n"), "\n", 1);
+            let missing = missing.replacen(&format!(" {}\n", node(0, nn - 1)), "\n", 1);
+            assert!(!store(&missing, &mut tags, &mut conn));
+        }
     }
 
     #[test]

@@ -52,7 +52,7 @@ pub fn group_faces(mesh: &Mesh, name: &str) -> Result<Vec<BoundaryFace>> {
         .flat_map(|b| {
             b.elements()
                 .enumerate()
-                .map(move |(e, n)| (b.kind, b.tags[e], n))
+                .map(move |(e, n)| (b.kind, b.tags.at(e), n))
         })
         .collect();
     if surface.is_empty() {
@@ -81,7 +81,7 @@ pub fn group_faces(mesh: &Mesh, name: &str) -> Result<Vec<BoundaryFace>> {
                         kind: *face_kind,
                         nodes,
                         surface_tag: surface[k].1,
-                        volume_tag: block.tags[e],
+                        volume_tag: block.tags.at(e),
                     });
                 }
             }

@@ -59,7 +59,7 @@ pub struct ElementBlock {
     /// Physical tags (dimension = `kind.dim()`) the elements belong to.
     pub physicals: Vec<i32>,
     /// Gmsh element tags, one per element.
-    pub tags: Vec<u64>,
+    pub tags: ElementTags,
     /// Node indices, `kind.num_nodes()` per element, in Gmsh order.
     pub connectivity: Vec<u32>,
 }
@@ -84,6 +84,120 @@ impl ElementBlock {
     /// Iterator over the elements' node-index slices.
     pub fn elements(&self) -> std::slice::ChunksExact<'_, u32> {
         self.connectivity.chunks_exact(self.kind.num_nodes())
+    }
+}
+
+/// The Gmsh tags of the elements of a block, in element order.
+///
+/// Gmsh numbers the elements of a block consecutively, so the usual block is a run `first,
+/// first + 1, …`, held as its first tag and length without an array; any other sequence is held
+/// as the list of its tags. The constructors and [`ElementTags::push`] keep a run as long as the
+/// tags run on, so equal sequences have equal representations.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ElementTags {
+    /// `len` tags `first, first + 1, …, first + len − 1`.
+    Run { first: u64, len: usize },
+    /// Any other sequence.
+    List(Vec<u64>),
+}
+
+impl Default for ElementTags {
+    fn default() -> Self {
+        ElementTags::Run { first: 0, len: 0 }
+    }
+}
+
+impl ElementTags {
+    /// The number of tags.
+    pub fn len(&self) -> usize {
+        match self {
+            ElementTags::Run { len, .. } => *len,
+            ElementTags::List(v) => v.len(),
+        }
+    }
+
+    /// Whether there is no tag.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The tag of element `e` (panics if `e` is out of range, as indexing does).
+    pub fn at(&self, e: usize) -> u64 {
+        match self {
+            ElementTags::Run { first, len } => {
+                assert!(e < *len, "element {e} of a block of {len}");
+                first + e as u64
+            }
+            ElementTags::List(v) => v[e],
+        }
+    }
+
+    /// The tags in element order.
+    pub fn iter(&self) -> impl Iterator<Item = u64> + '_ {
+        let (first, len, list) = match self {
+            ElementTags::Run { first, len } => (*first, *len as u64, &[][..]),
+            ElementTags::List(v) => (0, 0, &v[..]),
+        };
+        (0..len).map(move |k| first + k).chain(list.iter().copied())
+    }
+
+    /// Appends `tag`: a run grows while the tags run on, else becomes a list.
+    pub fn push(&mut self, tag: u64) {
+        match self {
+            ElementTags::Run { len: 0, .. } => *self = ElementTags::Run { first: tag, len: 1 },
+            ElementTags::Run { first, len } if first.checked_add(*len as u64) == Some(tag) => {
+                *len += 1
+            }
+            ElementTags::Run { first, len } => {
+                let mut v: Vec<u64> = (0..*len as u64).map(|k| *first + k).collect();
+                v.push(tag);
+                *self = ElementTags::List(v);
+            }
+            ElementTags::List(v) => v.push(tag),
+        }
+    }
+
+    /// Appends the tags of `other`.
+    pub fn extend(&mut self, other: &ElementTags) {
+        if self.is_empty() {
+            *self = other.clone();
+            return;
+        }
+        if let (ElementTags::Run { first, len }, &ElementTags::Run { first: f, len: l }) =
+            (&mut *self, other)
+        {
+            if first.checked_add(*len as u64) == Some(f) {
+                *len += l;
+                return;
+            }
+        }
+        match self {
+            ElementTags::List(v) => v.extend(other.iter()),
+            ElementTags::Run { .. } => other.iter().for_each(|t| self.push(t)),
+        }
+    }
+}
+
+impl From<Vec<u64>> for ElementTags {
+    /// A run if the tags run on (the vector is dropped), else the list.
+    fn from(v: Vec<u64>) -> Self {
+        let run = v.windows(2).all(|w| w[0].checked_add(1) == Some(w[1]));
+        match v.first() {
+            Some(&first) if run => ElementTags::Run {
+                first,
+                len: v.len(),
+            },
+            None => ElementTags::default(),
+            Some(_) => ElementTags::List(v),
+        }
+    }
+}
+
+impl FromIterator<u64> for ElementTags {
+    fn from_iter<I: IntoIterator<Item = u64>>(iter: I) -> Self {
+        let mut tags = ElementTags::default();
+        iter.into_iter().for_each(|t| tags.push(t));
+        tags
     }
 }
 
@@ -269,5 +383,64 @@ pub fn bbox_of<'a>(points: impl Iterator<Item = &'a [f64; 3]>) -> [[f64; 3]; 2] 
         [lo, hi]
     } else {
         [[0.0; 3]; 2]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ElementTags;
+
+    #[test]
+    fn element_tags_keep_a_run_while_the_tags_run_on() {
+        let mut t = ElementTags::default();
+        assert!(t.is_empty());
+        for k in 5..9 {
+            t.push(k);
+        }
+        assert_eq!(t, ElementTags::Run { first: 5, len: 4 });
+        assert_eq!((t.len(), t.at(0), t.at(3)), (4, 5, 8));
+        t.push(20);
+        assert_eq!(t, ElementTags::List(vec![5, 6, 7, 8, 20]));
+        t.push(21);
+        assert_eq!(t.iter().collect::<Vec<_>>(), vec![5, 6, 7, 8, 20, 21]);
+        assert_eq!(t.at(4), 20);
+        // From a vector and an iterator: the same representation for the same sequence.
+        assert_eq!(
+            ElementTags::from(vec![3, 4, 5]),
+            ElementTags::Run { first: 3, len: 3 }
+        );
+        assert_eq!(ElementTags::from(vec![3, 5]), ElementTags::List(vec![3, 5]));
+        assert_eq!(ElementTags::from(vec![]), ElementTags::default());
+        assert_eq!(
+            (1..=4).rev().collect::<ElementTags>(),
+            ElementTags::from(vec![4, 3, 2, 1])
+        );
+        // Tags at the top of the range do not overflow.
+        let top = ElementTags::from(vec![u64::MAX - 1, u64::MAX]);
+        assert_eq!(top.iter().collect::<Vec<_>>(), vec![u64::MAX - 1, u64::MAX]);
+        let mut over = top.clone();
+        over.push(0);
+        assert_eq!(
+            over.iter().collect::<Vec<_>>(),
+            vec![u64::MAX - 1, u64::MAX, 0]
+        );
+        // Extending: runs that continue merge, others append.
+        let mut a = ElementTags::Run { first: 1, len: 3 };
+        a.extend(&ElementTags::Run { first: 4, len: 2 });
+        assert_eq!(a, ElementTags::Run { first: 1, len: 5 });
+        a.extend(&ElementTags::Run { first: 10, len: 2 });
+        assert_eq!(a.iter().collect::<Vec<_>>(), vec![1, 2, 3, 4, 5, 10, 11]);
+        a.extend(&ElementTags::List(vec![7, 3]));
+        assert_eq!(a.len(), 9);
+        assert_eq!(a.at(8), 3);
+        let mut empty = ElementTags::default();
+        empty.extend(&ElementTags::List(vec![2, 9]));
+        assert_eq!(empty, ElementTags::List(vec![2, 9]));
+    }
+
+    #[test]
+    #[should_panic(expected = "element 3 of a block of 3")]
+    fn a_tag_beyond_the_run_panics_as_indexing_does() {
+        ElementTags::Run { first: 1, len: 3 }.at(3);
     }
 }

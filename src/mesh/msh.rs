@@ -26,7 +26,10 @@ use nom::{IResult, Parser};
 use rayon::prelude::*;
 
 use super::ascii;
-use super::{ElementBlock, ElementType, Mesh, MshFormat, MshVersion, PeriodicLink, PhysicalGroup};
+use super::{
+    ElementBlock, ElementTags, ElementType, Mesh, MshFormat, MshVersion, PeriodicLink,
+    PhysicalGroup,
+};
 use crate::error::Error;
 
 /// A malformed MSH file: where (section, line, byte offset) and what.
@@ -950,7 +953,7 @@ impl State {
                 kind,
                 entity,
                 physicals: Vec::new(),
-                tags: Vec::new(),
+                tags: ElementTags::default(),
                 connectivity: Vec::new(),
             };
             i = match rd.binary {
@@ -984,11 +987,10 @@ impl State {
             .lookup
             .as_ref()
             .expect("nodes are read before elements");
-        block.tags = ascii::zeroed(n);
+        let mut tags: Vec<u64> = ascii::zeroed(n);
         block.connectivity = ascii::zeroed(n * nn);
         // Fixed-size records: decode chunks of records in parallel; report the first bad one.
-        let bad = block
-            .tags
+        let bad = tags
             .par_chunks_mut(PAR_RECORDS)
             .zip(block.connectivity.par_chunks_mut(PAR_RECORDS * nn))
             .enumerate()
@@ -1020,11 +1022,14 @@ impl State {
                 unknown_node(e.u64(rec), node),
             );
         }
+        block.tags = tags.into();
         Ok((i, ()))
     }
 
     /// A 4.1 ASCII element block (`tag node...` per line) read in parallel, as
-    /// [`State::nodes_v22_parallel`]; on `None` the block is left empty.
+    /// [`State::nodes_v22_parallel`]: the element tags checked to run on from the first one
+    /// (Gmsh's numbering, stored as [`ElementTags::Run`]), else read into a list; on `None` the
+    /// block is left empty.
     fn element_block_ascii_parallel<'a>(
         lookup: &NodeLookup,
         i: &'a [u8],
@@ -1035,40 +1040,36 @@ impl State {
             return None;
         }
         let nn = block.kind.num_nodes();
-        block.tags = ascii::zeroed(n);
+        let i = skip_ws(i);
+        let first = ascii::uint(i)?.1;
         block.connectivity = ascii::zeroed(n * nn);
-        /// The records `tag node...` into `tags` and `conn`, node tags mapped by `index`.
-        fn records<'a>(
-            i: &'a [u8],
-            n: usize,
-            (tags, conn, nn): (&mut [u64], &mut [u32], usize),
-            index: impl Fn(u64) -> Option<u32> + Sync,
-        ) -> Option<&'a [u8]> {
-            ascii::read_records2(i, n, (tags, 1), (conn, nn), |line, tag, conn| {
-                let (mut r, t) = ascii::uint(line)?;
-                tag[0] = t;
-                for c in conn.iter_mut() {
-                    let (r2, node) = ascii::uint(r)?;
-                    *c = index(node)?;
-                    r = r2;
-                }
-                Some(r)
-            })
-        }
-        let out = (&mut block.tags[..], &mut block.connectivity[..], nn);
-        // The usual contiguous numbering without the lookup's match per node.
-        let read = match *lookup {
-            NodeLookup::Contiguous { first, n: count } => records(skip_ws(i), n, out, |node| {
-                let k = node.wrapping_sub(first);
-                (k < count).then_some(k as u32)
-            }),
-            _ => records(skip_ws(i), n, out, |node| lookup.get(node)),
+        let read = |tags: ascii::TagsOut<'_>, conn: &mut [u32]| match *lookup {
+            // The usual contiguous numbering without the lookup's match per node.
+            NodeLookup::Contiguous { first, n: count } => {
+                ascii::element_records(i, n, tags, conn, nn, |node| {
+                    let k = node.wrapping_sub(first);
+                    (k < count).then_some(k as u32)
+                })
+            }
+            _ => ascii::element_records(i, n, tags, conn, nn, |node| lookup.get(node)),
         };
-        if read.is_none() {
-            block.tags.clear();
+        let rest = match read(ascii::TagsOut::Run(first), &mut block.connectivity) {
+            Some(rest) => {
+                block.tags = ElementTags::Run { first, len: n };
+                Some(rest)
+            }
+            None => {
+                let mut tags: Vec<u64> = ascii::zeroed(n);
+                let rest = read(ascii::TagsOut::Store(&mut tags), &mut block.connectivity);
+                block.tags = tags.into();
+                rest
+            }
+        };
+        if rest.is_none() {
+            block.tags = ElementTags::default();
             block.connectivity.clear();
         }
-        read
+        rest
     }
 
     fn element_block_ascii<'a>(
@@ -1120,7 +1121,7 @@ impl State {
             kind: ElementType,
             entity: i32,
             physical: i32,
-            tags: Vec<u64>,
+            tags: ElementTags,
             connectivity: Vec<u32>,
         }
         if n == 0 {
@@ -1161,10 +1162,9 @@ impl State {
                             kind,
                             entity,
                             physical,
-                            tags: Vec::with_capacity(room),
+                            tags: ElementTags::default(),
                             connectivity: Vec::with_capacity(room * kind.num_nodes()),
                         };
-                        ascii::huge_pages(&mut run.tags);
                         ascii::huge_pages(&mut run.connectivity);
                         runs.push(run);
                     }
@@ -1186,7 +1186,7 @@ impl State {
             if b.tags.is_empty() {
                 (b.tags, b.connectivity) = (run.tags, run.connectivity);
             } else {
-                b.tags.extend_from_slice(&run.tags);
+                b.tags.extend(&run.tags);
                 b.connectivity.extend_from_slice(&run.connectivity);
             }
         }
@@ -1315,7 +1315,7 @@ impl State {
             kind,
             entity,
             physicals,
-            tags: Vec::new(),
+            tags: ElementTags::default(),
             connectivity: Vec::new(),
         });
         self.blocks.len() - 1
@@ -1624,7 +1624,7 @@ mod tests {
             kind: ElementType::Triangle3,
             entity: 1,
             physicals: Vec::new(),
-            tags: Vec::new(),
+            tags: ElementTags::default(),
             connectivity: Vec::new(),
         };
         let rest = State::element_block_ascii_parallel(lookup, elements.as_bytes(), n, &mut block)
@@ -1752,7 +1752,7 @@ mod tests {
         let bytes = binary_points(n);
         let m = parse_msh(&bytes).expect("parses");
         assert_eq!(m.coords[40_000], [40_001.0, 0.0, 0.0]);
-        assert_eq!(m.blocks[0].tags[40_000], 40_001);
+        assert_eq!(m.blocks[0].tags.at(40_000), 40_001);
         assert_eq!(m.blocks[0].connectivity[40_000], (n - 40_001) as u32);
         // Break elements 40 000 and 50 000 (in different parallel chunks): the first is reported.
         let elements = bytes

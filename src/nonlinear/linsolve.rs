@@ -319,7 +319,8 @@ impl LinearSolver {
     /// Hands a matrix that is no longer needed back for the next
     /// [`LinearSolver::linearization`] (kept when it is block-stored over this solver's blocks).
     pub fn recycle(&self, matrix: Jacobian) {
-        if let Jacobian::Blocks(b) = matrix {
+        if let Jacobian::Blocks(mut b) = matrix {
+            b.drop_pending();
             if b.block_sizes() == self.blocks {
                 if let Ok(mut spare) = self.spare.lock() {
                     *spare = Some(b);
@@ -420,8 +421,11 @@ impl LinearSolver {
     /// Factorises A (dense or block-stored) by the chosen path and solves A x = b (a structured
     /// solve checked by its backward error, [`BACKWARD_ERROR`], and refined; the dense LU when
     /// that fails). Returns x and the factors; `None` when A is (numerically) singular or x is
-    /// not finite.
-    pub fn factor_solve(&self, a: &Jacobian, b: &[f64]) -> Option<(Vec<f64>, Factored)> {
+    /// not finite. A pending term of a block-stored A is first added to its blocks
+    /// ([`Jacobian::materialize`]).
+    pub fn factor_solve(&self, a: &mut Jacobian, b: &[f64]) -> Option<(Vec<f64>, Factored)> {
+        a.materialize();
+        let a = &*a;
         let n = b.len();
         let split = match a {
             Jacobian::Blocks(m) if self.choice != SolverChoice::Dense => Some(Split::blocks(m)),
@@ -693,8 +697,9 @@ impl<'a> Split<'a> {
         }
     }
 
-    /// A block-stored matrix.
+    /// A block-stored matrix (without a pending term).
     fn blocks(m: &'a BlockJacobian) -> Split<'a> {
+        debug_assert!(!m.has_pending(), "a pending term is not in the blocks");
         let starts = m.starts().to_vec();
         let inner = m.inner();
         let mut entries: Vec<Vec<(usize, f64)>> = vec![Vec::new(); inner];
@@ -1151,7 +1156,7 @@ mod tests {
                     near[(i, j)] += 0.8 * noise(5000 + 3 * p + q) + if p == q { 0.5 } else { 0.0 };
                 }
             }
-            let (_, f) = solver.factor_solve(&Jacobian::Dense(near), &b).unwrap();
+            let (_, f) = solver.factor_solve(&mut Jacobian::Dense(near), &b).unwrap();
             let before = stats();
             let (x, iterations) = solver
                 .solve_krylov(&f, &Jacobian::Dense(a.clone()), &b)
@@ -1167,7 +1172,7 @@ mod tests {
             let far = Mat::from_fn(n, n, |i, j| {
                 a[(i, j)] + if i == j { 4.0 * noise(6000 + i) } else { 0.0 }
             });
-            let (_, f) = solver.factor_solve(&Jacobian::Dense(far), &b).unwrap();
+            let (_, f) = solver.factor_solve(&mut Jacobian::Dense(far), &b).unwrap();
             if let Some((x, iterations)) = solver.solve_krylov(&f, &Jacobian::Dense(a.clone()), &b)
             {
                 assert!(err(&x) <= 1e-10 * scale, "{choice:?} far: {:e}", err(&x));
@@ -1215,7 +1220,7 @@ mod tests {
             let mut near = a.clone();
             near[(20, 20)] += 1e-4;
             let (_, f) = solver
-                .factor_solve(&Jacobian::Dense(near.clone()), &b)
+                .factor_solve(&mut Jacobian::Dense(near.clone()), &b)
                 .unwrap();
             let (x, sign) = solver
                 .solve_near(&f, &Jacobian::Dense(a.clone()), &b)
@@ -1238,7 +1243,7 @@ mod tests {
                 })
                 .find(|m| solve_dense_signed_ref(m.as_ref(), &b).unwrap().1 != sd)
                 .expect("a matrix with the other determinant sign");
-            let (_, f) = solver.factor_solve(&Jacobian::Dense(far), &b).unwrap();
+            let (_, f) = solver.factor_solve(&mut Jacobian::Dense(far), &b).unwrap();
             assert!(solver
                 .solve_near(&f, &Jacobian::Dense(a.clone()), &b)
                 .is_none());

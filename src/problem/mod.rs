@@ -43,6 +43,20 @@ pub trait Log {
     fn detail(&self, line: &str);
 }
 
+/// Returns the free pages of the process heap to the system: glibc's `malloc_trim`, which
+/// releases free pages anywhere in the heap, not only at its top (elsewhere this does nothing).
+/// The setup of a sector problem (model, reduction, interfaces) frees far more than the problem
+/// keeps, in blocks below glibc's (adaptive) mmap threshold, whose pages glibc otherwise keeps
+/// resident for the whole continuation.
+pub fn release_free_heap() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: malloc_trim only hands free pages of the allocator back to the kernel; it takes
+    // the allocator's locks and is safe to call from any thread.
+    unsafe {
+        libc::malloc_trim(0);
+    }
+}
+
 /// A [`Log`] that drops every line.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Silent;

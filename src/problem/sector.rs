@@ -142,6 +142,7 @@ impl SectorProblem {
             forcing[1] = dofs.excitation_vector(h)?;
         }
         let linear = LinearModel::new(blocks, harmonic_block, forcing)?;
+        super::release_free_heap();
         Ok(SectorProblem {
             linear,
             contact,

@@ -68,6 +68,7 @@ def main() -> int:
         tools["meshio"] = lambda f: [py, "-c", MESHIO, f]
         tools["gmsh"] = lambda f: [py, "-c", GMSH, f]
     rows = []
+    load_start = os.getloadavg()[0]
     for prefix in args.prefixes:
         for v in args.variants.split(","):
             f = Path(f"{prefix}.{v}.msh")
@@ -86,7 +87,9 @@ def main() -> int:
             print(f"{prefix.name} {v}: " + ", ".join(f"{k} {b[0]:.2f} s CPU" for k, b in best.items()),
                   file=sys.stderr, flush=True)
 
-    print(f"\n{os.cpu_count()} cores; best of {args.repeat} interleaved runs; CPU = user + system of all threads\n")
+    load = f"load (1-min average) {load_start:.1f} at the start, {os.getloadavg()[0]:.1f} at the end"
+    print(f"\n{os.cpu_count()} cores, {load}; best of {args.repeat} interleaved runs; "
+          "CPU = user + system of all threads\n")
     peers = [k for k in tools if k != "nlrom"]
     head = "| mesh | variant | size (MB) | nlrom CPU (s) | nlrom wall (s) | nlrom peak (MB) |"
     head += "".join(f" {k} CPU (s) | {k} wall (s) |" for k in peers)

@@ -27,14 +27,19 @@
 //! condensation of the linear part at ω; AFT = contact forces alone (inverse DFT, contact law
 //! march, DFT); contact Jacobian = forces with the analytic Jacobian minus forces alone, into a
 //! dense matrix and into the block storage of `harmonics::BlockJacobian`; linear assembly = the
-//! whole residual + Jacobian evaluation minus the contact part; the residual alone (what a
+//! whole dense residual + Jacobian evaluation minus the contact part and the condensation; linear
+//! part, block-stored = the block-stored evaluation minus its contact part (D̄ left pending: the
+//! LU of D_LL and matrix–vector products); D̄ formed = adding the pending D̄ to the blocks, as a
+//! factorisation does (timed on a copy); the residual alone (what a
 //! damping trial evaluates); dense LU = faer's partial-pivoting LU and solve of the Jacobian
 //! (`nonlinear::solve_dense`); structured solve = the block LUs and low-rank correction of
 //! `nonlinear::linsolve` on the block-stored Jacobian; and the path the automatic choice takes.
 //!
 //! `solver=` takes a comma-separated list (e.g. `solver=auto,dense`): the continuation is traced
 //! once per solver in the same process, each with its own peak memory (the peak is reset before
-//! each, `/proc/self/clear_refs`), and the points are compared with the previous solver's.
+//! each, `/proc/self/clear_refs`), and the points are compared with the previous solver's. With
+//! `HBM_SPEED_POINTS` set, every point's iterations, factorisations, GMRES solves and CPU time are
+//! printed as it converges.
 
 #[path = "../../tests/support/hbm.rs"]
 mod hbm_support;
@@ -171,6 +176,7 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
     let rss_problem = rss_gb();
     let system = problem.system()?;
     drop((sm, rom, interfaces));
+    nlrom::problem::release_free_heap();
     eprintln!(
         "resident: {rss_rom:.2} GB after the reduction, {rss_problem:.2} GB with the problem, {:.2} GB after dropping the model and ROM; {} rows per harmonic ({} condensed)",
         rss_gb(),
@@ -197,7 +203,23 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
         let rss_before = reset_peak_rss();
         let (t, c) = (Instant::now(), cpu_seconds());
         let before = linsolve::stats();
-        let path = trace(&fp, &opts, &mut |_| {})?;
+        let mut mark = (linsolve::stats(), cpu_seconds());
+        let verbose = std::env::var_os("HBM_SPEED_POINTS").is_some();
+        let path = trace(&fp, &opts, &mut |p| {
+            let (s, c) = (linsolve::stats(), cpu_seconds());
+            if verbose {
+                eprintln!(
+                    "  point {:.4} Hz: {} iterations, {} factorisations, {} GMRES solves ({} iterations), CPU {:.2} s",
+                    p.parameter / (2.0 * PI),
+                    p.iterations,
+                    s.factorizations - mark.0.factorizations,
+                    s.krylov - mark.0.krylov,
+                    s.krylov_iterations - mark.0.krylov_iterations,
+                    c - mark.1
+                );
+            }
+            mark = (s, c);
+        })?;
         let (wall, cpu) = (t.elapsed().as_secs_f64(), cpu_seconds() - c);
         let after = linsolve::stats();
         let iterations: usize = path.points.iter().map(|p| p.iterations).sum();
@@ -322,10 +344,17 @@ fn split<F: HarmonicForce>(
         let mut r = vec![0.0; nf];
         fp.evaluate_residual(x, omega, state, &mut r).unwrap();
     });
+    // D̄(ω) is left pending by the block-stored evaluation: formed when the matrix is factorised
+    let formed = best(|| {
+        let mut j = lin_blocks.jacobian.clone();
+        j.materialize();
+        j
+    });
+    lin_blocks.jacobian.materialize();
     let mut path = None;
     let structured_solve = best(|| {
         let (x, f) = structured
-            .factor_solve(&lin_blocks.jacobian, &lin_blocks.residual)
+            .factor_solve(&mut lin_blocks.jacobian, &lin_blocks.residual)
             .unwrap();
         path = Some(f.path());
         x
@@ -333,7 +362,7 @@ fn split<F: HarmonicForce>(
     let mut auto_path = None;
     let auto_solve = best(|| {
         let (x, f) = auto
-            .factor_solve(&lin_blocks.jacobian, &lin_blocks.residual)
+            .factor_solve(&mut lin_blocks.jacobian, &lin_blocks.residual)
             .unwrap();
         auto_path = Some(f.path());
         x
@@ -350,7 +379,7 @@ fn split<F: HarmonicForce>(
     };
     let minus = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0, a.1 - b.1);
     if !dense {
-        let total = whole_blocks.0 + structured_solve.0;
+        let total = whole_blocks.0 + formed.0 + structured_solve.0;
         println!("one Newton iteration, {nf} unknowns (best of {REPEAT}, wall; % of the block-stored + structured iteration {total:.4} s):");
         row("condensation of the linear part", condense, total);
         row("AFT: contact forces", aft, total);
@@ -360,10 +389,11 @@ fn split<F: HarmonicForce>(
             total,
         );
         row(
-            "linear assembly, block-stored",
-            minus(minus(whole_blocks, aft_blocks), condense),
+            "linear part, block-stored (D̄ pending)",
+            minus(whole_blocks, aft_blocks),
             total,
         );
+        row("D̄ formed at a factorisation (with a copy)", formed, total);
         row("residual alone (a damping trial)", residual, total);
         row(
             "structured factorisation + solve (block-stored)",
@@ -374,7 +404,7 @@ fn split<F: HarmonicForce>(
         println!("  structured path: {path:?}; automatic choice: {auto_path:?}");
         println!(
             "  iteration: block-stored + structured {total:.4} s (CPU {:.2} s)",
-            whole_blocks.1 + structured_solve.1
+            whole_blocks.1 + formed.1 + structured_solve.1
         );
         return Ok(());
     }
@@ -407,9 +437,10 @@ fn split<F: HarmonicForce>(
         minus(minus(whole, aft_jac), condense),
     );
     row(
-        "linear assembly, block-stored",
-        minus(minus(whole_blocks, aft_blocks), condense),
+        "linear part, block-stored (D̄ pending)",
+        minus(whole_blocks, aft_blocks),
     );
+    row("D̄ formed at a factorisation (with a copy)", formed);
     row("residual alone (a damping trial)", residual);
     row("dense LU + solve", lu);
     row(
@@ -418,7 +449,7 @@ fn split<F: HarmonicForce>(
     );
     row("automatic choice: factorisation + solve", auto_solve);
     println!("  structured path: {path:?}; automatic choice: {auto_path:?}");
-    let structured_iteration = whole_blocks.0 + structured_solve.0;
+    let structured_iteration = whole_blocks.0 + formed.0 + structured_solve.0;
     println!(
         "  iteration: dense {total:.4} s, block-stored + structured {structured_iteration:.4} s ({:.1}×)",
         total / structured_iteration
