@@ -6,7 +6,7 @@
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 use nlrom::fe::structured::StructuredBox;
-use nlrom::fe::thermal::{assemble_thermal, ThermalMaterial};
+use nlrom::fe::thermal::{assemble_thermal, Capacity, ThermalMaterial};
 use nlrom::fe::{assemble, Material, Materials, Quadrature};
 use nlrom::mesh::{ElementType, Mesh};
 
@@ -19,6 +19,7 @@ const TI_TH: ThermalMaterial = ThermalMaterial {
     conductivity: 6.7,
     specific_heat: 520.0,
     expansion: 9e-6,
+    capacity: Capacity::Consistent,
 };
 const SIZE: [f64; 3] = [0.6, 0.2, 0.1];
 
@@ -370,6 +371,80 @@ fn clamped_bar_tip_moves_outward_by_alpha_delta_t_length() {
             );
         }
     }
+}
+
+#[test]
+fn lumped_capacity_is_a_positive_diagonal_with_the_total_and_the_hrz_shares() {
+    // HRZ lumping (Hinton, Rock & Zienkiewicz 1976): diagonal, positive at every node (the row
+    // sums of the serendipity types are negative at their vertices), total ρc_pV. On one cubic
+    // hexa20 cell the shares are ∫N²/Σ∫N² from the reference-cube integrals ∫N² = 28/135 at a
+    // vertex and 64/135 at a mid-edge node: 7/248 and 2/31 of ρc_pV.
+    let lumped = ThermalMaterial {
+        capacity: Capacity::Lumped,
+        ..TI_TH
+    };
+    let volume = SIZE.iter().product::<f64>();
+    let rho_c = TI.density * TI_TH.specific_heat;
+    for kind in KINDS {
+        for (what, mesh) in boxes(kind, [3, 2, 1]) {
+            let t = assemble_thermal(
+                &mesh,
+                &Materials::uniform(TI),
+                &lumped,
+                &Quadrature::default(),
+            )
+            .unwrap();
+            let c = dense(&t.capacity);
+            let n = c.nrows();
+            let mut total = 0.0;
+            for i in 0..n {
+                assert!(c[(i, i)] > 0.0, "{kind} {what}: C_{i}{i} = {}", c[(i, i)]);
+                total += c[(i, i)];
+                for j in (0..n).filter(|&j| j != i) {
+                    assert_eq!(c[(i, j)], 0.0, "{kind} {what}");
+                }
+            }
+            assert!(
+                (total - rho_c * volume).abs() < 1e-12 * rho_c * volume,
+                "{kind} {what}: {total} vs {}",
+                rho_c * volume
+            );
+        }
+    }
+    let side = 0.01;
+    let mesh = StructuredBox::new(ElementType::Hexa20, [1, 1, 1], [side; 3])
+        .build()
+        .unwrap();
+    let t = assemble_thermal(
+        &mesh,
+        &Materials::uniform(TI),
+        &lumped,
+        &Quadrature::default(),
+    )
+    .unwrap();
+    let c = dense(&t.capacity);
+    let total = rho_c * side.powi(3);
+    let (mut vertices, mut edges) = (0, 0);
+    for (i, x) in mesh.coords.iter().enumerate() {
+        let on_edge = x
+            .iter()
+            .filter(|&&v| (v - side / 2.0).abs() < 1e-12)
+            .count()
+            == 1;
+        let share = if on_edge { 2.0 / 31.0 } else { 7.0 / 248.0 };
+        if on_edge {
+            edges += 1;
+        } else {
+            vertices += 1;
+        }
+        assert!(
+            (c[(i, i)] - share * total).abs() < 1e-12 * total,
+            "node {i} at {x:?}: {} vs {}",
+            c[(i, i)],
+            share * total
+        );
+    }
+    assert_eq!((vertices, edges), (8, 12));
 }
 
 #[test]

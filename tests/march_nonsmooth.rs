@@ -886,7 +886,7 @@ fn bad_obstacle_and_gamma_keys_are_reported_with_their_path() {
 #[test]
 fn thermoelastic_fe_bar_hitting_a_wall_closes_its_energy_and_heat_balances() {
     use nlrom::fe::structured::StructuredBox;
-    use nlrom::fe::thermal::{assemble_thermal, ThermalMaterial};
+    use nlrom::fe::thermal::{assemble_thermal, Capacity, ThermalMaterial};
     use nlrom::fe::{assemble, Material, Materials, Quadrature};
     use nlrom::mesh::ElementType;
     let size = [0.05, 0.01, 0.01];
@@ -902,6 +902,7 @@ fn thermoelastic_fe_bar_hitting_a_wall_closes_its_energy_and_heat_balances() {
         conductivity: 6.7,
         specific_heat: 520.0,
         expansion: 9e-6,
+        capacity: Capacity::Consistent,
     };
     let quad = Quadrature::default();
     let mech = assemble(&mesh, &Materials::uniform(mat), &quad).unwrap();
@@ -1005,4 +1006,47 @@ fn thermoelastic_fe_bar_hitting_a_wall_closes_its_energy_and_heat_balances() {
         (mean - expected).abs() < 1e-9 * expected,
         "{mean} vs {expected}"
     );
+}
+
+#[test]
+fn sparse_rows_products_equal_the_dense_products() {
+    // SparseRows::row_dot (consecutive columns as a slice dot product, scattered ones gathered,
+    // both with partial sums) against the plain row-major product, on rows of every length
+    // 0–13 with consecutive, scattered and empty patterns.
+    use nlrom::march::obstacle::SparseRows;
+    let (rows, n) = (42, 17);
+    let mut a = vec![0.0; rows * n];
+    for r in 0..rows {
+        let len = r % 14;
+        for k in 0..len {
+            // Even rows: a consecutive block; odd rows: every other column (mod 17) from the end.
+            let c = if r % 2 == 0 {
+                (r / 2) % (n - len + 1) + k
+            } else {
+                (3 * n - 1 - 2 * k) % n
+            };
+            a[r * n + c] = 0.5 + ((r * n + c) as f64 * 0.37) % 5.3;
+        }
+    }
+    let x: Vec<f64> = (0..n).map(|i| (0.7 * i as f64).sin() + 0.1).collect();
+    let s = SparseRows::new(&a, n, 0..rows, 0..n);
+    let y = s.mul(&x);
+    for r in 0..rows {
+        let exact: f64 = (0..n).map(|c| a[r * n + c] * x[c]).sum();
+        let scale: f64 = (0..n)
+            .map(|c| (a[r * n + c] * x[c]).abs())
+            .sum::<f64>()
+            .max(1.0);
+        assert!(
+            (y[r] - exact).abs() < 1e-14 * scale,
+            "row {r}: {} vs {exact}",
+            y[r]
+        );
+    }
+    let z: Vec<f64> = (0..rows.min(n)).map(|i| x[i] - 0.3).collect();
+    let sq = SparseRows::new(&a, n, 0..n, 0..n);
+    let quad: f64 = (0..n)
+        .map(|r| z[r] * (0..n).map(|c| a[r * n + c] * z[c]).sum::<f64>())
+        .sum();
+    assert!((sq.quad(&z) - quad).abs() < 1e-13 * quad.abs().max(1.0));
 }

@@ -107,6 +107,21 @@ pub struct ThermalTable {
     /// Groups whose nodes keep θ = 0 (eliminated like a clamp); none: an insulated body.
     #[serde(default)]
     pub fixed: Vec<String>,
+    /// The heat capacity matrix: `"consistent"` (default) or `"lumped"` (HRZ diagonal).
+    #[serde(default)]
+    pub capacity: Capacity,
+}
+
+/// `thermal.capacity`: the form of the heat capacity matrix C^θθ (`crate::fe::thermal`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Capacity {
+    /// C_ab = ∫ ρ c_p Nₐ N_b dV.
+    #[default]
+    Consistent,
+    /// The HRZ diagonal of each element's consistent matrix, scaled to its ρ c_p V_e (Hinton,
+    /// Rock & Zienkiewicz, 1976).
+    Lumped,
 }
 
 fn room_temperature() -> f64 {

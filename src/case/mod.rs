@@ -22,7 +22,7 @@ use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::vec3::norm;
 
-pub use casing::{CasingGap, CasingTable, ThermalTable};
+pub use casing::{Capacity, CasingGap, CasingTable, ThermalTable};
 pub use obstacle::ObstacleTable;
 pub use strip::{PreloadDistribution, Strip};
 

@@ -13,6 +13,14 @@
 //! Quadrature: the mass rule of the type for C^θθ and K^uθ (integrand degrees 2p and 2p − 1 on
 //! affine elements) and the stiffness rule for K^θθ (degree 2p − 2), so all three are exact on
 //! straight-sided elements.
+//!
+//! [`Capacity::Lumped`] replaces each element's C^θθ by its HRZ diagonal (Hinton, Rock &
+//! Zienkiewicz, Earthquake Eng. Struct. Dyn. 4, 1976): C_aa ← C_aa · ρc_pV_e / Σ_b C_bb, which
+//! keeps the element's total ρc_pV_e and is positive on every element type (the row sums of the
+//! serendipity hexa20, prism15 and pyramid13 are negative at the corner nodes). A nodal heat
+//! input Q then raises its node at Q/C_aa and no other node, so a heated node is never cooled
+//! by the capacity coupling (the consistent C^θθ of a quadratic element pulls the neighbours of
+//! a heated corner node below zero and concentrates the rise on that corner).
 
 use faer::sparse::{SparseColMat, Triplet};
 use faer::Mat;
@@ -20,6 +28,7 @@ use faer::Mat;
 use super::element::{bad_element, gradients, mass_scalar, table, Tabulated};
 use super::material::Materials;
 use super::Quadrature;
+pub use crate::case::Capacity;
 use crate::error::{Error, Result};
 use crate::mesh::{ElementType, Mesh};
 
@@ -32,6 +41,8 @@ pub struct ThermalMaterial {
     pub specific_heat: f64,
     /// Linear expansion coefficient α_th (1/K).
     pub expansion: f64,
+    /// The capacity matrix C^θθ: consistent or HRZ-lumped (module doc).
+    pub capacity: Capacity,
 }
 
 impl ThermalMaterial {
@@ -124,11 +135,26 @@ pub fn element_thermal(
     let (lap, div) = integrals(&ts, &tm, xs).map_err(|b| bad_element(kind, b))?;
     let mut cap = vec![0.0; nn * nn];
     mass_scalar(&tm, xs, density * th.specific_heat, &mut cap).map_err(|b| bad_element(kind, b))?;
+    if th.capacity == Capacity::Lumped {
+        lump_hrz(&mut cap, nn);
+    }
     Ok(ThermalElement {
         conductance: Mat::from_fn(nn, nn, |a, b| th.conductivity * lap[a * nn + b]),
         capacity: Mat::from_fn(nn, nn, |a, b| cap[a * nn + b]),
         coupling: Mat::from_fn(3 * nn, nn, |r, b| -beta * div[r * nn + b]),
     })
+}
+
+/// Replaces the symmetric nn × nn matrix `c` (row-major) by its HRZ diagonal: c_aa · Σ_ab c_ab /
+/// Σ_b c_bb, zero off the diagonal (module doc).
+fn lump_hrz(c: &mut [f64], nn: usize) {
+    let total: f64 = c[..nn * nn].iter().sum();
+    let trace: f64 = (0..nn).map(|a| c[a * nn + a]).sum();
+    let diagonal: Vec<f64> = (0..nn).map(|a| c[a * nn + a] * total / trace).collect();
+    c[..nn * nn].fill(0.0);
+    for (a, d) in diagonal.into_iter().enumerate() {
+        c[a * nn + a] = d;
+    }
 }
 
 /// The assembled thermal matrices over all nodes (temperature DOF i = node index i; mechanical

@@ -327,6 +327,7 @@ fn thermal_rows(
         conductivity: t.conductivity,
         specific_heat: t.specific_heat,
         expansion: t.expansion,
+        capacity: t.capacity,
     };
     let quad = Quadrature {
         stiffness_degree: case.model.quadrature.stiffness,

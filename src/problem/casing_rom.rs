@@ -11,11 +11,12 @@
 //! - T_θ is the Craig–Bampton basis of the conduction pencil (K^θθ, C^θθ) with the contact
 //!   nodes' temperatures as masters and *every* fixed-interface conduction mode
 //!   K^θθ_ii φ = μ C^θθ_ii φ: a change of coordinates, not a truncation. Every conduction mode of
-//!   a blade is slow against the contact, so none may be condensed statically (keeping 40, 100 or
-//!   200 of the surrogate's 483 interior modes would give a peak temperature rise over one
-//!   revolution of 24.6, 33.7 or 48.0 K instead of 54.5 K). The gain is in the
-//!   structure: K̃^θθ = blockdiag(K_bb + K_bi Ψ, diag μ) and C̃^θθ = [[·, ·], [·, I]] (an arrow
-//!   matrix), cheaper to multiply and factorise than the FE conduction matrices.
+//!   a blade is slow against the contact, so none may be condensed statically (with the
+//!   consistent capacity, keeping 40, 100 or 200 of the surrogate's 483 interior modes gives a
+//!   peak temperature rise over one revolution of 24.6, 33.7 or 48.0 K instead of 54.5 K). The
+//!   gain is in the structure: K̃^θθ = blockdiag(K_bb + K_bi Ψ, diag μ) and
+//!   C̃^θθ = [[·, ·], [·, I]] (an arrow matrix), cheaper to multiply and factorise than the FE
+//!   conduction matrices.
 //!
 //! C^uu, K^uθ and the load are projected with the same basis, so the reduced model is the
 //! Galerkin projection of the full one.
