@@ -294,6 +294,13 @@ pub fn trace_from<S: ParameterSystem>(
                 if step >= min_step {
                     continue;
                 }
+                if let Some(t) = shrink_scale(&tangent, &mut scales, norm(&current.x)) {
+                    // the scale of a passed resonance made the minimum step large against the
+                    // present amplitude: retry from the initial step in the present scale
+                    tangent = t;
+                    step = initial_step;
+                    continue;
+                }
                 let before = path.points.len().checked_sub(2).map(|i| &path.points[i]);
                 let corner = kink_step(
                     system,
@@ -408,8 +415,32 @@ fn rescale(tangent: Vec<f64>, scales: &mut Scales, x_norm: f64) -> Vec<f64> {
     if x_norm <= scales.x {
         return tangent;
     }
-    let ratio = scales.x / x_norm;
-    scales.x = x_norm;
+    to_scale(&tangent, scales, x_norm)
+}
+
+/// Lowers the unknowns' scale x_s to ‖x‖ when it exceeds ‖x‖ by more than
+/// [`SHRINK_RATIO`], returning the tangent in the new scale; `None` otherwise.
+///
+/// x_s only grows along a path ([`rescale`]): past a resonance of high amplitude it stays at
+/// the peak, and the minimum step, a length in units of x_s, can then move x by more than
+/// the present amplitude. A strongly curved stretch of the path beyond the resonance cannot
+/// be followed at such a step, so this is tried once the step has fallen below its minimum.
+fn shrink_scale(tangent: &[f64], scales: &mut Scales, x_norm: f64) -> Option<Vec<f64>> {
+    if x_norm > 0.0 && scales.x > SHRINK_RATIO * x_norm {
+        Some(to_scale(tangent, scales, x_norm))
+    } else {
+        None
+    }
+}
+
+/// The ratio x_s / ‖x‖ above which a stalled path lowers x_s ([`shrink_scale`]).
+const SHRINK_RATIO: f64 = 4.0;
+
+/// Sets x_s to `x_scale` and converts the unit tangent in (u, μ) = (x / x_s, λ / λ_s) to it:
+/// the same direction in (x, λ), normalised again.
+fn to_scale(tangent: &[f64], scales: &mut Scales, x_scale: f64) -> Vec<f64> {
+    let ratio = scales.x / x_scale;
+    scales.x = x_scale;
     let n = tangent.len() - 1;
     let t: Vec<f64> = tangent
         .iter()
@@ -884,4 +915,39 @@ fn corner_step<S: ParameterSystem>(
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A tangent converted to another x_s keeps its direction in (x, λ) and unit length; a
+    /// stalled path lowers x_s only when it exceeds ‖x‖ by more than the ratio.
+    #[test]
+    fn a_lowered_scale_keeps_the_tangent_direction() {
+        let mut s = Scales {
+            x: 100.0,
+            lambda: 2.0,
+            residual: 1.0,
+        };
+        // (u, μ) = (x / x_s, λ / λ_s): raw direction (dx, dλ) = (t_u x_s, t_μ λ_s)
+        let t = [0.6, 0.0, 0.8];
+        let raw = |t: &[f64], s: &Scales| [t[0] * s.x, t[1] * s.x, t[2] * s.lambda];
+        let before = raw(&t, &s);
+        assert!(
+            shrink_scale(&t, &mut s, 30.0).is_none(),
+            "x_s = 100 ≤ 4 · 30"
+        );
+        assert_eq!(s.x, 100.0);
+        let u = shrink_scale(&t, &mut s, 10.0).expect("x_s = 100 > 4 · 10");
+        assert_eq!(s.x, 10.0);
+        assert!((norm(&u) - 1.0).abs() < 1e-15);
+        let after = raw(&u, &s);
+        // parallel: the cross product of the (x, λ) parts vanishes, and the same sense
+        let cross = before[0] * after[2] - before[2] * after[0];
+        assert!(cross.abs() < 1e-12 * norm(&before) * norm(&after));
+        assert!(dot(&before, &after) > 0.0);
+        // the x part's share grows by the ratio 10: t_u / t_μ = 0.6 / 0.8 · 10
+        assert!((u[0] / u[2] - 7.5).abs() < 1e-12);
+    }
 }

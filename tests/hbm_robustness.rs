@@ -7,8 +7,6 @@
 mod corpus;
 
 use nlrom::continuation::PathEnd;
-use nlrom::hbm::frf::frequency_response;
-use nlrom::hbm::{HbmSystem, ResponseOptions};
 
 const TOLERANCE: f64 = 1e-8;
 
@@ -58,10 +56,11 @@ fn generated_curves_reach_their_end_within_the_tolerance() {
 /// The same 32 cases with every friction element evaluated by the exact continuous-time cycle
 /// (`evaluation = "analytic"`: transitions located as roots, force harmonics integrated
 /// exactly; `contact::exact`). The sampled law's kinks, folds and aliasing are gone, and more
-/// curves reach their end than with the AFT (the floor is the measured count: 30).
+/// curves reach their end than with the AFT (the floor is the measured count: 31; #19, which
+/// starts on a superharmonic resonance and folds back at once, leaves the range).
 #[test]
 fn generated_curves_with_the_exact_cycle_reach_their_end() {
-    const REACHED_AT_LEAST: usize = 30;
+    const REACHED_AT_LEAST: usize = 31;
     let (reached, stopped) = run_first(32, corpus::Evaluation::Analytic);
     assert!(
         reached >= REACHED_AT_LEAST,
@@ -88,6 +87,41 @@ fn the_exact_cycle_passes_where_the_sampled_law_stops() {
     }
 }
 
+/// A sharply curved stretch far past a resonance of high amplitude is followed. Corpus case
+/// #17 (a chain of five masses, two Jenkins elements, H = 5, excitation 1.09 × the slip force,
+/// ζ = 0.17 %, exact cycle): the unknowns' scale x_s stays at the peak, 2800 × the amplitude
+/// at 1.213 rad/s where the path bends sharply, so the minimum step in units of x_s moved x by
+/// more than the response itself and no step converged there. The continuation lowers x_s to
+/// the present amplitude when the step falls below its minimum; the curve reaches its end and
+/// passes 1.3 rad/s, every point within the tolerance.
+#[test]
+fn a_sharp_bend_far_past_a_high_resonance_is_followed() {
+    let case = corpus::evaluated(corpus::case(17, 256), corpus::Evaluation::Analytic);
+    assert!(case.label.contains("chain n=5 H=5"), "{}", case.label);
+    let frf = corpus::trace(&case).expect("a path");
+    assert_eq!(frf.end, PathEnd::ReachedEnd, "{}", case.label);
+    let size = |q: &[f64]| q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let largest = frf.points.iter().map(|p| size(&p.q)).fold(0.0, f64::max);
+    let past = frf
+        .points
+        .iter()
+        .find(|p| p.omega > 1.3)
+        .expect("a point beyond 1.3 rad/s");
+    assert!(
+        largest > 1000.0 * size(&past.q),
+        "peak {largest} against {} past the bend",
+        size(&past.q)
+    );
+    for p in &frf.points {
+        assert!(
+            p.residual <= TOLERANCE,
+            "residual {} at {}",
+            p.residual,
+            p.omega
+        );
+    }
+}
+
 /// A resonance of high amplitude is passed once. Corpus case #9: a chain of five unit masses
 /// grounded at both ends, three Jenkins elements in gross slip (excitation 97 × the slip force),
 /// ζ = 0.12 %. The unknowns' scale is the peak, about 70 × the response off resonance, so the path
@@ -100,14 +134,7 @@ fn the_exact_cycle_passes_where_the_sampled_law_stops() {
 fn a_resonance_of_high_amplitude_is_passed_once() {
     let case = corpus::case(9, 256);
     assert!(case.label.contains("chain n=5"), "{}", case.label);
-    let system = HbmSystem::new(case.layout, &case.model, &case.force).expect("valid system");
-    let frf = frequency_response(
-        &system,
-        &case.options,
-        &ResponseOptions::default(),
-        &mut |_| {},
-    )
-    .expect("a path");
+    let frf = corpus::trace(&case).expect("a path");
     assert_eq!(frf.end, PathEnd::ReachedEnd, "{}", case.label);
     let size: Vec<f64> = frf
         .points

@@ -948,12 +948,10 @@ mod tests {
         ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
     }
 
-    /// The residual alone ([`LinearModel::condensed_residual`], matrix–vector products) equals
-    /// D̄ q − level F̄ from the condensed matrix of [`LinearModel::condense_applied`] on a damped
-    /// 7-DOF model with 3 nonlinear DOFs, forced on linear and nonlinear rows, for every
-    /// harmonic 0..2 (to 1e-12 relative to ‖D̄‖∞ ‖q‖∞).
-    #[test]
-    fn residual_alone_matches_the_condensed_matrix() {
+    /// A damped 7-DOF model with 3 nonlinear DOFs (rows 4, 0, 2), one response DOF and H = 2:
+    /// symmetric K, M (diagonals raised by 6 and 3) and C (0.05 × noise), a force on every row;
+    /// `seeds` are the noise seeds of K, M, C and the force.
+    fn damped_seven_dof(seeds: [usize; 4]) -> LinearModel {
         let n = 7;
         let sym = |seed: usize, diag: f64| {
             Mat::from_fn(n, n, |i, j| {
@@ -961,10 +959,10 @@ mod tests {
                 noise(seed + 31 * a + b) + if i == j { diag } else { 0.0 }
             })
         };
-        let (k, m, c) = (sym(1, 6.0), sym(500, 3.0), sym(900, 0.0));
+        let (k, m, c) = (sym(seeds[0], 6.0), sym(seeds[1], 3.0), sym(seeds[2], 0.0));
         let c = Mat::from_fn(n, n, |i, j| 0.05 * c[(i, j)]);
-        let force: Vec<f64> = (0..n).map(|i| noise(70 + i)).collect();
-        let model = LinearModel::from_real(
+        let force: Vec<f64> = (0..n).map(|i| noise(seeds[3] + i)).collect();
+        LinearModel::from_real(
             k.as_ref(),
             m.as_ref(),
             Some(c.as_ref()),
@@ -973,7 +971,16 @@ mod tests {
             vec![1],
             2,
         )
-        .unwrap();
+        .unwrap()
+    }
+
+    /// The residual alone ([`LinearModel::condensed_residual`], matrix–vector products) equals
+    /// D̄ q − level F̄ from the condensed matrix of [`LinearModel::condense_applied`] on a damped
+    /// 7-DOF model with 3 nonlinear DOFs, forced on linear and nonlinear rows, for every
+    /// harmonic 0..2 (to 1e-12 relative to ‖D̄‖∞ ‖q‖∞).
+    #[test]
+    fn residual_alone_matches_the_condensed_matrix() {
+        let model = damped_seven_dof([1, 500, 900, 70]);
         let (omega, level) = (0.83, 1.7);
         for h in 0..=2 {
             let q: Vec<c64> = (0..3)
@@ -1011,26 +1018,7 @@ mod tests {
     /// layout 1-norm as the operator's norm.
     #[test]
     fn deferred_condensation_matches_the_formed_one() {
-        let n = 7;
-        let sym = |seed: usize, diag: f64| {
-            Mat::from_fn(n, n, |i, j| {
-                let (a, b) = (i.min(j), i.max(j));
-                noise(seed + 31 * a + b) + if i == j { diag } else { 0.0 }
-            })
-        };
-        let (k, m, c) = (sym(11, 6.0), sym(600, 3.0), sym(800, 0.0));
-        let c = Mat::from_fn(n, n, |i, j| 0.05 * c[(i, j)]);
-        let force: Vec<f64> = (0..n).map(|i| noise(90 + i)).collect();
-        let model = LinearModel::from_real(
-            k.as_ref(),
-            m.as_ref(),
-            Some(c.as_ref()),
-            &force,
-            vec![4, 0, 2],
-            vec![1],
-            2,
-        )
-        .unwrap();
+        let model = damped_seven_dof([11, 600, 800, 90]);
         let omega = 0.91;
         let close = |a: &[c64], b: &[c64], what: &str| {
             let scale = b.iter().map(|v| v.norm()).fold(1e-300, f64::max);

@@ -16,7 +16,7 @@ use nlrom::contact::grounded::{DofElement, DofElements};
 use nlrom::contact::law::ContactParams;
 use nlrom::continuation::{ContinuationOptions, PathEnd};
 use nlrom::harmonics::HarmonicLayout;
-use nlrom::hbm::frf::frequency_response;
+use nlrom::hbm::frf::{frequency_response, Frf};
 use nlrom::hbm::{HbmSystem, LinearModel, ResponseOptions};
 use random::Lcg;
 
@@ -188,16 +188,21 @@ fn separating_pair(
     }
 }
 
-/// Traces the case's frequency response.
-pub fn run(case: &Case) -> Outcome {
-    let t0 = std::time::Instant::now();
+/// The case's frequency response (the path, or why its start failed).
+pub fn trace(case: &Case) -> nlrom::error::Result<Frf<Vec<f64>>> {
     let system = HbmSystem::new(case.layout, &case.model, &case.force).expect("valid system");
-    let frf = frequency_response(
+    frequency_response(
         &system,
         &case.options,
         &ResponseOptions::default(),
         &mut |_| {},
-    );
+    )
+}
+
+/// Traces the case's frequency response.
+pub fn run(case: &Case) -> Outcome {
+    let t0 = std::time::Instant::now();
+    let frf = trace(case);
     let seconds = t0.elapsed().as_secs_f64();
     match frf {
         Ok(frf) => Outcome {
