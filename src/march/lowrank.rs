@@ -18,7 +18,11 @@
 //!   Schur complement s = d − qᵀ B p: [[B + B p qᵀ B / s, −B p / s], [−qᵀ B / s, 1 / s]].
 //!
 //! A pivot β or s that cancels to below 1e-8 of its terms, or more updates than the rank of the
-//! last full build (rounding accumulates), asks for a new full build.
+//! last full build (rounding accumulates), asks for a new full build. So does a change of many
+//! columns: each update makes several passes over the r × r inverse and one column of Z, and a
+//! new build costs about as much as r updates, so beyond [`UPDATE_FRACTION`] · r changed columns
+//! (removed plus added) the factors are built anew (the crossover is measured by
+//! `cargo bench --bench lowrank`).
 
 use super::dense;
 use super::element::{Direction, Element};
@@ -32,6 +36,12 @@ pub type Column = (usize, Sparse, Sparse);
 
 /// Pivots that cancel to below this fraction of their terms ask for a full build.
 const PIVOT_TOLERANCE: f64 = 1e-8;
+
+/// Most changed columns (removed plus added), as a fraction of the larger of the two ranks, that
+/// [`LowRank::update`] makes by column updates; a larger change is built anew ([`LowRank::new`]).
+/// One: on 2312 coordinates a build costs as much as 1.0 r (r = 700) to 4 r (r = 100) column
+/// updates.
+pub const UPDATE_FRACTION: f64 = 1.0;
 
 /// The factors of one state: Z = A_stick⁻¹ U (n × r, column-major: column a is
 /// `z[a n..(a + 1) n]`), B = (I + VᵀZ)⁻¹ (r × r, row-major), the sparse columns of V and the
@@ -94,16 +104,21 @@ pub fn columns(elements: &[Element], states: &[ContactState]) -> Vec<Column> {
     out
 }
 
+/// The number of (u, v) columns of element `e` in state `s` (module documentation).
+fn element_rank(e: &Element, s: ContactState) -> usize {
+    match s {
+        ContactState::Stick => 0,
+        ContactState::Slip(_) => 1,
+        ContactState::Separated => 1 + usize::from(e.normal.is_some() && e.applies_normal),
+    }
+}
+
 /// The number of (u, v) columns of the states' change from full stick.
 pub fn rank(elements: &[Element], states: &[ContactState]) -> usize {
     elements
         .iter()
         .zip(states)
-        .map(|(e, s)| match s {
-            ContactState::Stick => 0,
-            ContactState::Slip(_) => 1,
-            ContactState::Separated => 1 + usize::from(e.normal.is_some() && e.applies_normal),
-        })
+        .map(|(e, &s)| element_rank(e, s))
         .sum()
 }
 
@@ -176,11 +191,39 @@ impl LowRank {
             .count()
     }
 
+    /// The number of columns removed and added to move the factors to `states`.
+    pub fn changed_columns(&self, elements: &[Element], states: &[ContactState]) -> usize {
+        elements
+            .iter()
+            .zip(self.states.iter().zip(states))
+            .filter(|(_, (a, b))| a != b)
+            .map(|(e, (&a, &b))| element_rank(e, a) + element_rank(e, b))
+            .sum()
+    }
+
     /// Moves the factors to `states` by removing and adding the columns of the elements whose
-    /// state changed (module documentation). Returns false, leaving the factors unusable, when a
-    /// pivot cancels or the updates since the last full build exceed its rank: the caller then
-    /// builds them anew ([`LowRank::new`]).
+    /// state changed (module documentation). Returns false when the change is better built anew
+    /// (more than [`UPDATE_FRACTION`] of the rank in changed columns, or more updates since the
+    /// last full build than its rank), leaving the factors unchanged, or when a pivot cancels,
+    /// leaving them unusable: the caller then builds them anew ([`LowRank::new`]).
     pub fn update(
+        &mut self,
+        stick_inverse: &[f64],
+        elements: &[Element],
+        states: &[ContactState],
+    ) -> bool {
+        let changed = self.changed_columns(elements, states);
+        let r_new = rank(elements, states);
+        if changed as f64 > UPDATE_FRACTION * self.rank().max(r_new) as f64
+            || self.updates + changed > self.max_updates
+        {
+            return false;
+        }
+        self.update_columns(stick_inverse, elements, states)
+    }
+
+    /// [`LowRank::update`] by column updates whatever the number of changed columns.
+    fn update_columns(
         &mut self,
         stick_inverse: &[f64],
         elements: &[Element],
@@ -453,8 +496,9 @@ mod tests {
     }
 
     /// Factors moved from state to state by column updates (400 random changes of one to three
-    /// of 12 elements) solve like the direct inverse of each state (1e-10), and the updates are
-    /// used (a full build only after the allowed number of updates).
+    /// of 12 elements, whatever their share of the rank) solve like the direct inverse of each
+    /// state (1e-10), and the updates are used (a full build only after the allowed number of
+    /// updates).
     #[test]
     fn updated_factors_solve_like_the_direct_inverse() {
         let (n, elements, base) = fixture(12);
@@ -479,7 +523,7 @@ mod tests {
                 states[e] = ALL[next(4)];
             }
             let changed = lr.differences(&states);
-            if lr.update(&stick_inverse, &elements, &states) {
+            if lr.update_columns(&stick_inverse, &elements, &states) {
                 updated += usize::from(changed > 0);
             } else {
                 lr = LowRank::new(&stick_inverse, n, &elements, &states).unwrap();
@@ -492,6 +536,86 @@ mod tests {
         assert!(
             updated > 300 && built < 40,
             "{updated} updates, {built} builds"
+        );
+    }
+    /// A change of many columns is refused by [`LowRank::update`] (the factors stay those of the
+    /// old state) and built anew; moving the factors there by column updates instead gives the
+    /// same solve as the new build and the direct inverse (1e-10), for changes of 2 to 6 of 40
+    /// elements and of all 40 drawn anew. A change of at most [`UPDATE_FRACTION`] of the rank is
+    /// made by updates.
+    #[test]
+    fn many_changed_columns_are_built_anew_with_the_same_solve() {
+        let (n, elements, base) = fixture(40);
+        let mut stick = base.clone();
+        for e in &elements {
+            e.add_stiffness(ContactState::Stick, &mut stick, n);
+        }
+        let stick_inverse = dense::inverse(&stick, n).unwrap();
+        let mut seed: u64 = 987;
+        let mut next = |m: usize| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 33) as usize % m
+        };
+        let b: Vec<f64> = (0..n).map(|i| 1.0 - 0.3 * i as f64).collect();
+        let (mut refused, mut accepted) = (0, 0);
+        for round in 0..60 {
+            let old: Vec<ContactState> = (0..elements.len()).map(|_| ALL[next(4)]).collect();
+            let lr = LowRank::new(&stick_inverse, n, &elements, &old).unwrap();
+            // even rounds: two to six elements change; odd rounds: every element is drawn anew
+            let mut states = old.clone();
+            if round % 2 == 0 {
+                for _ in 0..2 + round % 5 {
+                    let e = next(elements.len());
+                    states[e] = ALL[next(4)];
+                }
+            } else {
+                states.iter_mut().for_each(|s| *s = ALL[next(4)]);
+            }
+            let changed = lr.changed_columns(&elements, &states);
+            let limit = UPDATE_FRACTION * lr.rank().max(rank(&elements, &states)) as f64;
+            // the rule
+            let mut ruled = lr.clone();
+            if ruled.update(&stick_inverse, &elements, &states) {
+                assert!(
+                    changed as f64 <= limit,
+                    "{changed} columns updated, limit {limit}"
+                );
+                accepted += 1;
+            } else if changed as f64 > limit {
+                assert_eq!(ruled.states(), &old[..]);
+                check(n, &elements, &base, &old, &stick_inverse, &ruled, 1e-10);
+                refused += 1;
+            }
+            // both paths to the new state
+            let mut updated = lr.clone();
+            updated.max_updates = usize::MAX;
+            assert!(updated.update_columns(&stick_inverse, &elements, &states));
+            let built = LowRank::new(&stick_inverse, n, &elements, &states).unwrap();
+            let (mut x_u, mut x_b) = (vec![0.0; n], vec![0.0; n]);
+            updated.solve(&stick_inverse, &b, &mut x_u);
+            built.solve(&stick_inverse, &b, &mut x_b);
+            let scale = dense::norm_inf(&x_b);
+            for (u, v) in x_u.iter().zip(&x_b) {
+                assert!(
+                    (u - v).abs() < 1e-10 * scale,
+                    "{u} vs {v} ({changed} columns)"
+                );
+            }
+            check(
+                n,
+                &elements,
+                &base,
+                &states,
+                &stick_inverse,
+                &updated,
+                1e-10,
+            );
+        }
+        assert!(
+            refused > 20 && accepted > 20,
+            "{refused} refused, {accepted} accepted"
         );
     }
 }
