@@ -449,6 +449,25 @@ mod tests {
         (n, elements, base)
     }
 
+    /// The inverse of the all-stick step matrix of `elements` on `base`.
+    fn stick_inverse(n: usize, elements: &[Element], base: &[f64]) -> Vec<f64> {
+        let mut stick = base.to_vec();
+        for e in elements {
+            e.add_stiffness(ContactState::Stick, &mut stick, n);
+        }
+        dense::inverse(&stick, n).unwrap()
+    }
+
+    /// Pseudo-random draws in 0..m (a linear congruential sequence from `seed`).
+    fn draws(mut seed: u64) -> impl FnMut(usize) -> usize {
+        move |m| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 33) as usize % m
+        }
+    }
+
     /// The direct solve of A_stick + ΔK_c(states) against the low-rank one.
     fn check(
         n: usize,
@@ -482,11 +501,7 @@ mod tests {
     #[test]
     fn low_rank_solve_equals_the_direct_one() {
         let (n, elements, base) = fixture(3);
-        let mut stick = base.clone();
-        for e in &elements {
-            e.add_stiffness(ContactState::Stick, &mut stick, n);
-        }
-        let stick_inverse = dense::inverse(&stick, n).unwrap();
+        let stick_inverse = stick_inverse(n, &elements, &base);
         for code in 0..64 {
             let states = [ALL[code % 4], ALL[(code / 4) % 4], ALL[code / 16]];
             let lr = LowRank::new(&stick_inverse, n, &elements, &states).unwrap();
@@ -502,20 +517,10 @@ mod tests {
     #[test]
     fn updated_factors_solve_like_the_direct_inverse() {
         let (n, elements, base) = fixture(12);
-        let mut stick = base.clone();
-        for e in &elements {
-            e.add_stiffness(ContactState::Stick, &mut stick, n);
-        }
-        let stick_inverse = dense::inverse(&stick, n).unwrap();
+        let stick_inverse = stick_inverse(n, &elements, &base);
         let mut states = vec![ContactState::Stick; elements.len()];
         let mut lr = LowRank::new(&stick_inverse, n, &elements, &states).unwrap();
-        let mut seed: u64 = 12345;
-        let mut next = |m: usize| {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 33) as usize % m
-        };
+        let mut next = draws(12345);
         let (mut updated, mut built) = (0, 0);
         for _ in 0..400 {
             for _ in 0..1 + next(3) {
@@ -538,6 +543,7 @@ mod tests {
             "{updated} updates, {built} builds"
         );
     }
+
     /// A change of many columns is refused by [`LowRank::update`] (the factors stay those of the
     /// old state) and built anew; moving the factors there by column updates instead gives the
     /// same solve as the new build and the direct inverse (1e-10), for changes of 2 to 6 of 40
@@ -546,18 +552,8 @@ mod tests {
     #[test]
     fn many_changed_columns_are_built_anew_with_the_same_solve() {
         let (n, elements, base) = fixture(40);
-        let mut stick = base.clone();
-        for e in &elements {
-            e.add_stiffness(ContactState::Stick, &mut stick, n);
-        }
-        let stick_inverse = dense::inverse(&stick, n).unwrap();
-        let mut seed: u64 = 987;
-        let mut next = |m: usize| {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 33) as usize % m
-        };
+        let stick_inverse = stick_inverse(n, &elements, &base);
+        let mut next = draws(987);
         let b: Vec<f64> = (0..n).map(|i| 1.0 - 0.3 * i as f64).collect();
         let (mut refused, mut accepted) = (0, 0);
         for round in 0..60 {
