@@ -987,6 +987,152 @@ fn the_sparse_projection_of_the_reduced_blade_equals_the_dense_one() {
     assert!(e < 1e-10 && ei < 1e-10, "{e} {ei}");
 }
 
+/// A straight hexa8 blade in Gmsh 2.2 ASCII: chord 30 mm along x (`nx` cells), thickness 4 mm
+/// along y (2 cells), span 50 mm along z from r = 0.2 m (`nz` cells); groups "volume", "root"
+/// (the quads at z = 0.2 m) and "tip_contact" (the line of tip nodes at mid-thickness).
+fn hexa8_blade_msh(nx: usize, nz: usize) -> String {
+    let ny = 2;
+    let id = |i: usize, j: usize, k: usize| 1 + i + (nx + 1) * (j + (ny + 1) * k);
+    let mut nodes = String::new();
+    for k in 0..=nz {
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let (x, y, z) = (
+                    0.03 * i as f64 / nx as f64,
+                    -0.002 + 0.004 * j as f64 / ny as f64,
+                    0.2 + 0.05 * k as f64 / nz as f64,
+                );
+                nodes += &format!("{} {x} {y} {z}\n", id(i, j, k));
+            }
+        }
+    }
+    let mut elements = Vec::new();
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let c = [
+                    id(i, j, k),
+                    id(i + 1, j, k),
+                    id(i + 1, j + 1, k),
+                    id(i, j + 1, k),
+                    id(i, j, k + 1),
+                    id(i + 1, j, k + 1),
+                    id(i + 1, j + 1, k + 1),
+                    id(i, j + 1, k + 1),
+                ];
+                elements.push(format!("5 2 1 1 {}", c.map(|v| v.to_string()).join(" ")));
+            }
+        }
+    }
+    for j in 0..ny {
+        for i in 0..nx {
+            let q = [id(i, j, 0), id(i, j + 1, 0), id(i + 1, j + 1, 0), id(i + 1, j, 0)];
+            elements.push(format!("3 2 2 2 {}", q.map(|v| v.to_string()).join(" ")));
+        }
+    }
+    for i in 0..nx {
+        elements.push(format!("1 2 3 3 {} {}", id(i, 1, nz), id(i + 1, 1, nz)));
+    }
+    let n_nodes = (nx + 1) * (ny + 1) * (nz + 1);
+    let mut out = format!(
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n3\n3 1 \"volume\"\n2 2 \"root\"\n1 3 \"tip_contact\"\n$EndPhysicalNames\n$Nodes\n{n_nodes}\n{nodes}$EndNodes\n$Elements\n{}\n",
+        elements.len()
+    );
+    for (e, line) in elements.iter().enumerate() {
+        out += &format!("{} {line}\n", e + 1);
+    }
+    out + "$EndElements\n"
+}
+
+#[test]
+fn a_casing_model_beyond_the_dense_limit_is_reduced_from_its_sparse_rows() {
+    // A hexa8 blade of 9792 free displacement DOF, above the 6000 DOF of the dense model: without
+    // `[reduction]` a keyed error; with it the Craig–Bampton model (the 17 tip contact nodes as
+    // masters, 10 modes) is formed from the sparse rows. Its static response to the tip load
+    // equals the full model's, solved with faer's sparse LU (Craig–Bampton is exact for loads on
+    // the masters), to 1e-10; it marches into contact (the static tip rise, 6 µm, exceeds the
+    // 2 µm gap).
+    use nlrom::problem::casing_case::casing_model;
+    let dir = std::env::temp_dir().join(format!("nlrom_big_casing_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mesh = dir.join("blade_hexa8.msh");
+    std::fs::write(&mesh, hexa8_blade_msh(16, 64)).unwrap();
+    let text = format!(
+        r#"
+[model]
+mesh = "{}"
+material = {{ young = 110e9, poisson = 0.3, density = 4430 }}
+clamp = ["root"]
+damping = {{ rayleigh = [0.0, 1e-5] }}
+
+[[casing]]
+name = "casing"
+group = "tip_contact"
+axis = {{ origin = [0, 0, 0], direction = [1, 0, 0] }}
+gap = 2e-6
+restitution = 0.0
+mu = 0.15
+speed_rpm = 2000
+
+[excitation]
+group = "tip_contact"
+force = [0.0, 0.0, 100.0]
+
+[march]
+frequency_hz = 33.333333333333336
+periods = 1
+steps_per_period = 3000
+time_step_s = 1e-5
+"#,
+        mesh.display()
+    );
+    let path = dir.join("big.toml");
+    let case = Case::from_str(&text, &path).unwrap();
+    let sm = nlrom::model::build(&case, &mut |_| {}).unwrap();
+    let nm = sm.free.n_free();
+    assert_eq!(nm, 9792);
+    let err = nonsmooth_case(&case, &sm).err().unwrap().to_string();
+    assert!(err.contains("9792 DOF") && err.contains("[reduction]"), "{err}");
+    let full = casing_model(&case, &sm).unwrap();
+    let reduced_case =
+        Case::from_str(&(text + "\n[reduction]\ninterface_modes = 10\n"), &path).unwrap();
+    let t0 = std::time::Instant::now();
+    let rom = nonsmooth_case(&reduced_case, &sm).unwrap();
+    eprintln!(
+        "{nm} DOF reduced to {} in {:.2} s",
+        rom.system.n,
+        t0.elapsed().as_secs_f64()
+    );
+    assert_eq!(rom.system.n, 17 * 3 + 10);
+    // Static tip response: full K u = f (sparse LU) against the reduced K_r u_r = f_r.
+    let f_full = Mat::from_fn(nm, 1, |i, _| full.case.system.force[i].cos);
+    let lu = sm.free.k.as_ref().sp_lu().unwrap();
+    let mut u_full = f_full;
+    lu.solve_in_place(u_full.as_mut());
+    let r = rom.system.n;
+    let k_r = Mat::from_fn(r, r, |i, j| rom.system.stiffness[i * r + j]);
+    let f_r = Mat::from_fn(r, 1, |i, _| rom.system.force[i].cos);
+    let u_r = k_r.partial_piv_lu().solve(&f_r);
+    let rows_full = full.case.settings.record.clone().unwrap();
+    let rows_red = rom.settings.record.clone().unwrap();
+    assert_eq!(rows_full.len(), 51);
+    let scale = rows_full
+        .iter()
+        .map(|&i| u_full[(i, 0)].abs())
+        .fold(0.0, f64::max);
+    let diff = rows_full
+        .iter()
+        .zip(&rows_red)
+        .map(|(&i, &j)| (u_full[(i, 0)] - u_r[(j, 0)]).abs())
+        .fold(0.0, f64::max);
+    eprintln!("static tip response: largest {scale:.3e} m, difference {diff:.2e} m");
+    assert!(scale > 1e-6 && diff <= 1e-10 * scale, "{diff} of {scale}");
+    let h = moreau_jean(&rom.system, &with_steps(&rom.settings, 300)).unwrap();
+    assert!(h.impulse.iter().any(|&l| l > 0.0));
+    assert!(h.x.iter().all(|v| v.is_finite()));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn a_casing_case_refuses_an_interface_reduction() {
     let path = root().join("cases/blade_casing.toml");
