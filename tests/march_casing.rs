@@ -1026,7 +1026,12 @@ fn hexa8_blade_msh(nx: usize, nz: usize) -> String {
     }
     for j in 0..ny {
         for i in 0..nx {
-            let q = [id(i, j, 0), id(i, j + 1, 0), id(i + 1, j + 1, 0), id(i + 1, j, 0)];
+            let q = [
+                id(i, j, 0),
+                id(i, j + 1, 0),
+                id(i + 1, j + 1, 0),
+                id(i + 1, j, 0),
+            ];
             elements.push(format!("3 2 2 2 {}", q.map(|v| v.to_string()).join(" ")));
         }
     }
@@ -1092,7 +1097,10 @@ time_step_s = 1e-5
     let nm = sm.free.n_free();
     assert_eq!(nm, 9792);
     let err = nonsmooth_case(&case, &sm).err().unwrap().to_string();
-    assert!(err.contains("9792 DOF") && err.contains("[reduction]"), "{err}");
+    assert!(
+        err.contains("9792 DOF") && err.contains("[reduction]"),
+        "{err}"
+    );
     let full = casing_model(&case, &sm).unwrap();
     let reduced_case =
         Case::from_str(&(text + "\n[reduction]\ninterface_modes = 10\n"), &path).unwrap();
