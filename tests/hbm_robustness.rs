@@ -7,7 +7,7 @@
 mod corpus;
 
 use nlrom::continuation::PathEnd;
-use nlrom::hbm::frf::frequency_response;
+use nlrom::hbm::frf::{frequency_response, Frf};
 use nlrom::hbm::ResponseOptions;
 
 const TOLERANCE: f64 = 1e-8;
@@ -88,6 +88,25 @@ fn the_exact_cycle_passes_where_the_sampled_law_stops() {
     }
 }
 
+/// Corpus case `i` (N_t ≤ 256) with the exact cycle, whose label contains `kind`: traced, its
+/// end reached and every point within the tolerance.
+fn exact_case_to_its_end(i: u64, kind: &str) -> (corpus::Case, Frf<Vec<f64>>) {
+    let case = corpus::evaluated(corpus::case(i, 256), corpus::Evaluation::Analytic);
+    assert!(case.label.contains(kind), "{}", case.label);
+    let frf = corpus::trace(&case).expect("a path");
+    assert_eq!(frf.end, PathEnd::ReachedEnd, "{}", case.label);
+    for p in &frf.points {
+        assert!(
+            p.residual <= TOLERANCE,
+            "{}: residual {} at {}",
+            case.label,
+            p.residual,
+            p.omega
+        );
+    }
+    (case, frf)
+}
+
 /// A sweep whose start lies on a branch that folds back at once jumps and covers its range.
 /// Corpus case #19 (a separating tangential–normal pair, H = 15, exact cycle): the start at
 /// 0.2 rad/s lies on the fifth-order superharmonic resonance of the open contact (natural
@@ -97,10 +116,7 @@ fn the_exact_cycle_passes_where_the_sampled_law_stops() {
 /// (1e-6 of ‖Q‖), and every point satisfies the tolerance.
 #[test]
 fn a_sweep_that_starts_on_a_folding_branch_jumps_and_reaches_its_end() {
-    let case = corpus::evaluated(corpus::case(19, 256), corpus::Evaluation::Analytic);
-    assert!(case.label.contains("pair H=15"), "{}", case.label);
-    let frf = corpus::trace(&case).expect("a path");
-    assert_eq!(frf.end, PathEnd::ReachedEnd, "{}", case.label);
+    let (case, frf) = exact_case_to_its_end(19, "pair H=15");
     assert_eq!(frf.jumps.len(), 1, "{:?}", frf.jumps);
     let jump = frf.jumps[0];
     assert!(
@@ -110,14 +126,6 @@ fn a_sweep_that_starts_on_a_folding_branch_jumps_and_reaches_its_end() {
     );
     assert!((jump.to - jump.from - case.options.initial_step).abs() <= 1e-12);
     assert!(frf.points[..jump.point].iter().any(|p| p.omega < 0.15));
-    for p in &frf.points {
-        assert!(
-            p.residual <= TOLERANCE,
-            "residual {} at {}",
-            p.residual,
-            p.omega
-        );
-    }
     // the solution at 2.5 rad/s found on its own: a sweep that starts there (its start point
     // by Newton from the linear solution or by continuation in the excitation level)
     let system = nlrom::hbm::HbmSystem::new(case.layout, &case.model, &case.force).unwrap();
@@ -149,10 +157,7 @@ fn a_sweep_that_starts_on_a_folding_branch_jumps_and_reaches_its_end() {
 /// passes 1.3 rad/s, every point within the tolerance.
 #[test]
 fn a_sharp_bend_far_past_a_high_resonance_is_followed() {
-    let case = corpus::evaluated(corpus::case(17, 256), corpus::Evaluation::Analytic);
-    assert!(case.label.contains("chain n=5 H=5"), "{}", case.label);
-    let frf = corpus::trace(&case).expect("a path");
-    assert_eq!(frf.end, PathEnd::ReachedEnd, "{}", case.label);
+    let (_, frf) = exact_case_to_its_end(17, "chain n=5 H=5");
     let size = |q: &[f64]| q.iter().map(|v| v * v).sum::<f64>().sqrt();
     let largest = frf.points.iter().map(|p| size(&p.q)).fold(0.0, f64::max);
     let past = frf
@@ -165,14 +170,6 @@ fn a_sharp_bend_far_past_a_high_resonance_is_followed() {
         "peak {largest} against {} past the bend",
         size(&past.q)
     );
-    for p in &frf.points {
-        assert!(
-            p.residual <= TOLERANCE,
-            "residual {} at {}",
-            p.residual,
-            p.omega
-        );
-    }
 }
 
 /// A resonance of high amplitude is passed once. Corpus case #9: a chain of five unit masses
