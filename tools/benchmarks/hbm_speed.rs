@@ -23,7 +23,8 @@
 //! times less and stick all period (microslip of the interface). `nodense` leaves out the dense
 //! Jacobian and its LU (whose n² memory and n³ time are out of reach beyond about 15 000 unknowns).
 //!
-//! The split (best of `REPEAT` runs, wall clock, `faer::get_global_parallelism` threads):
+//! The split (best of `HBM_SPEED_REPEAT` runs, default 2, wall clock,
+//! `faer::get_global_parallelism` threads):
 //! condensation of the linear part at ω; AFT = contact forces alone (inverse DFT, contact law
 //! march, DFT); contact Jacobian = forces with the analytic Jacobian minus forces alone, into a
 //! dense matrix and into the block storage of `harmonics::BlockJacobian`; linear assembly = the
@@ -64,9 +65,17 @@ use nlrom::problem::settings::case_continuation;
 use nlrom::reduction::reduce;
 use nlrom::{model, Result};
 
-const REPEAT: usize = 2;
+/// Runs of each timed part of the split (`HBM_SPEED_REPEAT`, default 2).
+fn repeat() -> usize {
+    std::env::var("HBM_SPEED_REPEAT")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(2)
+        .max(1)
+}
 
 fn main() -> Result<()> {
+    nlrom::problem::use_one_heap_arena();
     let args: Vec<String> = std::env::args().skip(1).collect();
     let num = |i: usize, default: usize| {
         args.get(i)
@@ -124,9 +133,9 @@ fn peak_rss_gb() -> f64 {
         .map_or(0.0, |kb| kb / 1024.0 / 1024.0)
 }
 
-/// Best wall time (s) of `REPEAT` runs of `f`, and the CPU time of that run.
+/// Best wall time (s) of [`repeat`] runs of `f`, and the CPU time of that run.
 fn best<T>(mut f: impl FnMut() -> T) -> (f64, f64) {
-    (0..REPEAT)
+    (0..repeat())
         .map(|_| {
             let (t, c) = (Instant::now(), cpu_seconds());
             std::hint::black_box(f());
@@ -338,6 +347,8 @@ fn split<F: HarmonicForce>(
             )
             .unwrap();
     });
+    // one block storage at a time (each is (2 n_c)² H values)
+    drop(blocks);
     let mut lin_blocks = structured.linearization(nf);
     let whole_blocks = best(|| fp.evaluate(x, omega, state, &mut lin_blocks).unwrap());
     let residual = best(|| {
@@ -368,7 +379,6 @@ fn split<F: HarmonicForce>(
         x
     });
     drop(lin_blocks);
-    drop(blocks);
     let row = |what: &str, t: (f64, f64), total: f64| {
         println!(
             "  {what:<52} {:>9.4} s {:>5.1} %  (CPU {:.2} s)",
@@ -380,7 +390,7 @@ fn split<F: HarmonicForce>(
     let minus = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0, a.1 - b.1);
     if !dense {
         let total = whole_blocks.0 + formed.0 + structured_solve.0;
-        println!("one Newton iteration, {nf} unknowns (best of {REPEAT}, wall; % of the block-stored + structured iteration {total:.4} s):");
+        println!("one Newton iteration, {nf} unknowns (best of {}, wall; % of the block-stored + structured iteration {total:.4} s):", repeat());
         row("condensation of the linear part", condense, total);
         row("AFT: contact forces", aft, total);
         row(
@@ -424,7 +434,7 @@ fn split<F: HarmonicForce>(
     let lu = best(|| solve_dense(dense, &lin.residual).unwrap());
     let total = whole.0 + lu.0;
     let row = |what: &str, t: (f64, f64)| row(what, t, total);
-    println!("one Newton iteration, {nf} unknowns (best of {REPEAT}, wall; % of the dense iteration {total:.4} s):");
+    println!("one Newton iteration, {nf} unknowns (best of {}, wall; % of the dense iteration {total:.4} s):", repeat());
     row("condensation of the linear part", condense);
     row("AFT: contact forces", aft);
     row(
