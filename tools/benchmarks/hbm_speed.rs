@@ -10,8 +10,9 @@
 //! harmonics (default 3; the case's AFT samples), a continuation of POINTS points (default 8) from
 //! the case's start frequency: wall time per point and per Newton iteration (corrector
 //! iterations; the predictor's tangent solves are included in the per-point time), the linear
-//! solves by path (dense LU or structured, with the mean rank of the low-rank correction), then
-//! the split of one Newton iteration at the last point. KEY=VALUE overrides the case:
+//! solves by path (dense LU or structured, with the mean rank of the low-rank correction), the
+//! peak resident memory and the system time's share of the CPU time, then the split of one
+//! Newton iteration at the last point. KEY=VALUE overrides the case:
 //! `solver=dense|auto|structured[,...]` (`harmonic_balance.linear_solver`), `n0=N` (every contact's
 //! preload), `start=F` (`continuation.start`, in the case's unit).
 //!
@@ -110,6 +111,12 @@ fn main() -> Result<()> {
 /// CPU time (user + system, all threads) of this process so far (s), from /proc/self/stat
 /// (clock ticks of 10 ms); 0 where unavailable.
 fn cpu_seconds() -> f64 {
+    let (user, system) = cpu_split();
+    user + system
+}
+
+/// User and system CPU time of this process so far (s), fields 14 and 15 of /proc/self/stat.
+fn cpu_split() -> (f64, f64) {
     let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
     let after = stat.rsplit(')').next().unwrap_or("");
     let f: Vec<f64> = after
@@ -119,7 +126,7 @@ fn cpu_seconds() -> f64 {
     // fields 14 (utime) and 15 (stime) of proc(5); `after` starts at field 3
     f.get(11)
         .zip(f.get(12))
-        .map_or(0.0, |(u, s)| (u + s) / 100.0)
+        .map_or((0.0, 0.0), |(u, s)| (u / 100.0, s / 100.0))
 }
 
 /// Peak resident memory of this process so far (GB), from /proc/self/status (VmHWM); 0 where
@@ -210,7 +217,7 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
         let mut opts = case_continuation(&case)?;
         opts.max_points = points;
         let rss_before = reset_peak_rss();
-        let (t, c) = (Instant::now(), cpu_seconds());
+        let (t, c, split0) = (Instant::now(), cpu_seconds(), cpu_split());
         let before = linsolve::stats();
         let mut mark = (linsolve::stats(), cpu_seconds());
         let verbose = std::env::var_os("HBM_SPEED_POINTS").is_some();
@@ -230,6 +237,7 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
             mark = (s, c);
         })?;
         let (wall, cpu) = (t.elapsed().as_secs_f64(), cpu_seconds() - c);
+        let system_share = (cpu_split().1 - split0.1) / cpu.max(1e-9);
         let after = linsolve::stats();
         let iterations: usize = path.points.iter().map(|p| p.iterations).sum();
         let n = path.points.len();
@@ -247,7 +255,7 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
         let structured = after.structured - before.structured;
         let krylov = after.krylov - before.krylov;
         println!(
-            "  linear solves: {} dense LU, {structured} structured (mean rank {:.0} = {:.1} % of the unknowns), {} fallbacks to the dense LU, {} factorisations ({:.2} per point), {krylov} by GMRES on earlier factors ({:.1} iterations each); peak RSS of the continuation {:.2} GB (resident before it {rss_before:.2} GB)",
+            "  linear solves: {} dense LU, {structured} structured (mean rank {:.0} = {:.1} % of the unknowns), {} fallbacks to the dense LU, {} factorisations ({:.2} per point), {krylov} by GMRES on earlier factors ({:.1} iterations each); peak RSS of the continuation {:.2} GB (resident before it {rss_before:.2} GB); system time {:.1} % of the continuation's CPU",
             after.dense - before.dense,
             (after.rank_sum - before.rank_sum) as f64 / structured.max(1) as f64,
             100.0 * (after.rank_sum - before.rank_sum) as f64
@@ -256,7 +264,8 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
             after.factorizations - before.factorizations,
             (after.factorizations - before.factorizations) as f64 / n as f64,
             (after.krylov_iterations - before.krylov_iterations) as f64 / krylov.max(1) as f64,
-            peak_rss_gb()
+            peak_rss_gb(),
+            100.0 * system_share
         );
         let points: Vec<(f64, Vec<f64>)> = path
             .points
