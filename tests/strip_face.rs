@@ -113,11 +113,8 @@ fn face_points_integrate_the_consistent_surface_matrix() {
             };
             for &i in points {
                 let p = &fp.points[i];
-                for c in 0..3 {
-                    assert!(
-                        (p.normal[c] - unit_normal[c]).abs() < 1e-12,
-                        "{file} normal"
-                    );
+                for (n, u) in p.normal.iter().zip(&unit_normal) {
+                    assert!((n - u).abs() < 1e-12, "{file} normal");
                 }
                 let out: f64 = (0..3).map(|c| (p.x[c] - centre[c]) * p.normal[c]).sum();
                 assert!(out > 0.0, "{file}: normal points into the volume");
@@ -125,8 +122,8 @@ fn face_points_integrate_the_consistent_surface_matrix() {
                 let pn: f64 = (0..3).map(|c| direction[c] * p.normal[c]).sum();
                 let tp: Vec<f64> = (0..3).map(|c| direction[c] - pn * p.normal[c]).collect();
                 let tl = tp.iter().map(|v| v * v).sum::<f64>().sqrt();
-                for c in 0..3 {
-                    assert!((p.tangent[c] - tp[c] / tl).abs() < 1e-12, "{file} tangent");
+                for (t, q) in p.tangent.iter().zip(&tp) {
+                    assert!((t - q / tl).abs() < 1e-12, "{file} tangent");
                 }
             }
         }
@@ -201,7 +198,7 @@ fn line_strip(m: &Mesh, gauss: usize, kn: f64, distribution: &str) -> String {
             .map(|(i, c)| (i, c[2]))
             .collect();
         assert_eq!(nodes.len(), 4, "section x = {x}");
-        nodes.sort_by(|a, b| a.0.cmp(&b.0));
+        nodes.sort_by_key(|n| n.0);
         if j > 0 {
             for &(i, _) in &nodes {
                 dofs.push(3 * i);

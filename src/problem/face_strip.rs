@@ -104,7 +104,7 @@ pub fn face_points(
                     face.surface_tag
                 )
             };
-            if !(jac > 0.0) {
+            if jac.is_nan() || jac <= 0.0 {
                 return Err(Error::input(format!(
                     "{}: the face has zero area at a Gauss point (a degenerate element)",
                     place()
