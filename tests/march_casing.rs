@@ -21,10 +21,15 @@ fn root() -> PathBuf {
 /// The coarse blade (hexa20, 2 × 2 × 4 cells, chord 30 mm along x, thickness 4 mm along y,
 /// span 50 mm along z from r = 0.2 m) clamped at its root, five contact nodes on the tip line.
 fn blade_case(extra: &str) -> String {
+    blade_case_on("../meshes/blade_coarse.msh", extra)
+}
+
+/// [`blade_case`] on the mesh `mesh` (groups "root" and "tip_contact").
+fn blade_case_on(mesh: &str, extra: &str) -> String {
     format!(
         r#"
 [model]
-mesh = "../meshes/blade_coarse.msh"
+mesh = "{mesh}"
 material = {{ young = 110e9, poisson = 0.3, density = 4430 }}
 clamp = ["root"]
 damping = {{ rayleigh = [0.0, 1e-5] }}
@@ -882,6 +887,249 @@ fn craig_bampton_reduced_blade_follows_the_full_thermoelastic_march() {
     assert!(eu < eu5 && ef < ef5, "{eu} {eu5} {ef} {ef5}");
 }
 
+/// max |a − b| over the rows `rows` and columns `cols` of two row-major n × n matrices, relative
+/// to max |b| there (0 for a zero block).
+fn block_difference(
+    a: &[f64],
+    b: &[f64],
+    n: usize,
+    rows: std::ops::Range<usize>,
+    cols: std::ops::Range<usize>,
+) -> (f64, f64) {
+    let (mut diff, mut size) = (0.0f64, 0.0f64);
+    for i in rows {
+        for j in cols.clone() {
+            diff = diff.max((a[i * n + j] - b[i * n + j]).abs());
+            size = size.max(b[i * n + j].abs());
+        }
+    }
+    (if size > 0.0 { diff / size } else { diff }, size)
+}
+
+#[test]
+fn the_sparse_projection_of_the_reduced_blade_equals_the_dense_one() {
+    // The surrogate (1968 DOF) reduced to 533 coordinates twice: the sparse rows projected by
+    // blocks (the path of every `[reduction]`) and the dense full model projected with the dense
+    // basis. Every block of M, C and K, the load, the obstacles' rows and the heat weights agree to
+    // 1e-10 of the block's largest entry, and so do 200 steps of the march.
+    use nlrom::problem::casing_case::casing_model;
+    use nlrom::problem::casing_rom::{reduce_casing, Projection};
+    let path = root().join("cases/blade_casing.toml");
+    let text = std::fs::read_to_string(&path).unwrap() + "\n[reduction]\ninterface_modes = 20\n";
+    let case = Case::from_str(&text, &path).unwrap();
+    let sm = nlrom::model::build(&case, &mut |_| {}).unwrap();
+    let red = case.reduction.as_ref().unwrap();
+    let reduce = |how| {
+        let t0 = std::time::Instant::now();
+        let model = casing_model(&case, &sm).unwrap();
+        let nc = reduce_casing(&case, &sm, red, model, how).unwrap();
+        eprintln!("{how:?}: {:.3} s", t0.elapsed().as_secs_f64());
+        nc
+    };
+    let sparse = reduce(Projection::Sparse);
+    let dense = reduce(Projection::Dense);
+    let (s, d) = (&sparse.system, &dense.system);
+    let (n, nm) = (d.n, d.n_mech);
+    assert_eq!((s.n, s.n_mech), (n, nm));
+    assert_eq!((n, nm), (533, 41));
+    let mut nonzero_blocks = 0;
+    for (name, a, b) in [
+        ("M", &s.mass, &d.mass),
+        ("C", &s.damping, &d.damping),
+        ("K", &s.stiffness, &d.stiffness),
+    ] {
+        for (block, rows, cols) in [
+            ("uu", 0..nm, 0..nm),
+            ("uθ", 0..nm, nm..n),
+            ("θu", nm..n, 0..nm),
+            ("θθ", nm..n, nm..n),
+        ] {
+            let (e, size) = block_difference(a, b, n, rows, cols);
+            eprintln!("{name}^{block}: largest entry {size:.3e}, difference {e:.2e}");
+            assert!(e <= 1e-10, "{name}^{block}: {e:e} of {size:e}");
+            if size > 0.0 {
+                nonzero_blocks += 1;
+            }
+        }
+    }
+    // M^uu, C^uu, C^θθ, K^uu, K^uθ, K^θθ.
+    assert_eq!(nonzero_blocks, 6);
+    let fmax = d.force.iter().map(|f| f.cos.abs()).fold(0.0, f64::max);
+    for (a, b) in s.force.iter().zip(&d.force) {
+        assert!((a.cos - b.cos).abs() <= 1e-10 * fmax && a.mean == b.mean && a.sin == b.sin);
+    }
+    assert_eq!(s.obstacles.len(), 7);
+    for (a, b) in s.obstacles.iter().zip(&d.obstacles) {
+        for (x, y) in [
+            (&a.normal, &b.normal),
+            (&a.tangential, &b.tangential),
+            (&a.heated, &b.heated),
+        ] {
+            assert_eq!(x.len(), y.len(), "{}", a.name);
+            for (p, q) in x.iter().zip(y) {
+                assert!(p.0 == q.0 && (p.1 - q.1).abs() <= 1e-12, "{p:?} {q:?}");
+            }
+        }
+    }
+    let wmax = d.heat_weights.iter().map(|w| w.abs()).fold(0.0, f64::max);
+    for (a, b) in s.heat_weights.iter().zip(&d.heat_weights) {
+        assert!((a - b).abs() <= 1e-10 * wmax, "{a} {b}");
+    }
+    assert_eq!(s.heat_weights.len(), d.heat_weights.len());
+    assert_eq!(sparse.settings.record, dense.settings.record);
+    let settings = NonsmoothSettings {
+        steps: 200,
+        ..dense.settings.clone()
+    };
+    let (hs, hd) = (
+        moreau_jean(s, &settings).unwrap(),
+        moreau_jean(d, &settings).unwrap(),
+    );
+    let e = eta(&hs.x, &hd.x);
+    let ei = eta(&hs.impulse, &hd.impulse);
+    eprintln!("200 steps: η recorded rows {e:.2e}, impulses {ei:.2e}");
+    assert!(hd.impulse.iter().any(|&l| l > 0.0));
+    assert!(e < 1e-10 && ei < 1e-10, "{e} {ei}");
+}
+
+/// A straight hexa8 blade in Gmsh 2.2 ASCII: chord 30 mm along x (`nx` cells), thickness 4 mm
+/// along y (2 cells), span 50 mm along z from r = 0.2 m (`nz` cells); groups "volume", "root"
+/// (the quads at z = 0.2 m) and "tip_contact" (the line of tip nodes at mid-thickness).
+fn hexa8_blade_msh(nx: usize, nz: usize) -> String {
+    let ny = 2;
+    let id = |i: usize, j: usize, k: usize| 1 + i + (nx + 1) * (j + (ny + 1) * k);
+    let mut nodes = String::new();
+    for k in 0..=nz {
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let (x, y, z) = (
+                    0.03 * i as f64 / nx as f64,
+                    -0.002 + 0.004 * j as f64 / ny as f64,
+                    0.2 + 0.05 * k as f64 / nz as f64,
+                );
+                nodes += &format!("{} {x} {y} {z}\n", id(i, j, k));
+            }
+        }
+    }
+    let mut elements = Vec::new();
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let c = [
+                    id(i, j, k),
+                    id(i + 1, j, k),
+                    id(i + 1, j + 1, k),
+                    id(i, j + 1, k),
+                    id(i, j, k + 1),
+                    id(i + 1, j, k + 1),
+                    id(i + 1, j + 1, k + 1),
+                    id(i, j + 1, k + 1),
+                ];
+                elements.push(format!("5 2 1 1 {}", c.map(|v| v.to_string()).join(" ")));
+            }
+        }
+    }
+    for j in 0..ny {
+        for i in 0..nx {
+            let q = [
+                id(i, j, 0),
+                id(i, j + 1, 0),
+                id(i + 1, j + 1, 0),
+                id(i + 1, j, 0),
+            ];
+            elements.push(format!("3 2 2 2 {}", q.map(|v| v.to_string()).join(" ")));
+        }
+    }
+    for i in 0..nx {
+        elements.push(format!("1 2 3 3 {} {}", id(i, 1, nz), id(i + 1, 1, nz)));
+    }
+    let n_nodes = (nx + 1) * (ny + 1) * (nz + 1);
+    let mut out = format!(
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n3\n3 1 \"volume\"\n2 2 \"root\"\n1 3 \"tip_contact\"\n$EndPhysicalNames\n$Nodes\n{n_nodes}\n{nodes}$EndNodes\n$Elements\n{}\n",
+        elements.len()
+    );
+    for (e, line) in elements.iter().enumerate() {
+        out += &format!("{} {line}\n", e + 1);
+    }
+    out + "$EndElements\n"
+}
+
+#[test]
+fn a_casing_model_beyond_the_dense_limit_is_reduced_from_its_sparse_rows() {
+    // A hexa8 blade of 9792 free displacement DOF, above the 6000 DOF of the dense model: without
+    // `[reduction]` a keyed error; with it the Craig–Bampton model (the 17 tip contact nodes as
+    // masters, 10 modes) is formed from the sparse rows. Its static response to the tip load
+    // equals the full model's, solved with faer's sparse LU (Craig–Bampton is exact for loads on
+    // the masters), to 1e-10; it marches into contact (the static tip rise, 6 µm, exceeds the
+    // 2 µm gap).
+    use nlrom::problem::casing_case::casing_model;
+    let dir = std::env::temp_dir().join(format!("nlrom_big_casing_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mesh = dir.join("blade_hexa8.msh");
+    std::fs::write(&mesh, hexa8_blade_msh(16, 64)).unwrap();
+    let text = blade_case_on(
+        &mesh.display().to_string(),
+        r#"
+[[casing]]
+name = "casing"
+group = "tip_contact"
+axis = { origin = [0, 0, 0], direction = [1, 0, 0] }
+gap = 2e-6
+restitution = 0.0
+mu = 0.15
+speed_rpm = 2000
+"#,
+    );
+    let path = dir.join("big.toml");
+    let case = Case::from_str(&text, &path).unwrap();
+    let sm = nlrom::model::build(&case, &mut |_| {}).unwrap();
+    let nm = sm.free.n_free();
+    assert_eq!(nm, 9792);
+    let err = nonsmooth_case(&case, &sm).err().unwrap().to_string();
+    assert!(
+        err.contains("9792 DOF") && err.contains("[reduction]"),
+        "{err}"
+    );
+    let full = casing_model(&case, &sm).unwrap();
+    let reduced_case =
+        Case::from_str(&(text + "\n[reduction]\ninterface_modes = 10\n"), &path).unwrap();
+    let t0 = std::time::Instant::now();
+    let rom = nonsmooth_case(&reduced_case, &sm).unwrap();
+    eprintln!(
+        "{nm} DOF reduced to {} in {:.2} s",
+        rom.system.n,
+        t0.elapsed().as_secs_f64()
+    );
+    assert_eq!(rom.system.n, 17 * 3 + 10);
+    // Static tip response: full K u = f (sparse LU) against the reduced K_r u_r = f_r.
+    let f_full = Mat::from_fn(nm, 1, |i, _| full.case.system.force[i].cos);
+    let lu = sm.free.k.as_ref().sp_lu().unwrap();
+    let mut u_full = f_full;
+    lu.solve_in_place(u_full.as_mut());
+    let r = rom.system.n;
+    let k_r = Mat::from_fn(r, r, |i, j| rom.system.stiffness[i * r + j]);
+    let f_r = Mat::from_fn(r, 1, |i, _| rom.system.force[i].cos);
+    let u_r = k_r.partial_piv_lu().solve(&f_r);
+    let rows_full = full.case.settings.record.clone().unwrap();
+    let rows_red = rom.settings.record.clone().unwrap();
+    assert_eq!(rows_full.len(), 51);
+    let scale = rows_full
+        .iter()
+        .map(|&i| u_full[(i, 0)].abs())
+        .fold(0.0, f64::max);
+    let diff = rows_full
+        .iter()
+        .zip(&rows_red)
+        .map(|(&i, &j)| (u_full[(i, 0)] - u_r[(j, 0)]).abs())
+        .fold(0.0, f64::max);
+    eprintln!("static tip response: largest {scale:.3e} m, difference {diff:.2e} m");
+    assert!(scale > 1e-6 && diff <= 1e-10 * scale, "{diff} of {scale}");
+    let h = moreau_jean(&rom.system, &with_steps(&rom.settings, 300)).unwrap();
+    assert!(h.impulse.iter().any(|&l| l > 0.0));
+    assert!(h.x.iter().all(|v| v.is_finite()));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn a_casing_case_refuses_an_interface_reduction() {
     let path = root().join("cases/blade_casing.toml");
@@ -1100,6 +1348,55 @@ fn the_temperature_runaway_is_the_thermoelastic_instability_of_the_blade_held_on
     );
     assert!((fitted - sigma).abs() < 0.01 * sigma, "{fitted} vs {sigma}");
     assert!((full - sigma).abs() < 1e-4 * sigma, "{full} vs {sigma}");
+    // The end nodes end below the reference temperature although every heat input is ≥ 0,
+    // which the heat equation forbids (maximum principle): a spatial oscillation, not a
+    // physical effect nor one of the time stepping (h μ_max ≈ 5e-4). Heat at node 4 growing as
+    // e^{σt} penetrates √(κ/σ) = √(6.7 / (4430·520·8.08)) m = 0.6 mm, far below the node spacing
+    // (5 mm along the chord); the discrete response (σ C^θθ + K^θθ) y = e_4 of the full model's
+    // heat rows (HRZ-lumped capacity, hexa20 conduction with positive off-diagonal entries: not
+    // an M-matrix) changes sign at the end nodes, as the march does, while the steady response
+    // K^θθ y = e_4 and the response to a source growing 100 times slower (a 6 mm layer) stay
+    // positive.
+    let full_nc = surrogate("");
+    let fs = &full_nc.system;
+    let (n, nm) = (fs.n, fs.n_mech);
+    let nt = n - nm;
+    let rows: Vec<usize> = order
+        .iter()
+        .map(|&i| fs.obstacles[i].heated[0].0 - nm)
+        .collect();
+    let response = |rate: f64| -> Vec<f64> {
+        let a = Mat::from_fn(nt, nt, |i, j| {
+            rate * fs.damping[(nm + i) * n + nm + j] + fs.stiffness[(nm + i) * n + nm + j]
+        });
+        let y = a
+            .partial_piv_lu()
+            .solve(Mat::from_fn(nt, 1, |i, _| f64::from(i == rows[3])));
+        rows.iter().map(|&r| y[(r, 0)] / y[(rows[3], 0)]).collect()
+    };
+    let positive_off_diagonal = (0..nt)
+        .flat_map(|i| (0..nt).map(move |j| (i, j)))
+        .filter(|&(i, j)| i != j && fs.stiffness[(nm + i) * n + nm + j] > 0.0)
+        .count();
+    let (growing, slow, steady) = (response(sigma), response(0.01 * sigma), response(0.0));
+    let th = theta(last);
+    let marched: Vec<f64> = th.iter().map(|t| t / th[3]).collect();
+    eprintln!(
+        "θ/θ_4 at 0.99 s {marched:.4?}; response to heat growing at σ {growing:.4?}, at σ/100 {slow:.4?}, steady {steady:.4?}; K^θθ has {positive_off_diagonal} positive off-diagonal entries"
+    );
+    assert!(positive_off_diagonal > 0);
+    for v in [&growing, &marched] {
+        assert!(v[0] < 0.0 && v[6] < 0.0, "{v:?}");
+    }
+    for v in [&slow, &steady] {
+        assert!(v.iter().all(|&y| y > 0.0), "{v:?}");
+    }
+    // The march's end-node ratio is the growing response's within a factor 2 (the field also
+    // holds what is left of the heat from before the end nodes lifted off at 0.51 s).
+    for k in [0, 6] {
+        let q = marched[k] / growing[k];
+        assert!((0.5..2.0).contains(&q), "node {}: {q}", k + 1);
+    }
     // Without the thermal expansion the heat rows alone decay (conduction to the root).
     assert!(plain < 0.0, "{plain}");
 }

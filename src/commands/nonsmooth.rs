@@ -19,12 +19,19 @@
 //! and the attributes `time_step`, `gamma`, `gamma_thermal` (`moreau-jean`),
 //! `stability_limit` (`carpenter`: 2/ω_max, s), `thermal_stability_limit` (`carpenter` with heat
 //! rows: 2/μ_max, s), `reference_temperature` (°C, with `[thermal]`), `max_penetration` (m).
+//!
+//! The JSON report splits the run's wall time into the set-up (model, reduction), the march and
+//! the writing of the results, gives the process's CPU time (user + system, all threads) per
+//! phase and in total, and `waiting_for_cpu_seconds`: the time the command's thread was runnable
+//! but waited for a core (Linux scheduler statistics), which is where the wall time beyond the
+//! CPU time goes on a loaded machine.
 
 use std::path::Path;
 use std::time::Instant;
 
 use serde_json::json;
 
+use super::batch::records::{process_cpu_seconds, thread_cpu_wait_seconds};
 use super::Reporter;
 use crate::case::{Case, MarchScheme};
 use crate::error::Result;
@@ -45,6 +52,7 @@ pub fn nonsmooth_command(
     as_json: bool,
 ) -> Result<()> {
     let start = Instant::now();
+    let (cpu0, wait0) = (process_cpu_seconds(), thread_cpu_wait_seconds());
     let structural = model::build(case, &mut |l| rep.info(l))?;
     let nc = nonsmooth_case(case, &structural)?;
     let limit = if scheme == MarchScheme::Carpenter {
@@ -57,10 +65,13 @@ pub fn nonsmooth_command(
     } else {
         None
     };
+    let (setup_wall, setup_cpu) = (start.elapsed().as_secs_f64(), process_cpu_seconds());
     let hist = match scheme {
         MarchScheme::Carpenter => carpenter(&nc.system, &nc.settings)?,
         _ => moreau_jean(&nc.system, &nc.settings)?,
     };
+    let march_cpu = process_cpu_seconds();
+    let write_start = Instant::now();
     let data = march_data(&nc, &hist, limit);
     write_results(
         output,
@@ -70,6 +81,9 @@ pub fn nonsmooth_command(
             ..ResultsFile::default()
         },
     )?;
+    let write_wall = write_start.elapsed().as_secs_f64();
+    let cpu = process_cpu_seconds();
+    let span = |a: Option<f64>, b: Option<f64>| a.zip(b).map(|(a, b)| b - a);
     let impacts = hist.impulse.iter().filter(|&&l| l > 0.0).count();
     let energy_residual = hist
         .energy
@@ -95,9 +109,15 @@ pub fn nonsmooth_command(
         "steps_with_impulse": impacts,
         "max_penetration_m": hist.max_penetration(),
         "max_energy_residual_j": energy_residual,
+        "setup_wall_seconds": setup_wall,
+        "setup_cpu_seconds": span(cpu0, setup_cpu),
         "march_wall_seconds": hist.wall_seconds,
+        "march_cpu_seconds": span(setup_cpu, march_cpu),
+        "write_wall_seconds": write_wall,
         "output": output.display().to_string(),
         "wall_seconds": start.elapsed().as_secs_f64(),
+        "cpu_seconds": span(cpu0, cpu),
+        "waiting_for_cpu_seconds": span(wait0, thread_cpu_wait_seconds()),
     });
     if as_json {
         println!("{report}");

@@ -19,15 +19,17 @@
 //!   force; the Coulomb force μλ is used);
 //! - heat α λ_i into the node's temperature row (W for a force, J for an impulse).
 //!
-//! The load is `[excitation]`'s force per node of its group times cos ωt. The model is dense
-//! (n ≤ [`MAX_DENSE_DOF`]). With `[reduction]` it is then projected on a Craig–Bampton basis
-//! ([`super::casing_rom`]).
+//! The load is `[excitation]`'s force per node of its group times cos ωt. The matrices are
+//! gathered as sparse rows ([`CasingModel`]); the model marched without `[reduction]` is dense
+//! (n ≤ [`MAX_DENSE_DOF`]). With `[reduction]` the rows are projected on a Craig–Bampton basis
+//! ([`super::casing_rom`]) without forming a dense n × n matrix, so the size limit is that of
+//! the reduced model and of the dense conduction modes of the temperature rows.
 
 use std::collections::HashMap;
 
 use super::matrix_case::damping_matrix;
 use super::nonsmooth_case::{march_settings, NonsmoothCase};
-use crate::case::{Case, ExcitationLoad};
+use crate::case::{Case, Damping, ExcitationLoad};
 use crate::error::{Error, Result};
 use crate::fe::thermal::{assemble_thermal, ThermalMaterial};
 use crate::fe::{Materials, Quadrature};
@@ -50,9 +52,74 @@ pub fn radial(p: [f64; 3], o: [f64; 3], a: [f64; 3]) -> Option<([f64; 3], f64)> 
     (len > 0.0).then(|| (r.map(|x| x / len), len))
 }
 
+/// The full casing model of a case as sparse rows: the nonsmooth case whose system has empty
+/// matrices, and M, C, K (n × n) as rows of (column, value) pairs (repeated columns add).
+/// [`CasingModel::dense`] makes it the dense model the schemes march; a `[reduction]` projects the
+/// rows without forming them ([`super::casing_rom::reduce_casing`]).
+pub struct CasingModel {
+    /// The case; `system.mass`, `damping` and `stiffness` are empty.
+    pub case: NonsmoothCase,
+    /// M.
+    pub mass: Vec<Vec<(usize, f64)>>,
+    /// C.
+    pub damping: Vec<Vec<(usize, f64)>>,
+    /// K.
+    pub stiffness: Vec<Vec<(usize, f64)>>,
+}
+
+impl CasingModel {
+    /// The dense model (n ≤ [`MAX_DENSE_DOF`]; `file` names the case in errors).
+    pub fn dense(self, file: &str) -> Result<NonsmoothCase> {
+        let CasingModel {
+            mut case,
+            mass,
+            damping,
+            stiffness,
+        } = self;
+        let (n, nm) = (case.system.n, case.system.n_mech);
+        if n > MAX_DENSE_DOF {
+            return Err(Error::input(format!(
+                "{file}: the nonsmooth model has {n} DOF ({nm} displacements, {} temperatures); the dense schemes take at most {MAX_DENSE_DOF}: add a [reduction] table or use a coarser mesh",
+                n - nm
+            )));
+        }
+        let dense = |rows: &[Vec<(usize, f64)>]| {
+            let mut a = vec![0.0; n * n];
+            for (i, row) in rows.iter().enumerate() {
+                for &(j, v) in row {
+                    a[i * n + j] += v;
+                }
+            }
+            a
+        };
+        case.system.mass = dense(&mass);
+        case.system.damping = dense(&damping);
+        case.system.stiffness = dense(&stiffness);
+        case.system.validate(file)?;
+        Ok(case)
+    }
+}
+
 /// Builds the nonsmooth march of the mesh `case` with `[[casing]]` on its structural model `sm`
-/// (module doc).
+/// (module doc): dense, or reduced with `[reduction]`.
 pub fn casing_case(case: &Case, sm: &StructuralModel) -> Result<NonsmoothCase> {
+    let file = case.path.display().to_string();
+    let model = casing_model(case, sm)?;
+    match &case.reduction {
+        Some(red) => super::casing_rom::reduce_casing(
+            case,
+            sm,
+            red,
+            model,
+            super::casing_rom::Projection::Sparse,
+        ),
+        None => model.dense(&file),
+    }
+}
+
+/// The full model of the mesh `case` with `[[casing]]` on its structural model `sm` as sparse
+/// rows (module doc).
+pub fn casing_model(case: &Case, sm: &StructuralModel) -> Result<CasingModel> {
     let file = case.path.display().to_string();
     let mesh = sm.mesh.as_ref().ok_or_else(|| {
         Error::input(format!(
@@ -91,23 +158,42 @@ pub fn casing_case(case: &Case, sm: &StructuralModel) -> Result<NonsmoothCase> {
     };
     let nt = thermal.as_ref().map_or(0, |t| t.nodes.len());
     let n = nm + nt;
-    if n > MAX_DENSE_DOF {
-        return Err(Error::input(format!(
-            "{file}: the nonsmooth model has {n} DOF ({nm} displacements, {nt} temperatures); the dense schemes take at most {MAX_DENSE_DOF}: use a coarser mesh"
-        )));
-    }
-    let k = sm.free.k.to_dense();
-    let m = sm.free.m.to_dense();
-    let c = damping_matrix(case, sm, k.as_ref(), m.as_ref())?;
-    let mut stiffness = vec![0.0; n * n];
-    let mut mass = vec![0.0; n * n];
-    let mut damping = vec![0.0; n * n];
-    for i in 0..nm {
-        for j in 0..nm {
-            stiffness[i * n + j] = k[(i, j)];
-            mass[i * n + j] = m[(i, j)];
-            if let Some(c) = &c {
-                damping[i * n + j] = c[(i, j)];
+    let mut stiffness = vec![Vec::new(); n];
+    let mut mass = vec![Vec::new(); n];
+    let mut damping = vec![Vec::new(); n];
+    let push = |rows: &mut Vec<Vec<(usize, f64)>>,
+                a: faer::sparse::SparseColMatRef<'_, usize, f64>,
+                scale: f64| {
+        for j in 0..a.ncols() {
+            for (i, &v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+                rows[i].push((j, scale * v));
+            }
+        }
+    };
+    push(&mut stiffness, sm.free.k.as_ref(), 1.0);
+    push(&mut mass, sm.free.m.as_ref(), 1.0);
+    match case.model.damping.as_ref() {
+        None => {}
+        Some(Damping::Rayleigh { alpha, beta }) => {
+            push(&mut damping, sm.free.m.as_ref(), *alpha);
+            push(&mut damping, sm.free.k.as_ref(), *beta);
+        }
+        Some(_) => {
+            if nm > MAX_DENSE_DOF {
+                return Err(Error::input(format!(
+                    "{file}: key 'model.damping': modal or matrix damping of a casing model is formed dense, for at most {MAX_DENSE_DOF} displacements ({nm} here): use Rayleigh damping"
+                )));
+            }
+            let k = sm.free.k.to_dense();
+            let m = sm.free.m.to_dense();
+            if let Some(c) = damping_matrix(case, sm, k.as_ref(), m.as_ref())? {
+                for (i, row) in damping.iter_mut().enumerate().take(nm) {
+                    row.extend(
+                        (0..nm)
+                            .filter(|&j| c[(i, j)] != 0.0)
+                            .map(|j| (j, c[(i, j)])),
+                    );
+                }
             }
         }
     }
@@ -117,19 +203,13 @@ pub fn casing_case(case: &Case, sm: &StructuralModel) -> Result<NonsmoothCase> {
             theta_of.insert(node, nm + a);
         }
         for (a, row) in t.conductance.iter().enumerate() {
-            for &(b, v) in row {
-                stiffness[(nm + a) * n + nm + b] += v;
-            }
+            stiffness[nm + a].extend(row.iter().map(|&(b, v)| (nm + b, v)));
         }
         for (a, row) in t.capacity.iter().enumerate() {
-            for &(b, v) in row {
-                damping[(nm + a) * n + nm + b] += v;
-            }
+            damping[nm + a].extend(row.iter().map(|&(b, v)| (nm + b, v)));
         }
         for (i, &p) in sm.free.free_dofs.iter().enumerate() {
-            for &(b, v) in &t.coupling[p] {
-                stiffness[i * n + nm + b] += v;
-            }
+            stiffness[i].extend(t.coupling[p].iter().map(|&(b, v)| (nm + b, v)));
         }
     }
     let mut dof_names: Vec<String> = sm
@@ -155,9 +235,9 @@ pub fn casing_case(case: &Case, sm: &StructuralModel) -> Result<NonsmoothCase> {
     let mut sys = NonsmoothSystem {
         n,
         n_mech: nm,
-        mass,
-        damping,
-        stiffness,
+        mass: Vec::new(),
+        damping: Vec::new(),
+        stiffness: Vec::new(),
         force: vec![Harmonic::default(); n],
         omega,
         obstacles: Vec::new(),
@@ -247,7 +327,6 @@ pub fn casing_case(case: &Case, sm: &StructuralModel) -> Result<NonsmoothCase> {
             }
         }
     }
-    sys.validate(&file)?;
     // Recorded DOF: the response groups (else the contact nodes), then the contact nodes'
     // temperatures.
     let response_nodes: Vec<usize> = match case.response.as_ref().filter(|r| !r.groups.is_empty()) {
@@ -284,17 +363,18 @@ pub fn casing_case(case: &Case, sm: &StructuralModel) -> Result<NonsmoothCase> {
             temperature_nodes.push(mesh.node_tags[i]);
         }
     }
-    let full = NonsmoothCase {
-        system: sys,
-        settings: march_settings(case, record)?,
-        response,
-        temperature_nodes,
-        reference_temperature: case.thermal.as_ref().map(|t| t.reference_temperature),
-    };
-    match &case.reduction {
-        Some(red) => super::casing_rom::reduce_casing(case, sm, red, full),
-        None => Ok(full),
-    }
+    Ok(CasingModel {
+        case: NonsmoothCase {
+            system: sys,
+            settings: march_settings(case, record)?,
+            response,
+            temperature_nodes,
+            reference_temperature: case.thermal.as_ref().map(|t| t.reference_temperature),
+        },
+        mass,
+        damping,
+        stiffness,
+    })
 }
 
 /// The thermal matrices restricted to the free temperature rows, as sparse rows.

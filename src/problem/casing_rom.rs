@@ -1,5 +1,5 @@
 //! The Craig–Bampton reduced model of a `[[casing]]` case with `[reduction]`: the nonsmooth
-//! thermoelastic model of [`super::casing_case`] projected ([`crate::march::reduced::project`])
+//! thermoelastic model of [`super::casing_case`] projected
 //! on x = T x_r, T = blockdiag(T_u, T_θ), as Thorin et al. (ASME GT2018-75959, 2018, §2.3)
 //! reduce the blade before marching it.
 //!
@@ -19,16 +19,20 @@
 //!   conduction matrices.
 //!
 //! C^uu, K^uθ and the load are projected with the same basis, so the reduced model is the
-//! Galerkin projection of the full one.
+//! Galerkin projection of the full one. The projection works on the sparse rows of the full model
+//! block by block ([`crate::march::reduced::project_sparse`]), so no n × n array is formed: the
+//! Craig–Bampton basis itself comes from a sparse factorisation of K^uu_ii with faer, and the dense parts are the reduced matrices and the conduction modes of the
+//! temperature rows (n_θ × n_θ, an eigen-decomposition of O(n_θ³)).
 
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 
+use super::casing_case::CasingModel;
 use super::nonsmooth_case::NonsmoothCase;
 use crate::case::{Case, Reduction};
 use crate::eigen::pencil::pencil_modes;
 use crate::error::{Error, Result};
-use crate::march::reduced::project;
+use crate::march::reduced::{project, project_sparse, BlockBasis};
 use crate::model::StructuralModel;
 use crate::reduction::{case_master_groups, craig_bampton, partition, CbOptions, Partition};
 use crate::rom::MasterRole;
@@ -118,15 +122,29 @@ fn full_cb_basis(
     })
 }
 
-/// Reduces the full casing model `full` of `case` (module doc).
+/// How [`reduce_casing`] forms the reduced matrices TᵀAT.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Projection {
+    /// From the sparse rows by blocks ([`crate::march::reduced::project_sparse`]): no n × n
+    /// array, no size limit but the reduced model's.
+    Sparse,
+    /// From the dense full model ([`crate::march::reduced::project`]; n ≤
+    /// [`super::casing_case::MAX_DENSE_DOF`]): the reference the sparse projection is tested
+    /// against.
+    Dense,
+}
+
+/// Reduces the full casing model `full` of `case` (module doc), projecting its matrices as `how`
+/// says.
 pub fn reduce_casing(
     case: &Case,
     sm: &StructuralModel,
     red: &Reduction,
-    full: NonsmoothCase,
+    full: CasingModel,
+    how: Projection,
 ) -> Result<NonsmoothCase> {
     let file = case.path.display().to_string();
-    let sys = &full.system;
+    let sys = &full.case.system;
     let (n, nm) = (sys.n, sys.n_mech);
     if red.gsi_modes.is_some() {
         return Err(Error::input(format!(
@@ -163,7 +181,7 @@ pub fn reduce_casing(
     // Thermal basis: the contact nodes' temperatures (heated or recorded rows) and every
     // conduction mode.
     let nt = n - nm;
-    let recorded = full.settings.record.clone().unwrap_or_default();
+    let recorded = full.case.settings.record.clone().unwrap_or_default();
     let mut thermal_masters: Vec<usize> = Vec::new();
     for &r in sys
         .obstacles
@@ -176,10 +194,18 @@ pub fn reduce_casing(
         }
     }
     let thermal = if nt > 0 {
-        let block = |a: &[f64]| Mat::from_fn(nt, nt, |i, j| a[(nm + i) * n + nm + j]);
+        let block = |rows: &[Vec<(usize, f64)>]| {
+            let mut b = Mat::<f64>::zeros(nt, nt);
+            for (a, row) in rows[nm..].iter().enumerate() {
+                for &(j, v) in row.iter().filter(|&&(j, _)| j >= nm) {
+                    b[(a, j - nm)] += v;
+                }
+            }
+            b
+        };
         let basis = full_cb_basis(
-            block(&sys.stiffness).as_ref(),
-            block(&sys.damping).as_ref(),
+            block(&full.stiffness).as_ref(),
+            block(&full.damping).as_ref(),
             &thermal_masters,
         )
         .map_err(|e| Error::Compute(format!("{file}: the heat rows' modes: {e}")))?;
@@ -195,13 +221,40 @@ pub fn reduce_casing(
     let tt = thermal
         .as_ref()
         .map_or_else(|| Mat::<f64>::zeros(0, 0), |b| b.t.clone());
-    let r = ru + tt.ncols();
-    let mut t = Mat::<f64>::zeros(n, r);
-    t.as_mut().submatrix_mut(0, 0, nm, ru).copy_from(&tu);
-    t.as_mut()
-        .submatrix_mut(nm, ru, nt, tt.ncols())
-        .copy_from(&tt);
-    let mut system = project(sys, t.as_ref(), ru, names)?;
+    let blocks = BlockBasis {
+        mech: tu.as_ref(),
+        thermal: tt.as_ref(),
+    };
+    let mut system = match how {
+        Projection::Sparse => project_sparse(
+            sys,
+            [&full.mass, &full.damping, &full.stiffness],
+            &blocks,
+            names,
+        )?,
+        Projection::Dense => {
+            let r = ru + tt.ncols();
+            let mut t = Mat::<f64>::zeros(n, r);
+            t.as_mut().submatrix_mut(0, 0, nm, ru).copy_from(&tu);
+            t.as_mut()
+                .submatrix_mut(nm, ru, nt, tt.ncols())
+                .copy_from(&tt);
+            let dense = CasingModel {
+                case: NonsmoothCase {
+                    system: sys.clone(),
+                    settings: full.case.settings.clone(),
+                    response: Vec::new(),
+                    temperature_nodes: Vec::new(),
+                    reference_temperature: None,
+                },
+                mass: full.mass.clone(),
+                damping: full.damping.clone(),
+                stiffness: full.stiffness.clone(),
+            }
+            .dense(&file)?;
+            project(&dense.system, t.as_ref(), ru, names)?
+        }
+    };
     if let Some(b) = &thermal {
         // The exact structure of the heat rows (the projection leaves round-off in the zero
         // blocks): K̃ = blockdiag(K_bb + K_bi Ψ, diag μ), C̃ = [[·, ·], [·, I]].
@@ -233,6 +286,7 @@ pub fn reduce_casing(
             })
         })
         .collect::<Result<Vec<_>>>()?;
+    let full = full.case;
     Ok(NonsmoothCase {
         system,
         settings: crate::march::obstacle::NonsmoothSettings {

@@ -322,6 +322,16 @@ pub fn process_cpu_seconds() -> Option<f64> {
     }
 }
 
+/// The time (s) the calling thread has spent runnable but waiting for a CPU (the run-queue
+/// delay, second field of `/proc/thread-self/schedstat`, ns): on a loaded machine, the part of
+/// its wall time that other processes took. `None` where it cannot be read (not Linux, or a
+/// kernel without scheduler statistics).
+pub fn thread_cpu_wait_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let delay: f64 = stat.split_whitespace().nth(1)?.parse().ok()?;
+    Some(delay * 1e-9)
+}
+
 /// `$SLURM_ARRAY_JOB_ID_$SLURM_ARRAY_TASK_ID` (or `$SLURM_JOB_ID`) inside a Slurm job.
 pub fn slurm_job() -> Option<String> {
     let var = |k: &str| std::env::var(k).ok().filter(|v| !v.is_empty());
