@@ -21,20 +21,23 @@ fn main() {
         corpus::Evaluation::Aft
     };
     let (mut reached, mut points, mut iterations, mut seconds) = (0, 0, 0, 0.0);
+    let mut jumped = 0;
     let mut worst: f64 = 0.0;
     for i in 0..count {
         let case = corpus::evaluated(corpus::case(i, 4096), evaluation);
         let o = corpus::run(&case);
         println!(
-            "{:<100} {:>5} pts {:>6} its {:>8.3} s  worst residual {:.1e}  {}",
+            "{:<100} {:>5} pts {:>6} its {:>8.3} s  worst residual {:.1e}  jumps {}  {}",
             case.label,
             o.points,
             o.iterations,
             o.seconds,
             o.worst_residual,
+            o.jumps,
             if o.reached_end { "end" } else { &o.end }
         );
         reached += usize::from(o.reached_end);
+        jumped += usize::from(o.reached_end && o.jumps > 0);
         points += o.points;
         iterations += o.iterations;
         seconds += o.seconds;
@@ -42,7 +45,7 @@ fn main() {
     }
     let n = count as f64;
     println!(
-        "{reached} of {count} curves reached their end ({:.1} %); per curve: {:.1} points, {:.1} Newton iterations, {:.3} s; worst accepted residual {worst:.2e}",
+        "{reached} of {count} curves reached their end ({:.1} %; {jumped} of them with a jump of the sweep); per curve: {:.1} points, {:.1} Newton iterations, {:.3} s; worst accepted residual {worst:.2e}",
         100.0 * reached as f64 / n,
         points as f64 / n,
         iterations as f64 / n,

@@ -361,6 +361,7 @@ fn evaluation_parser() -> impl TypedValueParser<Value = Evaluation> {
 
 /// Parses the command line, runs the command and returns the exit status; errors go to stderr.
 pub fn main() -> i32 {
+    crate::problem::use_one_heap_arena();
     let cli = Cli::parse();
     match run(cli) {
         Ok(()) => 0,

@@ -47,8 +47,8 @@ use faer::Mat;
 
 use crate::error::{Error, Result};
 use crate::nonlinear::{
-    newton_core, norm, solve_fixed, Factored, Iterate, Jacobian, LinearSolver, Linearization,
-    NewtonOptions, NewtonOutcome, NewtonSolution, ParameterSystem,
+    linsolve, newton_core, norm, solve_fixed, Factored, Iterate, Jacobian, LinearSolver,
+    Linearization, NewtonOptions, NewtonOutcome, NewtonSolution, ParameterSystem,
 };
 
 /// Continuation settings (parameter values in the parameter's unit, e.g. rad/s).
@@ -75,6 +75,9 @@ pub struct ContinuationOptions {
     /// [`PathEnd::LeftRange`] (a frequency response stops at ω ≤ 0, where the harmonic balance
     /// has no physical meaning). `None`: no bound besides the range rule.
     pub floor: Option<f64>,
+    /// Most jumps of a frequency sweep whose path leaves its range on the start side
+    /// (`hbm::frf::frequency_response`); 0: the response ends there. Not used by [`trace`].
+    pub max_jumps: usize,
 }
 
 impl ContinuationOptions {
@@ -90,6 +93,7 @@ impl ContinuationOptions {
             target_iterations: 4,
             newton: NewtonOptions::default(),
             floor: None,
+            max_jumps: 4,
         }
     }
 
@@ -705,7 +709,8 @@ fn correct_on<S: ParameterSystem>(
     let residual = norm(&it.g[..n]);
     // the tangent system [G; tangentᵀ] at the solution: the corrector's matrix there with its
     // last row replaced; solved on the factors of the last step's matrix when they are close
-    // enough to it (refined to the backward error of a direct solve), factorised otherwise
+    // enough to it (refined to the backward error of a direct solve, or by GMRES on them),
+    // factorised otherwise
     let matrix = match it.matrix {
         Some(m) => Some(m),
         None => eval(&it.z, true).ok().and_then(|e| e.matrix),
@@ -719,7 +724,19 @@ fn correct_on<S: ParameterSystem>(
         let mut rhs = vec![0.0; n + 1];
         rhs[n] = 1.0;
         let near = (border == tangent)
-            .then(|| solver.solve_near(&factors, &m, &rhs))
+            .then(|| {
+                solver.solve_near(&factors, &m, &rhs).or_else(|| {
+                    // GMRES on the same factors, with the sign of det from its Hessenberg
+                    // matrix; a solve that needs many iterations factorises, so that the
+                    // next corrector starts on fresh factors
+                    solver
+                        .reuses_factors(n + 1)
+                        .then(|| solver.solve_krylov_signed(&factors, &m, &rhs))
+                        .flatten()
+                        .filter(|(_, k, _)| *k <= linsolve::KRYLOV_REFRESH)
+                        .map(|(t, _, sign)| (t, sign))
+                })
+            })
             .flatten();
         match near {
             Some((t, sign)) => unit_tangent(t, sign, Some(factors)),

@@ -8,6 +8,7 @@ mod support;
 use faer::Mat;
 use nlrom::continuation::{trace, ContinuationOptions, PathEnd, PathPoint};
 use nlrom::harmonics::HarmonicLayout;
+use nlrom::hbm::frf::frequency_response;
 use nlrom::hbm::response::output_response;
 use nlrom::hbm::{FrequencyPath, HbmSystem, LevelPath, LinearModel, ResponseOptions};
 use nlrom::nonlinear::{Linearization, ParameterSystem};
@@ -361,4 +362,52 @@ fn a_path_that_reaches_the_parameter_floor_ends_there() {
     assert!(last.parameter < 0.35, "last point at {}", last.parameter);
     // the turning point at λ = 1 was passed: x − 1 changed sign
     assert!((last.x[0] - 1.0) * (bounded.points[0].x[0] - 1.0) < 0.0);
+}
+
+/// A downward sweep started on the lower branch inside the bistable range: the path folds at the
+/// lower fold ω₋, runs back up the middle branch past the start by more than half the range and
+/// leaves it. The sweep jumps from ω₋ one initial step down to the upper branch, the only
+/// solution there, and reaches the end. Checked against the HB-1 relation: the jump's origin at
+/// the analytic fold frequency (2e-3), every point on the curve (1e-6), the point after the
+/// jump on the upper branch. With `max_jumps = 0` the same sweep ends where it left the range.
+#[test]
+fn a_sweep_that_leaves_its_range_jumps_at_the_fold() {
+    let model = duffing_model(1);
+    let force = cubic();
+    let system = HbmSystem::new(HarmonicLayout::new(1, 8).unwrap(), &model, &force).unwrap();
+    let mut opts = ContinuationOptions::new(1.2, 1.0, 0.01);
+    opts.max_step = Some(0.005);
+    let frf = frequency_response(&system, &opts, &ResponseOptions::default(), &mut |_| {}).unwrap();
+    assert_eq!(frf.end, PathEnd::ReachedEnd);
+    assert_eq!(frf.jumps.len(), 1, "jumps {:?}", frf.jumps);
+    let jump = frf.jumps[0];
+    let (_, w_min) = analytic_folds();
+    assert!(
+        (jump.from - w_min).abs() <= 2e-3 * w_min,
+        "jump from {} vs the fold {w_min}",
+        jump.from
+    );
+    assert!((jump.to - (jump.from - 0.01)).abs() <= 1e-12);
+    // before the jump the path ran back up the middle branch beyond the start
+    assert!(frf.points[..jump.point].iter().any(|p| p.omega > 1.3));
+    for p in &frf.points {
+        let r = hb1_residual(p.omega, p.response.amplitude[0]);
+        assert!(r.abs() <= 1e-6, "ω = {}: relation residual {r:e}", p.omega);
+    }
+    let landed = &frf.points[jump.point];
+    assert!((landed.omega - jump.to).abs() <= 1e-12);
+    // the upper branch (the single real root of the relation at ω = 1.1236 is A = 0.9654)
+    assert!(
+        landed.response.amplitude[0] > 0.9,
+        "{}",
+        landed.response.amplitude[0]
+    );
+    assert!((frf.points.last().unwrap().omega - 1.0).abs() <= 1e-12);
+
+    opts.max_jumps = 0;
+    let stopped =
+        frequency_response(&system, &opts, &ResponseOptions::default(), &mut |_| {}).unwrap();
+    assert_eq!(stopped.end, PathEnd::LeftRange);
+    assert!(stopped.jumps.is_empty());
+    assert_eq!(stopped.points.len(), jump.point);
 }

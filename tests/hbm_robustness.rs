@@ -7,6 +7,8 @@
 mod corpus;
 
 use nlrom::continuation::PathEnd;
+use nlrom::hbm::frf::{frequency_response, Frf};
+use nlrom::hbm::ResponseOptions;
 
 const TOLERANCE: f64 = 1e-8;
 
@@ -55,12 +57,11 @@ fn generated_curves_reach_their_end_within_the_tolerance() {
 
 /// The same 32 cases with every friction element evaluated by the exact continuous-time cycle
 /// (`evaluation = "analytic"`: transitions located as roots, force harmonics integrated
-/// exactly; `contact::exact`). The sampled law's kinks, folds and aliasing are gone, and more
-/// curves reach their end than with the AFT (the floor is the measured count: 31; #19, which
-/// starts on a superharmonic resonance and folds back at once, leaves the range).
+/// exactly; `contact::exact`). The sampled law's kinks, folds and aliasing are gone, and every
+/// curve reaches its end (#19 with a jump of the sweep, below).
 #[test]
 fn generated_curves_with_the_exact_cycle_reach_their_end() {
-    const REACHED_AT_LEAST: usize = 31;
+    const REACHED_AT_LEAST: usize = 32;
     let (reached, stopped) = run_first(32, corpus::Evaluation::Analytic);
     assert!(
         reached >= REACHED_AT_LEAST,
@@ -87,6 +88,66 @@ fn the_exact_cycle_passes_where_the_sampled_law_stops() {
     }
 }
 
+/// Corpus case `i` (N_t ≤ 256) with the exact cycle, whose label contains `kind`: traced, its
+/// end reached and every point within the tolerance.
+fn exact_case_to_its_end(i: u64, kind: &str) -> (corpus::Case, Frf<Vec<f64>>) {
+    let case = corpus::evaluated(corpus::case(i, 256), corpus::Evaluation::Analytic);
+    assert!(case.label.contains(kind), "{}", case.label);
+    let frf = corpus::trace(&case).expect("a path");
+    assert_eq!(frf.end, PathEnd::ReachedEnd, "{}", case.label);
+    for p in &frf.points {
+        assert!(
+            p.residual <= TOLERANCE,
+            "{}: residual {} at {}",
+            case.label,
+            p.residual,
+            p.omega
+        );
+    }
+    (case, frf)
+}
+
+/// A sweep whose start lies on a branch that folds back at once jumps and covers its range.
+/// Corpus case #19 (a separating tangential–normal pair, H = 15, exact cycle): the start at
+/// 0.2 rad/s lies on the fifth-order superharmonic resonance of the open contact (natural
+/// frequency 1 rad/s), whose branch folds back at about 0.202 rad/s and runs down to ω = 0. The
+/// sweep jumps from that fold one initial step (0.005 rad/s) up and reaches 2.5 rad/s. Checked
+/// independently: the last point equals the start point of a sweep that starts at 2.5 rad/s
+/// (1e-6 of ‖Q‖), and every point satisfies the tolerance.
+#[test]
+fn a_sweep_that_starts_on_a_folding_branch_jumps_and_reaches_its_end() {
+    let (case, frf) = exact_case_to_its_end(19, "pair H=15");
+    assert_eq!(frf.jumps.len(), 1, "{:?}", frf.jumps);
+    let jump = frf.jumps[0];
+    assert!(
+        jump.from > 0.2 && jump.from < 0.21,
+        "the branch through the start folds at {}",
+        jump.from
+    );
+    assert!((jump.to - jump.from - case.options.initial_step).abs() <= 1e-12);
+    assert!(frf.points[..jump.point].iter().any(|p| p.omega < 0.15));
+    // the solution at 2.5 rad/s found on its own: a sweep that starts there (its start point
+    // by Newton from the linear solution or by continuation in the excitation level)
+    let system = nlrom::hbm::HbmSystem::new(case.layout, &case.model, &case.force).unwrap();
+    let mut back = case.options.clone();
+    back.start = 2.5;
+    back.end = 2.4;
+    let direct = frequency_response(&system, &back, &ResponseOptions::default(), &mut |_| {})
+        .expect("a start point at 2.5 rad/s");
+    let direct = &direct.points[0];
+    assert_eq!(direct.omega, 2.5);
+    let last = frf.points.last().unwrap();
+    assert_eq!(last.omega, 2.5);
+    let size = |q: &[f64]| q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let gap: Vec<f64> = last.q.iter().zip(&direct.q).map(|(a, b)| a - b).collect();
+    assert!(
+        size(&gap) <= 1e-6 * size(&direct.q),
+        "{} against {}",
+        size(&gap),
+        size(&direct.q)
+    );
+}
+
 /// A sharply curved stretch far past a resonance of high amplitude is followed. Corpus case
 /// #17 (a chain of five masses, two Jenkins elements, H = 5, excitation 1.09 × the slip force,
 /// ζ = 0.17 %, exact cycle): the unknowns' scale x_s stays at the peak, 2800 × the amplitude
@@ -96,10 +157,7 @@ fn the_exact_cycle_passes_where_the_sampled_law_stops() {
 /// passes 1.3 rad/s, every point within the tolerance.
 #[test]
 fn a_sharp_bend_far_past_a_high_resonance_is_followed() {
-    let case = corpus::evaluated(corpus::case(17, 256), corpus::Evaluation::Analytic);
-    assert!(case.label.contains("chain n=5 H=5"), "{}", case.label);
-    let frf = corpus::trace(&case).expect("a path");
-    assert_eq!(frf.end, PathEnd::ReachedEnd, "{}", case.label);
+    let (_, frf) = exact_case_to_its_end(17, "chain n=5 H=5");
     let size = |q: &[f64]| q.iter().map(|v| v * v).sum::<f64>().sqrt();
     let largest = frf.points.iter().map(|p| size(&p.q)).fold(0.0, f64::max);
     let past = frf
@@ -112,14 +170,6 @@ fn a_sharp_bend_far_past_a_high_resonance_is_followed() {
         "peak {largest} against {} past the bend",
         size(&past.q)
     );
-    for p in &frf.points {
-        assert!(
-            p.residual <= TOLERANCE,
-            "residual {} at {}",
-            p.residual,
-            p.omega
-        );
-    }
 }
 
 /// A resonance of high amplitude is passed once. Corpus case #9: a chain of five unit masses

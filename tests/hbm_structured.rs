@@ -89,8 +89,9 @@ fn compare<T>(dense: &CurvePath<T>, structured: &CurvePath<T>) -> f64 {
 /// solved to a backward error of 1e-12, not to rounding, and the difference is carried along 638
 /// points), with the same folds passed, so the same tangent orientations; the structured run
 /// never fell back to the dense LU, its correction had positive rank (the element separates
-/// within the period, coupling the harmonics), and it factorised half as often as the dense run
-/// (the other steps by GMRES on earlier factors).
+/// within the period, coupling the harmonics), and it factorised less often than the dense run
+/// (the other steps and most tangents by GMRES on earlier factors, the tangents' orientation
+/// from the GMRES Hessenberg matrix: 16 factorisations against 1 313 measured).
 #[test]
 fn separation_folds_are_the_same_with_the_structured_solve() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
@@ -123,7 +124,7 @@ fn separation_folds_are_the_same_with_the_structured_solve() {
     assert!(worst <= 1e-8, "{worst:e}");
     assert_eq!((sd.structured, sd.krylov), (0, 0));
     assert_eq!((ss.dense, ss.fallbacks), (0, 0), "{ss:?}");
-    assert!(ss.structured > 100, "{ss:?}");
+    assert!(ss.structured > 0, "{ss:?}");
     // most corrector steps after the first reuse the factors by GMRES
     assert!(
         ss.krylov > 100 && ss.factorizations < sd.factorizations,

@@ -61,6 +61,7 @@ fn frf(n0: f64, points: usize, harmonics: usize, contacts: usize) -> FrfData {
         harmonics,
         response_dofs,
         points,
+        jumps: Vec::new(),
     }
 }
 
@@ -161,7 +162,13 @@ fn sample() -> ResultsFile {
             title: "shroud sweep".to_string(),
             case_text: "[sweep]\n\"contact.shroud.n0\" = [113.0, 250.0]\n".to_string(),
         },
-        frfs: vec![frf(113.0, 6, 3, 2), no_stability],
+        frfs: vec![
+            FrfData {
+                jumps: vec![2, 4],
+                ..frf(113.0, 6, 3, 2)
+            },
+            no_stability,
+        ],
         // not in alphabetical order: the order of the points' fractions must survive
         contacts: vec![contact("underplatform", 3), contact("shroud", 4)],
         march: Some(march(9)),
@@ -285,6 +292,11 @@ fn inconsistent_sizes_are_refused() {
         msg.contains("/contact/underplatform/elements/0") && msg.contains("loops"),
         "{msg}"
     );
+
+    let mut r = sample();
+    r.frfs[0].jumps = vec![4, 2];
+    let msg = write_error(&r);
+    assert!(msg.contains("/frf/0") && msg.contains("jumps"), "{msg}");
 
     let mut r = sample();
     r.contacts[1].name = "underplatform".to_string();

@@ -810,6 +810,9 @@ pub struct Continuation {
     pub tolerance: Option<f64>,
     /// Most corrector iterations per point (`max_iterations`); `None`: solver default.
     pub max_iterations: Option<usize>,
+    /// Most jumps of the sweep where its path leaves the range on the start side (`max_jumps`);
+    /// `None`: solver default.
+    pub max_jumps: Option<usize>,
 }
 
 impl Continuation {
@@ -850,6 +853,7 @@ struct ContinuationSpec {
     max_points: Option<usize>,
     tolerance: Option<f64>,
     max_iterations: Option<usize>,
+    max_jumps: Option<usize>,
 }
 
 impl TryFrom<ContinuationSpec> for Continuation {
@@ -894,6 +898,7 @@ impl TryFrom<ContinuationSpec> for Continuation {
             max_points: s.max_points,
             tolerance: s.tolerance,
             max_iterations: s.max_iterations,
+            max_jumps: s.max_jumps,
         })
     }
 }

@@ -557,6 +557,7 @@ fn trace_curve<F: HarmonicForce>(
         harmonics: system.layout().harmonics,
         response_dofs,
         points: Vec::new(),
+        jumps: Vec::new(),
     };
     let mut details = vec![ContactCurveDetail::default(); contact.sizes.len()];
     let mut maps = Vec::new();
@@ -593,6 +594,15 @@ fn trace_curve<F: HarmonicForce>(
                     opts.start / (2.0 * PI)
                 ));
             }
+            for jump in &traced.jumps {
+                rep.warn(&format!(
+                    "{label}: the path turned back at {:.6} Hz and left the range; the sweep jumped to {:.6} Hz and went on from there (point {})",
+                    jump.from / (2.0 * PI),
+                    jump.to / (2.0 * PI),
+                    jump.point
+                ));
+            }
+            frf.jumps = traced.jumps.iter().map(|j| j.point).collect();
             for p in &traced.points {
                 frf.points.push(FrfRecord {
                     omega: p.omega,

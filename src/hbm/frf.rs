@@ -4,7 +4,7 @@
 use super::response::{output_response, OutputResponse, ResponseOptions};
 use super::stability::is_stable;
 use super::system::{FrequencyPath, HbmSystem, LevelPath};
-use crate::continuation::{trace, trace_from, ContinuationOptions, PathEnd, PathPoint};
+use crate::continuation::{trace, trace_from, ContinuationOptions, Path, PathEnd, PathPoint};
 use crate::error::{Error, Result};
 use crate::harmonics::HarmonicForce;
 use crate::nonlinear::{solve_fixed, NewtonOptions, NewtonSolution, ParameterSystem};
@@ -43,6 +43,22 @@ pub struct Frf<S> {
     /// `Some(λ₀)` when Newton from the linear solution missed the start point and it was reached
     /// by continuation in the excitation level from λ₀ × the force (see [`frequency_response`]).
     pub start_level: Option<f64>,
+    /// The jumps of the sweep, in path order ([`frequency_response`]): where the path turned
+    /// back out of its range and the response went on from the next frequency.
+    pub jumps: Vec<Jump>,
+}
+
+/// A jump of a frequency sweep: the path turned back at ω = `from` (its furthest point towards
+/// the end of the range) and left the range; the response goes on from the solution at ω = `to`
+/// = `from` ± the initial step, on another branch, as a stepped-sine sweep jumps at a fold.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Jump {
+    /// Index in [`Frf::points`] of the first point after the jump (the solution at `to`).
+    pub point: usize,
+    /// The frequency the path turned back at (rad/s).
+    pub from: f64,
+    /// The frequency the sweep went on from (rad/s).
+    pub to: f64,
 }
 
 /// Traces the frequency response of `system` (excitation level 1) and recovers the outputs.
@@ -50,6 +66,15 @@ pub struct Frf<S> {
 /// from the linear solution or, when that does not converge, reached by continuation in the
 /// excitation level at the start frequency (from λ₀ = ½, ¼, … 2⁻¹⁰ × the force up to 1; the
 /// λ₀ used is [`Frf::start_level`]).
+///
+/// A path that turns back and leaves its range on the start side ([`PathEnd::LeftRange`]: the
+/// branch through the start folds back, e.g. a superharmonic resonance met at the start) does
+/// not cover the range. The sweep then jumps, at most [`ContinuationOptions::max_jumps`] times
+/// ([`Jump`]): from the path's furthest point towards the end, ω_f, to ω_f ± the initial step,
+/// where the solution is found by Newton from the furthest point's or, failing that, as a start
+/// point (linear solution, then level continuation); the path goes on from there, and its
+/// points follow the earlier ones. A jump that finds no solution ends the response as
+/// `LeftRange`.
 pub fn frequency_response<F: HarmonicForce>(
     system: &HbmSystem<'_, F>,
     opts: &ContinuationOptions,
@@ -69,7 +94,22 @@ pub fn frequency_response<F: HarmonicForce>(
         floor: Some(0.0),
         ..opts.clone()
     };
-    let path = trace_from(&fp, &frequency_opts, start, on_point)?;
+    let mut path = trace_from(&fp, &frequency_opts, start, on_point)?;
+    let mut jumps = Vec::new();
+    while path.end == PathEnd::LeftRange && jumps.len() < opts.max_jumps {
+        let Some((jump, segment)) = jump_on(&fp, &frequency_opts, &path, on_point)? else {
+            break;
+        };
+        jumps.push(jump);
+        let offset = path.points.last().map_or(0.0, |p| p.arc_length);
+        path.points.extend(segment.points.into_iter().map(|mut p| {
+            p.arc_length += offset;
+            p
+        }));
+        path.end = segment.end;
+        path.retries += segment.retries;
+        path.corner_steps += segment.corner_steps;
+    }
     let points = path
         .points
         .into_iter()
@@ -96,7 +136,54 @@ pub fn frequency_response<F: HarmonicForce>(
         end: path.end,
         retries: path.retries,
         start_level,
+        jumps,
     })
+}
+
+/// One jump of [`frequency_response`] after `path` left the range: the jump and the path traced
+/// from where it lands (its points not yet appended), or `None` when no solution was found
+/// there (or the furthest point is already at the end).
+#[allow(clippy::type_complexity)]
+fn jump_on<F: HarmonicForce>(
+    fp: &FrequencyPath<'_, '_, F>,
+    opts: &ContinuationOptions,
+    path: &Path<F::State>,
+    on_point: &mut dyn FnMut(&PathPoint<F::State>),
+) -> Result<Option<(Jump, Path<F::State>)>> {
+    let direction = (opts.end - opts.start).signum();
+    let progress = |p: &PathPoint<F::State>| direction * (p.parameter - opts.start);
+    let Some(furthest) = path
+        .points
+        .iter()
+        .max_by(|a, b| progress(a).total_cmp(&progress(b)))
+    else {
+        return Ok(None);
+    };
+    let from = furthest.parameter;
+    let to = from + direction * opts.initial_step;
+    let remaining = opts.max_points.saturating_sub(path.points.len());
+    if direction * (opts.end - to) <= 0.0 || remaining == 0 {
+        return Ok(None);
+    }
+    let segment_opts = ContinuationOptions {
+        start: to,
+        max_points: remaining,
+        ..opts.clone()
+    };
+    let landed = match solve_fixed(fp, &furthest.x, to, &furthest.state, &opts.newton) {
+        Ok(sol) => sol,
+        Err(_) => match start_point(fp, &segment_opts) {
+            Ok((sol, _)) => sol,
+            Err(_) => return Ok(None),
+        },
+    };
+    let segment = trace_from(fp, &segment_opts, landed, on_point)?;
+    let jump = Jump {
+        point: path.points.len(),
+        from,
+        to,
+    };
+    Ok(Some((jump, segment)))
 }
 
 /// The points of a traced response at chosen frequencies ([`land_at`]).
@@ -116,7 +203,9 @@ pub struct Landed {
 /// the fixed ω* starts from Q interpolated linearly in ω between them, with the force memory of
 /// point i; the solution is inserted between them, its arc length interpolated the same way and
 /// its outputs (and Hill stability when `response.stability`) recovered as for the traced points.
-/// A point already at ω* is kept as it is. A crossing whose Newton fails is left out and listed in
+/// A point already at ω* is kept as it is; a jump ([`Frf::jumps`]) is no crossing (its two points
+/// lie on different branches), and the jumps' point indices follow the inserted points. A
+/// crossing whose Newton fails is left out and listed in
 /// [`Landed::failed`].
 pub fn land_at<F: HarmonicForce>(
     system: &HbmSystem<'_, F>,
@@ -130,6 +219,10 @@ pub fn land_at<F: HarmonicForce>(
     // (insert after point i, the new point), in path order
     let mut inserted: Vec<(usize, FrfPoint<F::State>)> = Vec::new();
     for i in 0..frf.points.len().saturating_sub(1) {
+        if frf.jumps.iter().any(|j| j.point == i + 1) {
+            // a jump: the two points lie on different branches
+            continue;
+        }
         let (a, b) = (&frf.points[i], &frf.points[i + 1]);
         let mut between: Vec<f64> = omegas
             .iter()
@@ -168,6 +261,9 @@ pub fn land_at<F: HarmonicForce>(
         }
     }
     if !inserted.is_empty() {
+        for jump in &mut frf.jumps {
+            jump.point += inserted.iter().filter(|(i, _)| *i < jump.point).count();
+        }
         let old = std::mem::take(&mut frf.points);
         let mut extra = inserted.into_iter().peekable();
         for (i, p) in old.into_iter().enumerate() {

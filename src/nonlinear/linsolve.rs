@@ -42,7 +42,9 @@
 //! continuation corrector its first as well, on the factors of the previous point's tangent
 //! system) and factorises again only when GMRES needs more than [`KRYLOV_ITERATIONS`] iterations (or more than
 //! [`KRYLOV_REFRESH`] at the step before); every Krylov solution is checked by the same backward
-//! error as a direct one.
+//! error as a direct one. [`LinearSolver::solve_krylov_signed`] adds the sign of det A from
+//! the Hessenberg matrix of the GMRES cycle (the continuation tangent where the refinement of
+//! [`LinearSolver::solve_near`] does not converge).
 //!
 //! Cost for n unknowns, blocks s_b, rank r (flops): dense LU (2/3)n³; structured
 //! Σ_b (2/3)s_b³ + 2 Σ_b s_b² r + 2 r Σ_k r_k |C_k| + (2/3) r³, plus the QRs (Σ_k 2|R_k||C_k|²).
@@ -513,6 +515,37 @@ impl LinearSolver {
         a: &Jacobian,
         b: &[f64],
     ) -> Option<(Vec<f64>, usize)> {
+        self.krylov(near, a, b).map(|(x, k, _)| (x, k))
+    }
+
+    /// [`LinearSolver::solve_krylov`] with the sign of det A: sign det F · sign det H_k, H_k
+    /// = V_kᵀ A F⁻¹ V_k the square Hessenberg matrix of the GMRES cycle that converged (V_k its
+    /// Arnoldi basis). With A F⁻¹ = I + L, L = V_k V_kᵀ L when the Krylov space holds the range
+    /// of L, and then det(A F⁻¹) = det(I_k + V_kᵀ L V_k) = det H_k (Sylvester's determinant
+    /// identity); GMRES converges to the backward error of a direct solve in k ≪ n
+    /// iterations only when A F⁻¹ is the identity plus such a term of low rank and a
+    /// remainder clustered at 1, whose eigenvalues lie off the negative real axis (the
+    /// argument of [`LinearSolver::solve_near`]). Returns x, the GMRES iterations and sign det
+    /// A; `None` when GMRES does not converge within one cycle of at most
+    /// [`KRYLOV_ITERATIONS`] iterations, or H_k is singular (factorise A instead).
+    pub fn solve_krylov_signed(
+        &self,
+        near: &Factored,
+        a: &Jacobian,
+        b: &[f64],
+    ) -> Option<(Vec<f64>, usize, f64)> {
+        let (x, k, sign) = self.krylov(near, a, b)?;
+        Some((x, k, sign?))
+    }
+
+    /// GMRES of [`LinearSolver::solve_krylov`]; the sign of det A when at most one cycle ran
+    /// ([`LinearSolver::solve_krylov_signed`]).
+    fn krylov(
+        &self,
+        near: &Factored,
+        a: &Jacobian,
+        b: &[f64],
+    ) -> Option<(Vec<f64>, usize, Option<f64>)> {
         let n = b.len();
         if near.n != n || a.dim() != n {
             return None;
@@ -523,6 +556,10 @@ impl LinearSolver {
         let norm_b = inf(b);
         let mut x = near.solve(b)?;
         let mut used = 0;
+        // sign det (A F⁻¹): +1 while no cycle ran (x = F⁻¹ b solves A to the threshold, the
+        // case of `solve_near`), that of the only cycle's H_k, unknown after a restart
+        let mut cycles = 0;
+        let mut relative: Option<f64> = Some(1.0);
         loop {
             let (eta, r) = backward_error(view, norm_a, &x, b);
             if !eta.is_finite() {
@@ -533,17 +570,19 @@ impl LinearSolver {
                     s.krylov += 1;
                     s.krylov_iterations += used;
                 });
-                return Some((x, used));
+                return Some((x, used, relative.map(|s| s * near.sign())));
             }
             if used >= KRYLOV_ITERATIONS {
                 return None;
             }
             // ‖r‖₂ that makes the backward error at most half the threshold
             let target = 0.5 * BACKWARD_ERROR * (norm_a * inf(&x) + norm_b);
-            let (dx, k) = gmres_cycle(near, view, r, target, KRYLOV_ITERATIONS - used)?;
+            let (dx, k, sign) = gmres_cycle(near, view, r, target, KRYLOV_ITERATIONS - used)?;
             if k == 0 {
                 return None;
             }
+            cycles += 1;
+            relative = if cycles == 1 { sign } else { None };
             used += k;
             x.iter_mut().zip(dx).for_each(|(xi, d)| *xi += d);
         }
@@ -552,19 +591,22 @@ impl LinearSolver {
 
 /// One cycle of right-preconditioned GMRES on A d = r (at most `max` iterations, until the
 /// residual estimate is at most `target`): d = F⁻¹ V_k y_k with y_k minimising ‖β e₁ − H̄_k y‖
-/// (Saad 2003, Alg. 9.5). Returns d and k.
+/// (Saad 2003, Alg. 9.5). Returns d, k and the sign of det H_k (H_k = V_kᵀ A F⁻¹ V_k, the
+/// square part of the Hessenberg matrix before its rotations; `None` if it is singular).
 fn gmres_cycle(
     near: &Factored,
     a: View<'_>,
     r: Vec<f64>,
     target: f64,
     max: usize,
-) -> Option<(Vec<f64>, usize)> {
+) -> Option<(Vec<f64>, usize, Option<f64>)> {
     let dot = |u: &[f64], v: &[f64]| u.iter().zip(v).map(|(a, b)| a * b).sum::<f64>();
     let beta = super::norm(&r);
     if beta == 0.0 || !beta.is_finite() {
-        return Some((vec![0.0; r.len()], 0));
+        return Some((vec![0.0; r.len()], 0, Some(1.0)));
     }
+    // the Hessenberg columns as computed (for det H_k)
+    let mut hessenberg: Vec<Vec<f64>> = Vec::new();
     let mut basis: Vec<Vec<f64>> = vec![r.iter().map(|v| v / beta).collect()];
     // columns of the rotated Hessenberg matrix (the upper triangle R), the rotations, and g
     let mut columns: Vec<Vec<f64>> = Vec::new();
@@ -581,6 +623,7 @@ fn gmres_cycle(
         }
         let next = super::norm(&w);
         h[k + 1] = next;
+        hessenberg.push(h.clone());
         for (i, &(c, s)) in rotations.iter().enumerate() {
             let (p, q) = (h[i], h[i + 1]);
             h[i] = c * p + s * q;
@@ -613,7 +656,9 @@ fn gmres_cycle(
     for (yj, v) in y.iter().zip(&basis) {
         u.iter_mut().zip(v).for_each(|(u, v)| *u += yj * v);
     }
-    Some((near.solve(&u)?, k))
+    let square = Mat::from_fn(k, k, |i, j| hessenberg[j].get(i).copied().unwrap_or(0.0));
+    let sign = lu_sign(&square.partial_piv_lu());
+    Some((near.solve(&u)?, k, sign))
 }
 
 /// The path of one solve.
@@ -1177,6 +1222,56 @@ mod tests {
             {
                 assert!(err(&x) <= 1e-10 * scale, "{choice:?} far: {:e}", err(&x));
                 assert!(iterations <= KRYLOV_ITERATIONS);
+            }
+        }
+    }
+
+    /// GMRES on the factors of a nearby matrix (A plus the stiffness of one "element", rank 3)
+    /// and of a matrix whose determinant has the other sign (one diagonal entry of A moved
+    /// across det = 0, rank 1) gives the dense solution of A and the dense LU's sign of det A.
+    #[test]
+    fn krylov_sign_matches_dense() {
+        let (a, blocks) = example(true, 0.5);
+        let n = a.nrows();
+        let b: Vec<f64> = (0..n).map(|i| noise(7000 + i)).collect();
+        let (xd, sd) = solve_dense_signed_ref(a.as_ref(), &b).unwrap();
+        let scale = xd.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let mut near = a.clone();
+        let el = [4usize, 15, 40];
+        for (p, &i) in el.iter().enumerate() {
+            for (q, &j) in el.iter().enumerate() {
+                near[(i, j)] += 0.8 * noise(5000 + 3 * p + q) + if p == q { 0.5 } else { 0.0 };
+            }
+        }
+        let far = [-20.0, -5.0, -1.0, 7.0, 20.0]
+            .iter()
+            .map(|&v| {
+                let mut m = a.clone();
+                m[(20, 20)] = v;
+                m
+            })
+            .find(|m| solve_dense_signed_ref(m.as_ref(), &b).unwrap().1 != sd)
+            .expect("a matrix with the other determinant sign");
+        for choice in [SolverChoice::Dense, SolverChoice::Structured] {
+            let solver = LinearSolver::new(blocks.clone(), choice);
+            for (what, m) in [("near", &near), ("other sign", &far)] {
+                let (_, f) = solver
+                    .factor_solve(&mut Jacobian::Dense(m.clone()), &b)
+                    .unwrap();
+                if what == "other sign" {
+                    assert_ne!(f.sign(), sd);
+                }
+                let (x, k, sign) = solver
+                    .solve_krylov_signed(&f, &Jacobian::Dense(a.clone()), &b)
+                    .unwrap();
+                let err = x
+                    .iter()
+                    .zip(&xd)
+                    .map(|(p, q)| (p - q).abs())
+                    .fold(0.0, f64::max);
+                assert!(err <= 1e-10 * scale, "{choice:?} {what}: {err:e}");
+                assert!((1..=5).contains(&k), "{choice:?} {what}: {k}");
+                assert_eq!(sign, sd, "{choice:?} {what}");
             }
         }
     }

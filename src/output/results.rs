@@ -18,6 +18,7 @@
 //! | `/frf/<i>/newton_iterations` | u64 \[P\] | 1 | Newton iterations of each point |
 //! | `/frf/<i>/residual` | f64 \[P\] | 1 | accepted scaled residual ‖r‖₂/r_s of each point (≤ the tolerance) |
 //! | `/frf/<i>/stable` | i64 \[P\] | 1 | 1 stable, 0 unstable (only when computed) |
+//! | `/frf/<i>/jumps` | u64 \[J\] | 1 | index of the first point after each jump of the sweep (only when it jumped) |
 //! | `/contact` attributes | | | `names`: the interfaces in the order of the points' contact fractions |
 //! | `/contact/<name>` attributes | | | `model`, `coupling` (array, interpolated), `element`, `sigma`, `mu` |
 //! | `/contact/<name>/pairs` | compound \[E\] {contact_node u64, target_node u64} | 1 | the node-to-node elements (c, t_j) |
@@ -104,6 +105,9 @@ pub struct FrfData {
     pub response_dofs: Vec<ResponseDof>,
     /// The points, in path order (ω may go back and forth at a fold).
     pub points: Vec<FrfRecord>,
+    /// Indices in `points` of the first point after each jump of the sweep (where the path had
+    /// left its range on the start side and went on from the next frequency); empty without.
+    pub jumps: Vec<usize>,
 }
 
 /// One node-to-node friction element (c, t_j) of a contact interface.
@@ -319,6 +323,14 @@ fn check_frf(frf: &FrfData, i: usize, contacts: usize) -> Result<()> {
             frf.points.len()
         )));
     }
+    let ordered = frf.jumps.windows(2).all(|w| w[0] < w[1]);
+    if !ordered || frf.jumps.iter().any(|&j| j == 0 || j >= frf.points.len()) {
+        return Err(size_error(format!(
+            "/frf/{i}: jumps at points {:?} of {} (increasing, each after the first point)",
+            frf.jumps,
+            frf.points.len()
+        )));
+    }
     for (p, point) in frf.points.iter().enumerate() {
         if point.harmonics.len() != per_point || point.peak.len() != r {
             return Err(size_error(format!(
@@ -457,6 +469,16 @@ fn frf_group(group: &mut Group, frf: &FrfData) {
     let stable: Option<Vec<i64>> = frf.points.iter().map(|q| q.stable.map(i64::from)).collect();
     if let (Some(stable), false) = (stable, frf.points.is_empty()) {
         group.add("stable", Dataset::i64s(stable, "1", "1 stable, 0 unstable"));
+    }
+    if !frf.jumps.is_empty() {
+        group.add(
+            "jumps",
+            Dataset::u64s(
+                frf.jumps.iter().map(|&j| j as u64).collect(),
+                "1",
+                "index of the first point after each jump of the sweep",
+            ),
+        );
     }
 }
 
@@ -1067,6 +1089,19 @@ fn read_frf(reader: &H5Reader, i: usize, contact_names: &[String]) -> Result<Frf
     } else {
         None
     };
+    let jumps = match reader.group(&base)?.datasets.get("jumps") {
+        Some(d) => {
+            let jumps = reader.u64s(&format!("{base}/jumps"), &[d.shape[0]])?;
+            if let Some(bad) = jumps.iter().find(|&&j| j == 0 || j as usize >= p) {
+                return Err(reader.error(
+                    &format!("{base}/jumps"),
+                    format!("jump at point {bad}: not a point after the first of {p}"),
+                ));
+            }
+            jumps.into_iter().map(|j| j as usize).collect()
+        }
+        None => Vec::new(),
+    };
     let mut fractions = Vec::with_capacity(contact_names.len());
     for name in contact_names {
         fractions.push(reader.f64s(&format!("/contact/{name}/state_fractions/{i}"), &[p, 3])?);
@@ -1091,6 +1126,7 @@ fn read_frf(reader: &H5Reader, i: usize, contact_names: &[String]) -> Result<Frf
         harmonics,
         response_dofs,
         points,
+        jumps,
     })
 }
 

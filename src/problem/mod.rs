@@ -57,6 +57,23 @@ pub fn release_free_heap() {
     }
 }
 
+/// Keeps the whole process heap in glibc's main arena (`mallopt(M_ARENA_MAX, 1)`; elsewhere
+/// this does nothing). Call it before other threads allocate (at the start of `main`). By
+/// default glibc gives threads that allocate at the same time arenas of their own; blocks
+/// freed below the (adaptive, up to 32 MB) mmap threshold stay in the arena that held them,
+/// and a thread's arena gives memory back only from its top. The continuation of a large
+/// harmonic balance problem allocates and frees block storage and factors of 4–25 MB from the
+/// calling thread and the rayon workers, and the extra arenas kept 0.12–0.15 GB of them
+/// resident on the bundled sector at H = 3 (docs/performance.md).
+pub fn use_one_heap_arena() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only changes an allocator parameter; M_ARENA_MAX takes effect for arenas
+    // created after the call.
+    unsafe {
+        libc::mallopt(libc::M_ARENA_MAX, 1);
+    }
+}
+
 /// A [`Log`] that drops every line.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Silent;

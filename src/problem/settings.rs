@@ -21,6 +21,9 @@ pub fn case_continuation(case: &Case) -> Result<ContinuationOptions> {
     if let Some(n) = c.max_points {
         opts.max_points = n;
     }
+    if let Some(n) = c.max_jumps {
+        opts.max_jumps = n;
+    }
     opts.newton = NewtonOptions {
         tolerance: c.tolerance.unwrap_or(opts.newton.tolerance),
         max_iterations: c.max_iterations.unwrap_or(opts.newton.max_iterations),

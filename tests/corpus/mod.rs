@@ -37,6 +37,8 @@ pub struct Outcome {
     pub iterations: usize,
     pub worst_residual: f64,
     pub seconds: f64,
+    /// Jumps of the sweep (the path left its range on the start side and went on beyond it).
+    pub jumps: usize,
 }
 
 fn jenkins(dofs: Vec<usize>, weights: Vec<f64>, params: ContactParams) -> DofElement {
@@ -212,6 +214,7 @@ pub fn run(case: &Case) -> Outcome {
             iterations: frf.points.iter().map(|p| p.iterations).sum(),
             worst_residual: frf.points.iter().map(|p| p.residual).fold(0.0, f64::max),
             seconds,
+            jumps: frf.jumps.len(),
         },
         Err(e) => Outcome {
             reached_end: false,
@@ -220,6 +223,7 @@ pub fn run(case: &Case) -> Outcome {
             iterations: 0,
             worst_residual: f64::NAN,
             seconds,
+            jumps: 0,
         },
     }
 }

@@ -10,8 +10,9 @@
 //! harmonics (default 3; the case's AFT samples), a continuation of POINTS points (default 8) from
 //! the case's start frequency: wall time per point and per Newton iteration (corrector
 //! iterations; the predictor's tangent solves are included in the per-point time), the linear
-//! solves by path (dense LU or structured, with the mean rank of the low-rank correction), then
-//! the split of one Newton iteration at the last point. KEY=VALUE overrides the case:
+//! solves by path (dense LU or structured, with the mean rank of the low-rank correction), the
+//! peak resident memory and the system time's share of the CPU time, then the split of one
+//! Newton iteration at the last point. KEY=VALUE overrides the case:
 //! `solver=dense|auto|structured[,...]` (`harmonic_balance.linear_solver`), `n0=N` (every contact's
 //! preload), `start=F` (`continuation.start`, in the case's unit).
 //!
@@ -23,7 +24,8 @@
 //! times less and stick all period (microslip of the interface). `nodense` leaves out the dense
 //! Jacobian and its LU (whose n² memory and n³ time are out of reach beyond about 15 000 unknowns).
 //!
-//! The split (best of `REPEAT` runs, wall clock, `faer::get_global_parallelism` threads):
+//! The split (best of `HBM_SPEED_REPEAT` runs, default 2, wall clock,
+//! `faer::get_global_parallelism` threads):
 //! condensation of the linear part at ω; AFT = contact forces alone (inverse DFT, contact law
 //! march, DFT); contact Jacobian = forces with the analytic Jacobian minus forces alone, into a
 //! dense matrix and into the block storage of `harmonics::BlockJacobian`; linear assembly = the
@@ -64,9 +66,17 @@ use nlrom::problem::settings::case_continuation;
 use nlrom::reduction::reduce;
 use nlrom::{model, Result};
 
-const REPEAT: usize = 2;
+/// Runs of each timed part of the split (`HBM_SPEED_REPEAT`, default 2).
+fn repeat() -> usize {
+    std::env::var("HBM_SPEED_REPEAT")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(2)
+        .max(1)
+}
 
 fn main() -> Result<()> {
+    nlrom::problem::use_one_heap_arena();
     let args: Vec<String> = std::env::args().skip(1).collect();
     let num = |i: usize, default: usize| {
         args.get(i)
@@ -101,6 +111,12 @@ fn main() -> Result<()> {
 /// CPU time (user + system, all threads) of this process so far (s), from /proc/self/stat
 /// (clock ticks of 10 ms); 0 where unavailable.
 fn cpu_seconds() -> f64 {
+    let (user, system) = cpu_split();
+    user + system
+}
+
+/// User and system CPU time of this process so far (s), fields 14 and 15 of /proc/self/stat.
+fn cpu_split() -> (f64, f64) {
     let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
     let after = stat.rsplit(')').next().unwrap_or("");
     let f: Vec<f64> = after
@@ -110,7 +126,7 @@ fn cpu_seconds() -> f64 {
     // fields 14 (utime) and 15 (stime) of proc(5); `after` starts at field 3
     f.get(11)
         .zip(f.get(12))
-        .map_or(0.0, |(u, s)| (u + s) / 100.0)
+        .map_or((0.0, 0.0), |(u, s)| (u / 100.0, s / 100.0))
 }
 
 /// Peak resident memory of this process so far (GB), from /proc/self/status (VmHWM); 0 where
@@ -124,9 +140,9 @@ fn peak_rss_gb() -> f64 {
         .map_or(0.0, |kb| kb / 1024.0 / 1024.0)
 }
 
-/// Best wall time (s) of `REPEAT` runs of `f`, and the CPU time of that run.
+/// Best wall time (s) of [`repeat`] runs of `f`, and the CPU time of that run.
 fn best<T>(mut f: impl FnMut() -> T) -> (f64, f64) {
-    (0..REPEAT)
+    (0..repeat())
         .map(|_| {
             let (t, c) = (Instant::now(), cpu_seconds());
             std::hint::black_box(f());
@@ -201,7 +217,7 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
         let mut opts = case_continuation(&case)?;
         opts.max_points = points;
         let rss_before = reset_peak_rss();
-        let (t, c) = (Instant::now(), cpu_seconds());
+        let (t, c, split0) = (Instant::now(), cpu_seconds(), cpu_split());
         let before = linsolve::stats();
         let mut mark = (linsolve::stats(), cpu_seconds());
         let verbose = std::env::var_os("HBM_SPEED_POINTS").is_some();
@@ -221,6 +237,7 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
             mark = (s, c);
         })?;
         let (wall, cpu) = (t.elapsed().as_secs_f64(), cpu_seconds() - c);
+        let system_share = (cpu_split().1 - split0.1) / cpu.max(1e-9);
         let after = linsolve::stats();
         let iterations: usize = path.points.iter().map(|p| p.iterations).sum();
         let n = path.points.len();
@@ -238,7 +255,7 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
         let structured = after.structured - before.structured;
         let krylov = after.krylov - before.krylov;
         println!(
-            "  linear solves: {} dense LU, {structured} structured (mean rank {:.0} = {:.1} % of the unknowns), {} fallbacks to the dense LU, {} factorisations ({:.2} per point), {krylov} by GMRES on earlier factors ({:.1} iterations each); peak RSS of the continuation {:.2} GB (resident before it {rss_before:.2} GB)",
+            "  linear solves: {} dense LU, {structured} structured (mean rank {:.0} = {:.1} % of the unknowns), {} fallbacks to the dense LU, {} factorisations ({:.2} per point), {krylov} by GMRES on earlier factors ({:.1} iterations each); peak RSS of the continuation {:.2} GB (resident before it {rss_before:.2} GB); system time {:.1} % of the continuation's CPU",
             after.dense - before.dense,
             (after.rank_sum - before.rank_sum) as f64 / structured.max(1) as f64,
             100.0 * (after.rank_sum - before.rank_sum) as f64
@@ -247,7 +264,8 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
             after.factorizations - before.factorizations,
             (after.factorizations - before.factorizations) as f64 / n as f64,
             (after.krylov_iterations - before.krylov_iterations) as f64 / krylov.max(1) as f64,
-            peak_rss_gb()
+            peak_rss_gb(),
+            100.0 * system_share
         );
         let points: Vec<(f64, Vec<f64>)> = path
             .points
@@ -338,6 +356,8 @@ fn split<F: HarmonicForce>(
             )
             .unwrap();
     });
+    // one block storage at a time (each is (2 n_c)² H values)
+    drop(blocks);
     let mut lin_blocks = structured.linearization(nf);
     let whole_blocks = best(|| fp.evaluate(x, omega, state, &mut lin_blocks).unwrap());
     let residual = best(|| {
@@ -368,7 +388,6 @@ fn split<F: HarmonicForce>(
         x
     });
     drop(lin_blocks);
-    drop(blocks);
     let row = |what: &str, t: (f64, f64), total: f64| {
         println!(
             "  {what:<52} {:>9.4} s {:>5.1} %  (CPU {:.2} s)",
@@ -380,7 +399,7 @@ fn split<F: HarmonicForce>(
     let minus = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0, a.1 - b.1);
     if !dense {
         let total = whole_blocks.0 + formed.0 + structured_solve.0;
-        println!("one Newton iteration, {nf} unknowns (best of {REPEAT}, wall; % of the block-stored + structured iteration {total:.4} s):");
+        println!("one Newton iteration, {nf} unknowns (best of {}, wall; % of the block-stored + structured iteration {total:.4} s):", repeat());
         row("condensation of the linear part", condense, total);
         row("AFT: contact forces", aft, total);
         row(
@@ -424,7 +443,7 @@ fn split<F: HarmonicForce>(
     let lu = best(|| solve_dense(dense, &lin.residual).unwrap());
     let total = whole.0 + lu.0;
     let row = |what: &str, t: (f64, f64)| row(what, t, total);
-    println!("one Newton iteration, {nf} unknowns (best of {REPEAT}, wall; % of the dense iteration {total:.4} s):");
+    println!("one Newton iteration, {nf} unknowns (best of {}, wall; % of the dense iteration {total:.4} s):", repeat());
     row("condensation of the linear part", condense);
     row("AFT: contact forces", aft);
     row(

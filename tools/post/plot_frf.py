@@ -85,13 +85,24 @@ def sweep_value(frf):
     return (names[0], float(frf["attrs"][names[0]])) if names else (None, None)
 
 
+def segments(frf):
+    """Slices of a curve's points between the jumps of its sweep (`/frf/<i>/jumps`): the points
+    either side of a jump lie on different branches and are not joined by a line."""
+    bounds = [0] + [int(j) for j in frf.get("jumps", [])] + [len(frf["frequency_hz"])]
+    return [slice(a, b) for a, b in zip(bounds, bounds[1:])]
+
+
 def plot_file(plt, tree, path, label, dof):
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for frf in tree["frf"]:
         if not len(frf["frequency_hz"]):
             continue
         r = response_dof(frf, dof)
-        ax.plot(frf["frequency_hz"], frf["amplitude"][:, r], label=sweep_label(frf) or label)
+        line = None
+        for part in segments(frf):
+            line, = ax.plot(frf["frequency_hz"][part], frf["amplitude"][part, r],
+                            color=line.get_color() if line else None,
+                            label=None if line else (sweep_label(frf) or label))
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("first-harmonic amplitude (m)")
     ax.set_title(label)
@@ -110,8 +121,10 @@ def plot_compare(plt, trees, labels, path, dof):
             if not len(frf["frequency_hz"]):
                 continue
             r = response_dof(frf, dof)
-            ax.plot(frf["frequency_hz"], frf["amplitude"][:, r], styles[k % len(styles)],
-                    color=colors[i % len(colors)], label=f"{label} {sweep_label(frf)}")
+            for n, part in enumerate(segments(frf)):
+                ax.plot(frf["frequency_hz"][part], frf["amplitude"][part, r],
+                        styles[k % len(styles)], color=colors[i % len(colors)],
+                        label=None if n else f"{label} {sweep_label(frf)}")
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("first-harmonic amplitude (m)")
     ax.legend(fontsize="x-small", ncol=2)
