@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use nlrom::mesh::msh::read_msh;
 use nlrom::mesh::{ElementType, Mesh, MshVersion};
 
-const MODELS: [&str; 13] = [
+const MODELS: [&str; 14] = [
     "sector_conforming",
     "sector_nonconforming",
     "sector_coarse_target",
@@ -19,6 +19,7 @@ const MODELS: [&str; 13] = [
     "cube_tet10",
     "bar_hex20",
     "bar_tet10",
+    "damper_bar",
     "mixed_o1",
     "mixed_o2",
     "mixed_o2i",

@@ -132,22 +132,29 @@ fn wrapped(a: f64, b: f64) -> f64 {
     }
 }
 
+/// Per point: the angle where it returns from negative slip to stick (none for a point that
+/// never slips).
+fn stick_returns(m: &ContactMap) -> Vec<Option<f64>> {
+    (0..m.position.len())
+        .map(|e| {
+            let (lo, hi) = (
+                m.transition_offsets[e] as usize,
+                m.transition_offsets[e + 1] as usize,
+            );
+            (lo..hi)
+                .find(|&k| {
+                    let before = if k == lo { hi - 1 } else { k - 1 };
+                    m.transition_states[k] == 0 && m.transition_states[before] == -1
+                })
+                .map(|k| m.transition_angles[k])
+        })
+        .collect()
+}
+
 /// Per point that slips: the angle where it returns from negative slip to stick. Returns the
 /// number of such points and the spread (max − min, rad) of the angles.
 fn stick_return_spread(m: &ContactMap) -> (usize, f64) {
-    let mut angles = Vec::new();
-    for e in 0..m.position.len() {
-        let (lo, hi) = (
-            m.transition_offsets[e] as usize,
-            m.transition_offsets[e + 1] as usize,
-        );
-        for k in lo..hi {
-            let before = if k == lo { hi - 1 } else { k - 1 };
-            if m.transition_states[k] == 0 && m.transition_states[before] == -1 {
-                angles.push(m.transition_angles[k]);
-            }
-        }
-    }
+    let angles: Vec<f64> = stick_returns(m).into_iter().flatten().collect();
     let Some(&first) = angles.first() else {
         return (0, 0.0);
     };
@@ -155,6 +162,16 @@ fn stick_return_spread(m: &ContactMap) -> (usize, f64) {
     let spread =
         d.iter().fold(f64::MIN, |a, &b| a.max(b)) - d.iter().fold(f64::MAX, |a, &b| a.min(b));
     (angles.len(), spread)
+}
+
+/// The largest difference (rad) of the stick-return angles of two maps over the points where
+/// both return to stick.
+fn stick_return_offset(a: &ContactMap, b: &ContactMap) -> f64 {
+    stick_returns(a)
+        .iter()
+        .zip(stick_returns(b))
+        .filter_map(|(x, y)| Some(wrapped((*x)?, y?).abs()))
+        .fold(0.0, f64::max)
 }
 
 /// The stick–slip boundary distance of two maps (fraction of L): the largest number, over the
@@ -192,8 +209,9 @@ fn bar_maps_show_the_multi_mode_properties() {
         for (m, maps) in &by_modes {
             let (count, spread) = stick_return_spread(&maps[f]);
             let to_full = boundary_distance(&maps[f], &full[f]);
+            let offset = stick_return_offset(&maps[f], &full[f]);
             eprintln!(
-                "{hz} Hz, {m} modes: {count} slipping points, spread {spread:.3e} rad, boundary off the full model by {to_full:.3} L"
+                "{hz} Hz, {m} modes: {count} slipping points, spread {spread:.3e} rad, boundary off the full model by {to_full:.3} L, stick-return angles off by at most {offset:.3e} rad"
             );
             row.push((count, spread, to_full));
         }

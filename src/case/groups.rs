@@ -46,6 +46,11 @@ impl Case {
         {
             add(format!("response.groups[{i}]"), g);
         }
+        for (i, s) in self.strip.iter().enumerate() {
+            if let Some(face) = &s.face {
+                add(format!("strip[{i}].face"), face);
+            }
+        }
         for (i, c) in self.casing.iter().enumerate() {
             add(format!("casing[{i}].group"), &c.group);
         }
@@ -94,6 +99,13 @@ impl Case {
                 g.dim,
                 g.tag,
                 mesh.source_name()
+            );
+            return Some(self.key_error(&path, msg).to_string());
+        }
+        if key.starts_with("strip[") && key.ends_with(".face") && g.dim != 2 {
+            let msg = format!(
+                "a strip's face needs a surface group (dim 2) of faces on the volume, but '{name}' has dim {}",
+                g.dim
             );
             return Some(self.key_error(&path, msg).to_string());
         }

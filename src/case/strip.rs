@@ -1,15 +1,20 @@
-//! `[[strip]]`: a distributed friction interface along a line of a matrix model — the 1-D
-//! contact strip of Cigeroglu, An & Menq 2007 (§2, eqs 4–17 at every point; §4.1, the bar
-//! damper) as a quadrature of point elements.
+//! `[[strip]]`: a distributed friction interface — the contact area of Cigeroglu, An & Menq
+//! 2007 (§2, eqs 4–17 at every point; eq 38 for the modal forces) as a quadrature of point
+//! elements, either along a line of a matrix model or on a face group of a mesh.
 //!
-//! The strip has stations s_0 < s_1 < … (m) along the line; at each station the tangential
-//! relative displacement is u(s_j) = Σ_k T_jk q(dofs_k) (and the normal approach
-//! v(s_j) = Σ_k N_jk q(dofs_k)), with weights that are the nodes' shape-function values (a
-//! nodal model) or the mode-shape values φ_k(s_j) (a modal model). Between stations the weights
-//! are interpolated linearly. The integration points are the Gauss–Legendre points of every
-//! segment [s_j, s_{j+1}]; a point of weight dA (m) is one friction element of the 1-D law with
-//! k_t = k_u dA, k_n = k_v dA, μ and the preload n0 = q(s) dA, where the preload per length q(s)
-//! has the chosen shape and integrates (by the same rule) to the strip's total preload.
+//! **On matrix rows** (`dofs`, `stations`, `tangential`): the strip has stations s_0 < s_1 < …
+//! (m) along the line; at each station the tangential relative displacement is
+//! u(s_j) = Σ_k T_jk q(dofs_k) (and the normal approach v(s_j) = Σ_k N_jk q(dofs_k)), with weights
+//! that are the nodes' shape-function values (a nodal model) or the mode-shape values φ_k(s_j) (a
+//! modal model). Between stations the weights are interpolated linearly. The integration points
+//! are the Gauss–Legendre points of every segment [s_j, s_{j+1}]; a point of weight dA (m) is one
+//! friction element of the 1-D law with k_t = k_u dA, k_n = k_v dA, μ and the preload
+//! n0 = q(s) dA, where the preload per length q(s) has the chosen shape and integrates (by the
+//! same rule) to the strip's total preload.
+//!
+//! **On a mesh face** (`face`, `direction`): the points are the Gauss points of the faces of a
+//! surface group against rigid ground, with k_u, k_v per unit area and dA the point's area
+//! (`crate::problem::face_strip` builds them).
 
 use serde::Deserialize;
 
@@ -40,34 +45,52 @@ impl PreloadDistribution {
     }
 }
 
-/// `[[strip]]`: a line of friction points on DOF combinations of a matrix model.
+/// `[[strip]]`: friction points on DOF combinations of a matrix model (a line: `dofs`,
+/// `stations`, `tangential`) or on a face group of a mesh model (`face`, `direction`).
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Strip {
-    /// The matrix rows (0-based) the strip's kinematics read.
+    /// The matrix rows (0-based) the strip's kinematics read (a strip on matrix rows).
+    #[serde(default)]
     pub dofs: Vec<usize>,
-    /// Station positions s_j (m), strictly increasing, at least two.
+    /// Station positions s_j (m), strictly increasing, at least two (a strip on matrix rows).
+    #[serde(default)]
     pub stations: Vec<f64>,
-    /// Per station, one weight per entry of `dofs`: u(s_j) = Σ_k tangential\[j\]\[k\]·q[dofs\[k\]].
+    /// Per station, one weight per entry of `dofs`: u(s_j) = Σ_k tangential\[j\]\[k\]·q[dofs\[k\]]
+    /// (a strip on matrix rows).
+    #[serde(default)]
     pub tangential: Vec<Vec<f64>>,
     /// Per station, the weights of the normal approach v(s_j) (v > 0 loads the contact); none:
     /// no normal motion (constant preload).
     #[serde(default)]
     pub normal: Option<Vec<Vec<f64>>>,
-    /// Gauss–Legendre points per segment (1 to 8; default 2).
+    /// A surface physical group of the mesh in contact with rigid ground: the strip's points are
+    /// the Gauss points of its faces (instead of `dofs`, `stations`, `tangential`, `normal`).
+    #[serde(default)]
+    pub face: Option<String>,
+    /// With `face`: the slip direction p (global frame, any non-zero length), projected on the
+    /// face's tangent plane at every point; positions along the strip are measured along it.
+    #[serde(default)]
+    pub direction: Option<[f64; 3]>,
+    /// Gauss–Legendre points per segment (1 to 8; default 2); with `face`: per direction of a
+    /// quadrilateral (g × g points), and triangles take a rule exact to degree 2g − 1.
     #[serde(default = "default_gauss")]
     pub gauss: usize,
-    /// Tangential contact stiffness per unit length k_u (N/m²), ≥ 0.
+    /// Tangential contact stiffness k_u ≥ 0 per unit length (N/m²), or per unit area with `face`
+    /// (N/m³).
     pub kt: f64,
-    /// Normal contact stiffness per unit length k_v (N/m²), ≥ 0; default 0.
+    /// Normal contact stiffness k_v ≥ 0 per unit length (N/m²), or per unit area with `face`
+    /// (N/m³); default 0. With `face`, kn > 0 adds the normal motion (normal load variation).
     #[serde(default)]
     pub kn: f64,
     /// Friction coefficient μ ≥ 0.
     pub mu: f64,
-    /// Total normal preload ∫ q ds (N); negative: an initial gap, n0 = −k_v g0 per length (needs
-    /// `normal` and `kn` > 0).
+    /// Total normal preload ∫ q ds (N) (∫ q dA with `face`); negative: an initial gap,
+    /// n0 = −k_v g0 per length or area (needs the normal motion: `normal` weights, or `face`, and
+    /// `kn` > 0).
     pub preload: f64,
-    /// The shape of q(s) (default uniform).
+    /// The shape of q(s) along the strip (default uniform; with `face`, s is the position along
+    /// `direction` and ξ runs over the face group's extent along it).
     #[serde(default)]
     pub distribution: PreloadDistribution,
     /// The coefficient c of the quadratic distribution.
@@ -114,11 +137,16 @@ impl Strip {
         self.name.clone().unwrap_or_else(|| format!("strip{index}"))
     }
 
-    /// The relative preload per length at s (the shape of q, not normalised); valid after
-    /// validation (stations increasing, `c` and `values` present when their distribution needs
-    /// them).
+    /// The relative preload per length at s (the shape of q, not normalised) of a strip on
+    /// matrix rows; valid after validation (stations increasing, `c` and `values` present when
+    /// their distribution needs them).
     pub fn shape(&self, s: f64) -> f64 {
-        let (s0, s1) = (self.stations[0], self.stations[self.stations.len() - 1]);
+        self.shape_on(s, self.stations[0], self.stations[self.stations.len() - 1])
+    }
+
+    /// The relative preload at position s of a strip that spans [s0, s1] (for `stations`, the
+    /// stations' values interpolated at s).
+    pub fn shape_on(&self, s: f64, s0: f64, s1: f64) -> f64 {
         match self.distribution {
             PreloadDistribution::Uniform => 1.0,
             PreloadDistribution::Quadratic => {

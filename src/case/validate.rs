@@ -284,39 +284,84 @@ impl Case {
         Ok(())
     }
 
+    /// A strip on matrix rows: rows, stations and weight tables of matching shapes, no face keys.
+    fn validate_line_strip(&self, i: usize, s: &Strip) -> Result<()> {
+        let k = |name: &str| format!("strip[{i}].{name}");
+        let n = s.stations.len();
+        self.require(s.direction.is_none(), &k("direction"), || {
+            "`direction` is the slip direction of a strip on a `face`; a strip on matrix rows takes its direction from the `tangential` weights"
+        })?;
+        self.require(!s.dofs.is_empty(), &k("dofs"), || {
+            "needs at least one matrix row (or give `face` and `direction` for a strip on a mesh face group)"
+        })?;
+        self.finite(&k("stations"), &s.stations)?;
+        self.require(
+            n >= 2 && s.stations.windows(2).all(|w| w[1] > w[0]),
+            &k("stations"),
+            || format!("needs at least two strictly increasing positions (found {n})"),
+        )?;
+        for (name, table) in [
+            ("tangential", Some(&s.tangential)),
+            ("normal", s.normal.as_ref()),
+        ] {
+            let Some(t) = table else { continue };
+            self.require(t.len() == n, &k(name), || {
+                format!("needs one row per station ({n}), found {}", t.len())
+            })?;
+            for (j, row) in t.iter().enumerate() {
+                self.require(row.len() == s.dofs.len(), &k(name), || {
+                    format!(
+                        "row {j} has {} weights; it needs one per entry of `dofs` ({})",
+                        row.len(),
+                        s.dofs.len()
+                    )
+                })?;
+                self.finite(&k(name), row)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// A strip on a mesh face: a mesh model, a non-zero finite `direction`, none of the keys of a
+    /// strip on matrix rows.
+    fn validate_face_strip(&self, i: usize, s: &Strip) -> Result<()> {
+        let k = |name: &str| format!("strip[{i}].{name}");
+        self.require(self.model.mesh.is_some(), &k("face"), || {
+            "a strip on a face group needs a mesh model (`[model] mesh`)"
+        })?;
+        for (name, given) in [
+            ("dofs", !s.dofs.is_empty()),
+            ("stations", !s.stations.is_empty()),
+            ("tangential", !s.tangential.is_empty()),
+            ("normal", s.normal.is_some()),
+        ] {
+            self.require(!given, &k(name), || {
+                format!("`{name}` belongs to a strip on matrix rows; a strip on a `face` reads the face's nodes (remove `{name}`, or remove `face` and `direction`)")
+            })?;
+        }
+        let Some(d) = s.direction else {
+            return Err(self.key_error(
+                &KeyPath::parse(&k("face")),
+                "a strip on a face needs `direction = [px, py, pz]`, the slip direction in the face's plane",
+            ));
+        };
+        self.finite(&k("direction"), &d)?;
+        self.require(norm(d) > 0.0, &k("direction"), || {
+            "must not be the zero vector"
+        })?;
+        Ok(())
+    }
+
     /// `[[strip]]`: station table shapes, ranges, and a preload distribution that keeps one sign.
     pub(super) fn validate_strips(&self) -> Result<()> {
         for (i, s) in self.strip.iter().enumerate() {
             let key = format!("strip[{i}]");
             let k = |name: &str| format!("{key}.{name}");
             let n = s.stations.len();
-            self.require(!s.dofs.is_empty(), &k("dofs"), || {
-                "needs at least one matrix row"
-            })?;
-            self.finite(&k("stations"), &s.stations)?;
-            self.require(
-                n >= 2 && s.stations.windows(2).all(|w| w[1] > w[0]),
-                &k("stations"),
-                || format!("needs at least two strictly increasing positions (found {n})"),
-            )?;
-            for (name, table) in [
-                ("tangential", Some(&s.tangential)),
-                ("normal", s.normal.as_ref()),
-            ] {
-                let Some(t) = table else { continue };
-                self.require(t.len() == n, &k(name), || {
-                    format!("needs one row per station ({n}), found {}", t.len())
-                })?;
-                for (j, row) in t.iter().enumerate() {
-                    self.require(row.len() == s.dofs.len(), &k(name), || {
-                        format!(
-                            "row {j} has {} weights; it needs one per entry of `dofs` ({})",
-                            row.len(),
-                            s.dofs.len()
-                        )
-                    })?;
-                    self.finite(&k(name), row)?;
-                }
+            if s.face.is_some() {
+                self.validate_face_strip(i, s)?;
+            } else {
+                self.validate_line_strip(i, s)?;
             }
             self.require(
                 (1..=strip::MAX_GAUSS).contains(&s.gauss),
@@ -334,11 +379,11 @@ impl Case {
             self.non_negative(&k("mu"), s.mu)?;
             self.finite(&k("preload"), &[s.preload])?;
             self.require(
-                s.preload >= 0.0 || (s.normal.is_some() && s.kn > 0.0),
+                s.preload >= 0.0 || ((s.normal.is_some() || s.face.is_some()) && s.kn > 0.0),
                 &k("preload"),
                 || {
                     format!(
-                        "a negative total preload ({}) is an initial gap; it needs `normal` weights and kn > 0",
+                        "a negative total preload ({}) is an initial gap; it needs the normal motion (`normal` weights, or `face`) and kn > 0",
                         s.preload
                     )
                 },
@@ -367,6 +412,9 @@ impl Case {
                 })?;
             }
             if let Some(v) = &s.values {
+                self.require(s.face.is_none(), &k("distribution"), || {
+                    "distribution = \"stations\" gives values at `stations`, which a strip on a `face` has none of; use \"uniform\" or \"quadratic\""
+                })?;
                 self.require(v.len() == n, &k("values"), || {
                     format!("needs one value per station ({n}), found {}", v.len())
                 })?;

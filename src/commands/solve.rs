@@ -265,8 +265,11 @@ fn matrix_curve(
         .iter()
         .map(|&r| ResponseDof::Row(r as u64))
         .collect();
+    let positions = (0..case.strip.len())
+        .map(|s| Ok(strip_points(case, s, model)?.iter().map(|p| p.0).collect()))
+        .collect::<Result<Vec<Vec<f64>>>>()?;
     let maps = |q: &[f64], state: &Vec<f64>, at: Option<f64>| {
-        strip_maps(case, &elements, &system.layout(), q, state, at)
+        strip_maps(case, &positions, &elements, &system.layout(), q, state, at)
     };
     let mut map_hz: Vec<f64> = case
         .strip
@@ -287,10 +290,12 @@ fn matrix_curve(
 
 /// The maps of the `[[strip]]` entries that ask for one (`map = N_θ`), at the harmonics `q` with
 /// slider states `state` of the friction elements `elements` (the strips' points follow the
-/// friction `[[element]]` entries, in file order): with `at` = None the strips without `map_hz`
-/// (a resonance peak), with `at` = Some(f) those whose `map_hz` lists f (Hz).
+/// friction `[[element]]` entries, in file order; `positions[s]` are the positions of strip s's
+/// points): with `at` = None the strips without `map_hz` (a resonance peak), with `at` = Some(f)
+/// those whose `map_hz` lists f (Hz).
 fn strip_maps(
     case: &Case,
+    positions: &[Vec<f64>],
     elements: &DofElements,
     layout: &HarmonicLayout,
     q: &[f64],
@@ -304,7 +309,7 @@ fn strip_maps(
         .count();
     let mut maps = Vec::new();
     for (s, strip) in case.strip.iter().enumerate() {
-        let points = strip_points(strip);
+        let points = &positions[s];
         let range = start..start + points.len();
         start = range.end;
         let Some(phases) = strip.map else { continue };
@@ -320,7 +325,7 @@ fn strip_maps(
         maps.push(ContactMap {
             name: strip.label(s),
             mu: strip.mu,
-            position: points.iter().map(|(x, _)| *x).collect(),
+            position: points.clone(),
             phase: map.phases,
             state: map.state.into_iter().map(i64::from).collect(),
             friction_ratio: map.friction_ratio,

@@ -700,14 +700,18 @@ pub fn march(sys: &MarchSystem, settings: &MarchSettings) -> Result<MarchOutcome
 /// the largest step for the quasi-static method; shortened so a period holds a whole number of steps.
 fn fixed_step(sys: &MarchSystem, s: &MarchSettings, dt_max: f64) -> Result<f64> {
     let period = s.period();
-    let t_stick = if s.dynamic() {
-        sys.shortest_period(&sys.stick_states())
-    } else {
-        None
+    // the shortest full-stick period (an eigenvalue problem of the model), only where it is used
+    let t_stick = || {
+        if s.dynamic() {
+            sys.shortest_period(&sys.stick_states())
+        } else {
+            None
+        }
     };
     match s.time_step {
         Some(dt) => {
-            if let (MarchScheme::Newmark, Some(t)) = (s.scheme, t_stick) {
+            let checked = (s.scheme == MarchScheme::Newmark).then(t_stick).flatten();
+            if let Some(t) = checked {
                 if dt / t >= STEP_RATIO_LIMIT {
                     return Err(Error::input(format!(
                         "march settings: the time step {dt:e} s is {:.3} of the shortest natural period 𝕋 = {t:e} s in full stick; standard Newmark's corrector needs Δτ/𝕋 < 1/π ≈ 0.318 (Gastaldi & Berruti 2018 §4.2): use a step below {:e} s",
@@ -719,7 +723,7 @@ fn fixed_step(sys: &MarchSystem, s: &MarchSettings, dt_max: f64) -> Result<f64> 
             Ok(dt)
         }
         None => {
-            let dt = t_stick.map_or(dt_max, |t| (s.step_ratio * t).min(dt_max));
+            let dt = t_stick().map_or(dt_max, |t| (s.step_ratio * t).min(dt_max));
             let n = (period / dt - 1e-9).ceil().max(1.0);
             Ok(period / n)
         }

@@ -540,7 +540,7 @@ impl SparseRows {
         let (cols, vals) = (&self.col[a..b], &self.val[a..b]);
         let first = cols[0];
         if cols[b - a - 1] - first == b - a - 1 {
-            return dot4(vals, &x[first..first + (b - a)]);
+            return super::dense::dot(vals, &x[first..first + (b - a)]);
         }
         let mut acc = [0.0; 4];
         let (c4, v4) = (cols.chunks_exact(4), vals.chunks_exact(4));
@@ -567,24 +567,6 @@ impl SparseRows {
             .map(|r| z[r] * self.row_dot(r, z))
             .sum()
     }
-}
-
-/// aᵀb of two slices of the same length, with four partial sums (vectorisable).
-fn dot4(a: &[f64], b: &[f64]) -> f64 {
-    let mut acc = [0.0; 4];
-    let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
-    let tail: f64 = a4
-        .remainder()
-        .iter()
-        .zip(b4.remainder())
-        .map(|(x, y)| x * y)
-        .sum();
-    for (x, y) in a4.zip(b4) {
-        for l in 0..4 {
-            acc[l] += x[l] * y[l];
-        }
-    }
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
 /// y = A x for row-major A with `rows` rows and x.len() columns.

@@ -203,12 +203,26 @@ impl Workspace {
 /// this the cached factors of that step are dropped and rebuilt as the states recur.
 pub const MAX_CACHED_BYTES: usize = 256 << 20;
 
+/// Most f64 entries of a low-rank factor kept per state (4 MiB): larger ones (a travelling wave's
+/// hundreds of slipping elements on thousands of coordinates, where nearly every step meets a new
+/// state) are only held as the working factor and updated from state to state.
+pub const MAX_CACHED_LOW_RANK: usize = 1 << 19;
+
+/// Which factor solves a state's step.
+#[derive(Clone, Copy)]
+enum Held {
+    /// `factors[i]` of the step size.
+    Cached(usize),
+    /// The step size's working low-rank factor.
+    Working,
+}
+
 /// How the step matrix of one contact state is solved.
 enum StepFactor {
     /// Its inverse (n × n).
     Full(Vec<f64>),
-    /// A low-rank change of the all-stick step matrix ([`LowRank`]), when the rank is below n/2.
-    LowRank(LowRank),
+    /// A low-rank change of the all-stick step matrix ([`LowRank`]), when the rank is below n.
+    LowRank(Box<LowRank>),
 }
 
 impl StepFactor {
@@ -237,6 +251,10 @@ struct StepSize {
     held: usize,
     /// The factor used last (a step's state is most often the previous step's).
     last: Option<usize>,
+    /// The low-rank factors of the state met last, moved to each new state by column updates;
+    /// the factors kept in `factors` are copies of it when they are small
+    /// ([`MAX_CACHED_LOW_RANK`]).
+    working: Option<LowRank>,
 }
 
 impl StepSize {
@@ -250,6 +268,7 @@ impl StepSize {
             factors: Vec::new(),
             held: 0,
             last: None,
+            working: None,
         }
     }
 
@@ -365,12 +384,22 @@ impl Cache {
             return Ok(());
         }
         let slot = self.slot(if dynamic { ctx.dt.to_bits() } else { 0 });
-        let f = match self.sizes[slot].find(codes) {
-            Some(f) => f,
+        let size = &mut self.sizes[slot];
+        let held = match size.find(codes) {
+            Some(f) => Held::Cached(f),
+            None if size.working.as_ref().is_some_and(|w| w.states() == states) => Held::Working,
             None => self.build_factor(ctx, dynamic, slot, states, codes, k)?,
         };
         let size = &self.sizes[slot];
-        match &size.factors[f].1 {
+        let factor = match held {
+            Held::Cached(f) => &size.factors[f].1,
+            Held::Working => {
+                let w = size.working.as_ref().expect("working factor held");
+                w.solve_with(size.stick.as_ref().expect("stick held"), b, x, scratch);
+                return Ok(());
+            }
+        };
+        match factor {
             StepFactor::Full(inv) => dense::matvec(inv, b, x),
             StepFactor::LowRank(l) => {
                 l.solve_with(size.stick.as_ref().expect("stick held"), b, x, scratch)
@@ -379,7 +408,9 @@ impl Cache {
         Ok(())
     }
 
-    /// The factor of a state met for the first time ([`Cache::step_solve`]); returns its index.
+    /// The factor of a state met for the first time ([`Cache::step_solve`]): the working low-rank
+    /// factor moved to the state by column updates (or built anew), kept as a copy when small, or
+    /// the inverse when the rank is not below n. Returns where it is held.
     fn build_factor(
         &mut self,
         ctx: &StepContext,
@@ -388,7 +419,7 @@ impl Cache {
         states: &[ContactState],
         codes: &[u8],
         k: &mut Vec<f64>,
-    ) -> Result<usize> {
+    ) -> Result<Held> {
         let (sys, n) = (ctx.sys, ctx.sys.n);
         if dynamic {
             self.ensure_inertia(sys, ctx.dt);
@@ -405,10 +436,9 @@ impl Cache {
                 k.iter_mut().zip(p).for_each(|(a, b)| *a += b);
             }
         };
-        let cols = lowrank::columns(&sys.elements, states);
         let mut factor = None;
         let mut made = 0;
-        if 2 * cols.len() < n {
+        if lowrank::rank(&sys.elements, states) < n {
             if size.stick.is_none() {
                 step_matrix(&sys.stick_states(), k);
                 if let Some(inv) = dense::inverse(k, n) {
@@ -416,10 +446,22 @@ impl Cache {
                     made += 1;
                 }
             }
-            factor = size
-                .stick
-                .as_ref()
-                .and_then(|inv| LowRank::new(inv, n, cols).map(StepFactor::LowRank));
+            if let Some(inv) = size.stick.as_ref() {
+                let updated = size
+                    .working
+                    .as_mut()
+                    .is_some_and(|w| w.update(inv, &sys.elements, states));
+                if !updated {
+                    size.working = LowRank::new(inv, n, &sys.elements, states);
+                }
+                if let Some(w) = size.working.as_ref() {
+                    if w.len() > MAX_CACHED_LOW_RANK {
+                        self.factorisations += made + 1;
+                        return Ok(Held::Working);
+                    }
+                    factor = Some(StepFactor::LowRank(Box::new(w.clone())));
+                }
+            }
         }
         let factor = match factor {
             Some(f) => f,
@@ -442,7 +484,7 @@ impl Cache {
         size.index.insert(codes.to_vec(), i);
         size.last = Some(i);
         self.factorisations += made + 1;
-        Ok(i)
+        Ok(Held::Cached(i))
     }
 }
 
@@ -579,15 +621,10 @@ fn newmark_rates(kin: &mut Kinematics, qs: &[f64], vs: &[f64], dt: f64) {
 fn newmark_rhs(sys: &MarchSystem, p: &[f64], force: &[f64], ws: &mut Workspace) {
     let n = ws.qs.len();
     if ws.damped {
-        // one pass over the rows of P and C
+        // row by row over P and C
         for (i, bi) in ws.b.iter_mut().enumerate() {
             let (pr, cr) = (&p[i * n..(i + 1) * n], &sys.damping[i * n..(i + 1) * n]);
-            *bi = force[i]
-                + pr.iter()
-                    .zip(cr)
-                    .zip(ws.qs.iter().zip(&ws.vs))
-                    .map(|((pij, cij), (q, v))| pij * q - cij * v)
-                    .sum::<f64>();
+            *bi = force[i] + dense::dot(pr, &ws.qs) - dense::dot(cr, &ws.vs);
         }
     } else {
         dense::matvec(p, &ws.qs, &mut ws.b);

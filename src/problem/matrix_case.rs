@@ -11,6 +11,7 @@
 //! ([`damping_matrix`]) serve both solvers: the harmonic balance ([`matrix_setup`],
 //! [`matrix_elements`]) and the time march ([`matrix_march`]).
 
+use std::collections::HashMap;
 use std::path::Path;
 
 use faer::{Mat, MatRef};
@@ -26,8 +27,10 @@ use crate::march::element::{Direction, Element};
 use crate::march::law::FrictionParams;
 use crate::march::signal::Harmonic;
 use crate::march::{InitialCondition, MarchSystem};
-use crate::matrix_io::read_real_matrix;
+use crate::matrix_io::{read_real_matrix, DofMap};
 use crate::model::{damping, StructuralModel};
+
+use super::face_strip;
 
 /// Largest number of free DOF a matrix-defined case may have (the harmonic balance condenses
 /// densely per frequency).
@@ -68,7 +71,7 @@ pub fn matrix_setup(case: &Case, model: &StructuralModel) -> Result<MatrixSetup>
     let c = damping_matrix(case, model, k.as_ref(), m.as_ref())?;
     let force = excitation(case, model, &free_of)?;
     let mut nonlinear_rows = Vec::new();
-    let elements = case_elements(case);
+    let elements = case_elements(case, model)?;
     for (name, e) in &elements {
         let mut rows = vec![(format!("{name}.tangential.dofs"), &e.tangential.dofs)];
         if let Some(nrm) = &e.normal {
@@ -82,7 +85,7 @@ pub fn matrix_setup(case: &Case, model: &StructuralModel) -> Result<MatrixSetup>
     }
     nonlinear_rows.sort_unstable();
     nonlinear_rows.dedup();
-    let output_case_rows = output_rows(case)?;
+    let output_case_rows = output_rows(case, model)?;
     let output_rows = output_case_rows
         .iter()
         .map(|&d| free_row(case, &free_of, "response.dofs", d))
@@ -133,18 +136,85 @@ pub fn free_row(case: &Case, free_of: &[Option<usize>], key: &str, d: usize) -> 
     }
 }
 
-/// The output rows as written in the case: `[response] dofs`, else the excitation rows.
-fn output_rows(case: &Case) -> Result<Vec<usize>> {
+/// The output rows as written in the case: `[response] dofs`, else the x, y, z rows of the
+/// nodes of the `[response] groups` (a mesh model), else the excitation rows (or the excitation
+/// group's nodes).
+fn output_rows(case: &Case, model: &StructuralModel) -> Result<Vec<usize>> {
     if let Some(r) = case.response.as_ref().filter(|r| !r.dofs.is_empty()) {
         return Ok(r.dofs.clone());
     }
-    match case.excitation.as_ref().map(|e| &e.load) {
-        Some(ExcitationLoad::Dofs { dofs, .. }) => Ok(dofs.clone()),
-        _ => Err(Error::input(format!(
-            "{}: key 'response': a matrix-defined case needs `[response] dofs = [...]` or `[excitation] dofs`",
+    let groups: Vec<(String, &str)> =
+        match (&case.response, case.excitation.as_ref().map(|e| &e.load)) {
+            (Some(r), _) if !r.groups.is_empty() => r
+                .groups
+                .iter()
+                .enumerate()
+                .map(|(i, g)| (format!("response.groups[{i}]"), g.as_str()))
+                .collect(),
+            (_, Some(ExcitationLoad::Dofs { dofs, .. })) => return Ok(dofs.clone()),
+            (_, Some(ExcitationLoad::Group { group, .. })) => {
+                vec![("excitation.group".to_string(), group.as_str())]
+            }
+            _ => Vec::new(),
+        };
+    if groups.is_empty() {
+        return Err(Error::input(format!(
+            "{}: key 'response': a matrix-defined case needs `[response] dofs = [...]` (or `groups` on a mesh model) or an `[excitation]`",
             case.path.display()
-        ))),
+        )));
     }
+    let mut rows = Vec::new();
+    for (key, g) in groups {
+        for node in group_rows(case, model, &key, g)? {
+            for r in node {
+                if !rows.contains(&r) {
+                    rows.push(r);
+                }
+            }
+        }
+    }
+    Ok(rows)
+}
+
+/// The case rows (x, y, z) of every node of the mesh group `group` (named at `key`), through
+/// the model's DOF map: an error naming the key when the model has no mesh or DOF map, or a
+/// node has no row.
+fn group_rows(
+    case: &Case,
+    model: &StructuralModel,
+    key: &str,
+    group: &str,
+) -> Result<Vec<[usize; 3]>> {
+    let name = case.path.display();
+    let (Some(mesh), Some(map)) = (&model.mesh, &model.dofs) else {
+        return Err(Error::input(format!(
+            "{name}: key '{key}': the group '{group}' needs a mesh model with a DOF map; a model on matrices alone names matrix rows (`dofs`)"
+        )));
+    };
+    let rows = dof_rows(map);
+    mesh.nodes_of(group)?
+        .into_iter()
+        .map(|i| {
+            let tag = mesh.node_tags[i as usize];
+            let mut r = [0; 3];
+            for (c, slot) in r.iter_mut().enumerate() {
+                *slot = *rows.get(&(tag, c as u8)).ok_or_else(|| {
+                    Error::input(format!(
+                        "{name}: key '{key}': node {tag} of group '{group}' has no row for component {c} in the DOF map"
+                    ))
+                })?;
+            }
+            Ok(r)
+        })
+        .collect()
+}
+
+/// (node tag, component) → case row of a DOF map.
+fn dof_rows(map: &DofMap) -> HashMap<(u64, u8), usize> {
+    map.entries
+        .iter()
+        .map(|e| ((e.node_tag, e.component), e.row))
+        .collect()
 }
 
 /// The excitation amplitude per free row (N), f = force·cos(ωt) (times `force_scale`).
@@ -162,11 +232,12 @@ fn excitation(case: &Case, model: &StructuralModel, free_of: &[Option<usize>]) -
                 f[free_row(case, free_of, "excitation.dofs", d)?] += v * e.force_scale;
             }
         }
-        ExcitationLoad::Group { group, .. } => {
-            return Err(Error::input(format!(
-                "{}: key 'excitation.group': the group '{group}' cannot load a matrix-defined model in the direct harmonic balance; give `dofs` and `force` (matrix rows)",
-                case.path.display()
-            )))
+        ExcitationLoad::Group { group, force } => {
+            for node in group_rows(case, model, "excitation.group", group)? {
+                for (&d, &v) in node.iter().zip(force) {
+                    f[free_row(case, free_of, "excitation.group", d)?] += v * e.force_scale;
+                }
+            }
         }
     }
     Ok(f)
@@ -236,7 +307,7 @@ pub fn matrix_elements(
             weights: w.weights.clone(),
         })
     };
-    let elements = case_elements(case)
+    let elements = case_elements(case, model)?
         .into_iter()
         .map(|(name, e)| {
             Ok(FrictionElement {
@@ -256,31 +327,146 @@ pub fn matrix_elements(
 /// The nonlinear elements of a matrix case with the names its messages use: the `[[element]]`
 /// entries (`element[i]`), then the points of every `[[strip]]` (`strip[s].point[p]`,
 /// [`strip_points`]).
-pub fn case_elements(case: &Case) -> Vec<(String, FrictionElement)> {
+pub fn case_elements(
+    case: &Case,
+    model: &StructuralModel,
+) -> Result<Vec<(String, FrictionElement)>> {
     let mut out: Vec<(String, FrictionElement)> = case
         .element
         .iter()
         .enumerate()
         .map(|(i, e)| (format!("element[{i}]"), e.clone()))
         .collect();
-    for (s, strip) in case.strip.iter().enumerate() {
+    for s in 0..case.strip.len() {
         out.extend(
-            strip_points(strip)
+            strip_points(case, s, model)?
                 .into_iter()
                 .enumerate()
                 .map(|(p, (_, e))| (format!("strip[{s}].point[{p}]"), e)),
         );
     }
-    out
+    Ok(out)
 }
 
-/// The integration points of a validated strip (`docs/case-file.md`, `[[strip]]`) as friction
-/// elements, with their positions s (m): per segment [s_j, s_j+1] of length h the
+/// The integration points of the validated strip `case.strip[s]` on `model` with their
+/// positions s (m): [`line_strip_points`] for a strip on matrix rows, [`face_strip_points`] for
+/// one on a face group.
+pub fn strip_points(
+    case: &Case,
+    s: usize,
+    model: &StructuralModel,
+) -> Result<Vec<(f64, FrictionElement)>> {
+    let strip = &case.strip[s];
+    if strip.face.is_some() {
+        face_strip_points(case, s, model)
+    } else {
+        Ok(line_strip_points(strip))
+    }
+}
+
+/// The points of the strip `case.strip[s]` on a face group of the mesh of `model`
+/// ([`face_strip::face_points`], whose documentation gives the kinematics and the quadrature):
+/// per Gauss point, the tangential combination Σ_a N_a t_c q(row(a, c)) and, when kn > 0, the
+/// normal one Σ_a N_a n_c q(row(a, c)), with k_t = k_u dA, k_n = k_v dA and
+/// n0 = P q(s) dA / Σ q dA. Rows of clamped nodes are left out of the combinations (they do not
+/// move); a point whose nodes are all clamped is left out, its share of the preload included in
+/// the normalisation. Points are ordered by position s (stable).
+///
+/// Errors ([`Error::Input`], naming the case file and `strip[s]`): the model has no mesh or DOF
+/// map, a face node without rows, and the errors of [`face_strip::face_points`].
+pub fn face_strip_points(
+    case: &Case,
+    s: usize,
+    model: &StructuralModel,
+) -> Result<Vec<(f64, FrictionElement)>> {
+    let strip = &case.strip[s];
+    let name = case.path.display();
+    let key = format!("strip[{s}].face");
+    let (Some(mesh), Some(map), Some(group), Some(direction)) =
+        (&model.mesh, &model.dofs, &strip.face, strip.direction)
+    else {
+        return Err(Error::input(format!(
+            "{name}: key '{key}': a strip on a face group needs a mesh model with a DOF map and `direction`"
+        )));
+    };
+    let fp = face_strip::face_points(mesh, group, direction, strip.gauss)
+        .map_err(|e| Error::input(format!("{name}: key '{key}': {e}")))?;
+    let rows = dof_rows(map);
+    let free_of = free_row_map(model);
+    let total: f64 = fp
+        .points
+        .iter()
+        .map(|p| strip.shape_on(p.position, 0.0, fp.length) * p.area)
+        .sum();
+    let mut points = Vec::with_capacity(fp.points.len());
+    for p in &fp.points {
+        let combination = |dir: [f64; 3]| -> Result<WeightedDofs> {
+            let mut w = WeightedDofs::default();
+            for &(node, value) in &p.nodes {
+                let tag = mesh.node_tags[node as usize];
+                for (c, &dc) in dir.iter().enumerate() {
+                    let row = *rows.get(&(tag, c as u8)).ok_or_else(|| {
+                        Error::input(format!(
+                            "{name}: key '{key}': node {tag} of group '{group}' has no row for component {c} in the DOF map"
+                        ))
+                    })?;
+                    let weight = value * dc;
+                    if weight != 0.0 && free_of.get(row).is_some_and(Option::is_some) {
+                        w.dofs.push(row);
+                        w.weights.push(weight);
+                    }
+                }
+            }
+            Ok(w)
+        };
+        let tangential = combination(p.tangent)?;
+        let normal = if strip.kn > 0.0 {
+            Some(combination(p.normal)?)
+        } else {
+            None
+        };
+        // a combination needs a row: an empty one (every weight 0 or clamped) reads another
+        // row of the point with weight 0; a point with no free row at all is left out
+        let Some(&any) = tangential
+            .dofs
+            .first()
+            .or_else(|| normal.as_ref().and_then(|n| n.dofs.first()))
+        else {
+            continue;
+        };
+        let fill = |mut w: WeightedDofs| {
+            if w.dofs.is_empty() {
+                w.dofs.push(any);
+                w.weights.push(0.0);
+            }
+            w
+        };
+        let tangential = fill(tangential);
+        let normal = normal.map(fill);
+        let e = FrictionElement {
+            kind: ElementKind::Friction,
+            tangential,
+            normal,
+            kt: Some(strip.kt * p.area),
+            kn: strip.kn * p.area,
+            mu: Some(strip.mu),
+            n0: Some(strip.preload * strip.shape_on(p.position, 0.0, fp.length) * p.area / total),
+            evaluation: strip.evaluation,
+            ..FrictionElement::default()
+        };
+        points.push((p.position, e));
+    }
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    Ok(points)
+}
+
+/// The integration points of a validated strip on matrix rows (`docs/case-file.md`,
+/// `[[strip]]`) as friction elements, with their positions s (m): per segment [s_j, s_j+1] of length h the
 /// Gauss–Legendre points s = s_j + h(1 + x_g)/2 of weight dA = h w_g/2, the station weights
 /// interpolated linearly (η = (1 + x_g)/2), k_t = k_u dA, k_n = k_v dA and
 /// n0 = P q(s) dA / Σ q dA (P the total preload, so the points' preloads add up to P exactly).
 /// Weights that interpolate to exactly 0 are left out of a point's combination.
-pub fn strip_points(strip: &Strip) -> Vec<(f64, FrictionElement)> {
+pub fn line_strip_points(strip: &Strip) -> Vec<(f64, FrictionElement)> {
     let (xg, wg) = gauss_legendre(strip.gauss);
     let st = &strip.stations;
     let mut points = Vec::new();
@@ -382,7 +568,7 @@ pub fn matrix_march(case: &Case, sm: &StructuralModel) -> Result<(MarchSystem, V
         })
     };
     let mut elements = Vec::new();
-    for (name, e) in case_elements(case) {
+    for (name, e) in case_elements(case, sm)? {
         if e.kind != ElementKind::Friction {
             return Err(Error::input(format!(
                 "{file}: {name}: kind = \"{}\" is computed by the harmonic balance (`nlrom solve`); time marching takes `friction` elements only",

@@ -569,6 +569,38 @@ def make_blade(name: str, cells: tuple[int, int, int], out_dir: Path, chord: flo
     return stats
 
 
+def make_damper_bar(name: str, out_dir: Path, length: float = 1.25, side: float = 0.01,
+                    nx: int = 40) -> dict:
+    """Bar damper on a mesh: the bar [0,L] x [0,a] x [0,a] clamped at x = 0 and pressed between
+    two pads on its faces z = 0 and z = a (the distributed microslip bar of Cigeroglu, An & Menq
+    2007, section 4.1, as a solid). Transfinite first-order hexahedra, nx x 1 x 1, so the mesh is
+    symmetric about the planes y = a/2 and z = a/2.
+    Groups: volume (3), clamp (2, x = 0), tip (2, x = L), pads (2, the faces z = 0 and z = a).
+    """
+    start(name)
+    occ = gmsh.model.occ
+    box = occ.addBox(0, 0, 0, length, side, side)
+    occ.synchronize()
+    for _, c in gmsh.model.getEntities(1):
+        b = gmsh.model.getBoundingBox(1, c)
+        along_x = (b[3] - b[0]) > 0.5 * length
+        gmsh.model.mesh.setTransfiniteCurve(c, (nx if along_x else 1) + 1)
+    for _, s in gmsh.model.getEntities(2):
+        gmsh.model.mesh.setTransfiniteSurface(s)
+        gmsh.model.mesh.setRecombine(2, s)
+    gmsh.model.mesh.setTransfiniteVolume(box)
+    add_group(3, [box], "volume", 1)
+    add_group(2, _faces_at(0, 0.0), "clamp", 2)
+    add_group(2, _faces_at(0, length), "tip", 3)
+    add_group(2, _faces_at(2, 0.0) + _faces_at(2, side), "pads", 4)
+    check_groups_disjoint()
+    gmsh.model.mesh.generate(3)
+    stats = mesh_stats()
+    write_variants(name, out_dir)
+    gmsh.finalize()
+    return stats
+
+
 def make_mixed(name: str, order: int, incomplete: bool, out_dir: Path) -> dict:
     """A small mesh with as many element types as Gmsh makes, for parser coverage.
 
@@ -669,7 +701,8 @@ def sector_params(variant: str, **overrides) -> SectorParams:
 
 
 MODELS = ["sector_conforming", "sector_nonconforming", "sector_coarse_target", "cube_tet4", "cube_tet10",
-          "bar_hex20", "bar_tet10", "mixed_o1", "mixed_o2", "mixed_o2i", "sector8", "blade", "blade_coarse"]
+          "bar_hex20", "bar_tet10", "mixed_o1", "mixed_o2", "mixed_o2i", "sector8", "blade", "blade_coarse",
+          "damper_bar"]
 
 
 def build_all(out_dir: Path, only: list[str] | None) -> None:
@@ -705,6 +738,8 @@ def build_all(out_dir: Path, only: list[str] | None) -> None:
             info = make_blade(job, (3, 2, 12), out_dir)
         elif job == "blade_coarse":
             info = make_blade(job, (2, 2, 4), out_dir)
+        elif job == "damper_bar":
+            info = make_damper_bar(job, out_dir)
         elif job == "mixed_o1":
             info = make_mixed(job, 1, False, out_dir)
         elif job == "mixed_o2":
