@@ -46,7 +46,7 @@ pub fn mesh_summary(mesh: &Mesh) -> Value {
                 "dim": g.dim,
                 "tag": g.tag,
                 "elements": mesh.group_element_count(g),
-                "nodes": mesh.group_node_indices(g).len(),
+                "nodes": mesh.group_node_count(g),
             })
         })
         .collect();
@@ -94,7 +94,7 @@ fn mesh_summary_text(path: &Path, mesh: &Mesh) -> String {
             g.dim,
             g.tag,
             mesh.group_element_count(g),
-            mesh.group_node_indices(g).len()
+            mesh.group_node_count(g)
         );
     }
     let [lo, hi] = mesh.bbox();

@@ -306,36 +306,66 @@ pub enum TagsOut<'t> {
     Store(&'t mut [u64]),
 }
 
-/// One chunk of element records `tag node_1 … node_nn` (one per line, starting at `i[p..]`),
-/// `conn.len() / nn` of them: the node tags mapped by `index` into `conn`, the element tags
-/// into `tags` or, without it, checked to run on from `next_tag`. `NN` is `nn` as a constant
-/// for the common element sizes (the node loop unrolled), 0 otherwise.
+/// A run of element records for [`element_chunk`]: the offset of its first line, its element
+/// tags (stored into the slice, or checked to run on from the number), its connectivity slots.
+type ElementRun<'t, 'c> = (usize, Option<&'t mut [u64]>, u64, &'c mut [u32]);
+
+/// The `k`-th element tag of a run: stored into `tags`, or (without it) checked to be `*next`,
+/// which then moves on.
+#[inline(always)]
+fn element_tag(tags: &mut Option<&mut [u64]>, next: &mut u64, k: usize, tag: u64) -> Option<()> {
+    match tags {
+        Some(t) => t[k] = tag,
+        None if tag != *next => return None,
+        None => *next = next.wrapping_add(1),
+    }
+    Some(())
+}
+
+/// Two neighbouring runs of element records `tag node_1 … node_nn` (one per line) read side by
+/// side, one field of each in turn: each integer's position depends on the one before it, so
+/// a single run is a chain of dependent loads; two independent chains keep the core busy. The
+/// node tags are mapped by `index` into the runs' slots, `conn.len() / nn` records each (run
+/// `b` has at most as many as run `a`). `NN` is `nn` as a constant for the common element
+/// sizes (the node loop unrolled), 0 otherwise.
 #[inline(always)]
 fn element_chunk<const NN: usize>(
     i: &[u8],
-    mut p: usize,
-    (mut tags, mut next_tag): (Option<&mut [u64]>, u64),
-    (conn, nn): (&mut [u32], usize),
+    (mut pa, mut tags_a, mut next_a, conn_a): ElementRun<'_, '_>,
+    (mut pb, mut tags_b, mut next_b, conn_b): ElementRun<'_, '_>,
+    nn: usize,
     index: &impl Fn(u64) -> Option<u32>,
 ) -> Option<()> {
     let nn = if NN > 0 { NN } else { nn };
-    for (k, nodes) in conn.chunks_exact_mut(nn).enumerate() {
-        let tag = uint_at(i, &mut p)?;
-        match tags.as_deref_mut() {
-            Some(t) => t[k] = tag,
-            None if tag != next_tag => return None,
-            None => next_tag = next_tag.wrapping_add(1),
+    let paired = conn_b.len() / nn;
+    let (conn_a, rest_a) = conn_a.split_at_mut(paired * nn);
+    let records = conn_a.chunks_exact_mut(nn).zip(conn_b.chunks_exact_mut(nn));
+    for (k, (nodes_a, nodes_b)) in records.enumerate() {
+        let tag_a = uint_at(i, &mut pa)?;
+        let tag_b = uint_at(i, &mut pb)?;
+        for j in 0..nn {
+            nodes_a[j] = index(uint_at(i, &mut pa)?)?;
+            nodes_b[j] = index(uint_at(i, &mut pb)?)?;
         }
+        pa = line_end_at(i, pa)?;
+        pb = line_end_at(i, pb)?;
+        element_tag(&mut tags_a, &mut next_a, k, tag_a)?;
+        element_tag(&mut tags_b, &mut next_b, k, tag_b)?;
+    }
+    for (k, nodes) in rest_a.chunks_exact_mut(nn).enumerate() {
+        let tag = uint_at(i, &mut pa)?;
         for c in nodes.iter_mut() {
-            *c = index(uint_at(i, &mut p)?)?;
+            *c = index(uint_at(i, &mut pa)?)?;
         }
-        p = line_end_at(i, p)?;
+        pa = line_end_at(i, pa)?;
+        element_tag(&mut tags_a, &mut next_a, paired + k, tag)?;
     }
     Some(())
 }
 
 /// Reads `n` element records `tag node_1 … node_nn` starting at `i`, one per line, in parallel
-/// (as [`read_records`]): node tags mapped to indices by `index` into `conn` (`nn` per record),
+/// (as [`read_records`], each task reading two half-chunks side by side with
+/// [`element_chunk`]): node tags mapped to indices by `index` into `conn` (`nn` per record),
 /// element tags as `tags` says. Returns the input after the n-th line, or `None` if a record is
 /// not exactly one such line, names a node `index` does not know, or (with [`TagsOut::Run`])
 /// breaks the run of tags.
@@ -351,36 +381,48 @@ pub fn element_records<'a>(
     if nn == 0 || n == 0 {
         return None;
     }
-    let per = lines_per_chunk(n);
-    let (chunks, end) = line_chunks(i, n, per)?;
-    let chunk = |tags: (Option<&mut [u64]>, u64), conn: &mut [u32], start: usize| {
-        let out = (conn, nn);
+    let half = lines_per_chunk(n).div_ceil(2);
+    let (halves, end) = line_chunks(i, n, half)?;
+    let per = 2 * half;
+    // Task `c`: records `c * per ..` (halves 2c and 2c + 1), their tags stored into `tags` or
+    // checked to run on from `first` (the first tag of the block).
+    let task = |c: usize, (mut tags, first): (Option<&mut [u64]>, u64), conn: &mut [u32]| {
+        let (start_a, len_a) = halves[2 * c];
+        let start_b = halves.get(2 * c + 1).map_or(start_a, |h| h.0);
+        let (conn_a, conn_b) = conn.split_at_mut(len_a * nn);
+        let (tags_a, tags_b) = match tags.as_deref_mut() {
+            Some(t) => {
+                let (a, b) = t.split_at_mut(len_a);
+                (Some(a), Some(b))
+            }
+            None => (None, None),
+        };
+        let first = first.wrapping_add((c * per) as u64);
+        let a = (start_a, tags_a, first, conn_a);
+        let b = (start_b, tags_b, first.wrapping_add(len_a as u64), conn_b);
         match nn {
-            3 => element_chunk::<3>(i, start, tags, out, &index),
-            4 => element_chunk::<4>(i, start, tags, out, &index),
-            6 => element_chunk::<6>(i, start, tags, out, &index),
-            8 => element_chunk::<8>(i, start, tags, out, &index),
-            10 => element_chunk::<10>(i, start, tags, out, &index),
-            _ => element_chunk::<0>(i, start, tags, out, &index),
+            3 => element_chunk::<3>(i, a, b, nn, &index),
+            4 => element_chunk::<4>(i, a, b, nn, &index),
+            6 => element_chunk::<6>(i, a, b, nn, &index),
+            8 => element_chunk::<8>(i, a, b, nn, &index),
+            10 => element_chunk::<10>(i, a, b, nn, &index),
+            _ => element_chunk::<0>(i, a, b, nn, &index),
         }
         .is_some()
     };
-    let ok = match (tags, chunks.as_slice()) {
-        // One chunk: on the calling thread.
-        (TagsOut::Run(first), [(start, _)]) => chunk((None, first), conn, *start),
-        (TagsOut::Store(t), [(start, _)]) => chunk((Some(t), 0), conn, *start),
-        (TagsOut::Run(first), _) => conn
+    let ok = match tags {
+        // One task: on the calling thread.
+        TagsOut::Run(first) if halves.len() <= 2 => task(0, (None, first), conn),
+        TagsOut::Store(t) if halves.len() <= 2 => task(0, (Some(t), 0), conn),
+        TagsOut::Run(first) => conn
             .par_chunks_mut(per * nn)
-            .zip(chunks.par_iter())
             .enumerate()
-            .all(|(c, (conn, &(start, _)))| {
-                chunk((None, first.wrapping_add((c * per) as u64)), conn, start)
-            }),
-        (TagsOut::Store(tags), _) => tags
+            .all(|(c, conn)| task(c, (None, first), conn)),
+        TagsOut::Store(tags) => tags
             .par_chunks_mut(per)
             .zip(conn.par_chunks_mut(per * nn))
-            .zip(chunks.par_iter())
-            .all(|((t, conn), &(start, _))| chunk((Some(t), 0), conn, start)),
+            .enumerate()
+            .all(|(c, (t, conn))| task(c, (Some(t), 0), conn)),
     };
     ok.then(|| &i[end..])
 }
@@ -786,41 +828,58 @@ mod tests {
                     assert_eq!(u64::from(conn[k * nn + j]), node(k, j) - 1);
                 }
             }
-            // A run that starts elsewhere, or breaks in a middle chunk: refused; stored instead.
+            // A run that starts elsewhere: refused. One tag off the run in the first or the
+            // second half of a task or in a last, lone half (tasks read two halves of
+            // CHUNK_LINES / 2 lines side by side): refused; stored instead.
             assert!(
                 element_records(run.as_bytes(), n, TagsOut::Run(40), &mut conn, nn, index)
                     .is_none()
             );
-            let jump = |k: usize| 41 + k as u64 + if k > 2 * CHUNK_LINES { 5 } else { 0 };
-            let broken = text(&jump);
-            assert!(
-                element_records(broken.as_bytes(), n, TagsOut::Run(41), &mut conn, nn, index)
-                    .is_none()
-            );
             let mut tags = vec![0u64; n];
-            let rest = element_records(
-                broken.as_bytes(),
-                n,
-                TagsOut::Store(&mut tags),
-                &mut conn,
-                nn,
-                index,
-            )
-            .unwrap();
-            assert_eq!(rest, b"$End");
-            assert!((0..n).all(|k| tags[k] == jump(k)));
-            // A record over two lines, an unknown node, a missing node: refused.
+            for at in [
+                CHUNK_LINES / 2 + 3,
+                2 * CHUNK_LINES + 1,
+                3 * CHUNK_LINES + 2,
+            ] {
+                let jump = |k: usize| 41 + k as u64 + if k == at { 5 } else { 0 };
+                let broken = text(&jump);
+                assert!(
+                    element_records(broken.as_bytes(), n, TagsOut::Run(41), &mut conn, nn, index)
+                        .is_none(),
+                    "break at {at}"
+                );
+                let rest = element_records(
+                    broken.as_bytes(),
+                    n,
+                    TagsOut::Store(&mut tags),
+                    &mut conn,
+                    nn,
+                    index,
+                )
+                .unwrap();
+                assert_eq!(rest, b"$End");
+                assert!((0..n).all(|k| tags[k] == jump(k)), "break at {at}");
+                assert!((0..n * nn).all(|c| u64::from(conn[c]) == node(c / nn, c % nn) - 1));
+            }
+            // A record over two lines, an unknown node, a missing node: refused, in either
+            // half of a task.
             let store = |text: &str, tags: &mut [u64], conn: &mut [u32]| {
                 element_records(text.as_bytes(), n, TagsOut::Store(tags), conn, nn, index).is_some()
             };
-            let two_lines = run.replacen(&format!("\n{} ", 41 + 2 * CHUNK_LINES), "\n0\n", 1);
-            assert!(!store(&two_lines, &mut tags, &mut conn));
-            let unknown = run.replacen(" 8 ", " 1001 ", 1);
-            assert_ne!(unknown, run);
-            assert!(!store(&unknown, &mut tags, &mut conn));
-            let missing = run.replacen(&format!("{tail}\n"), "\n", 1);
-            let missing = missing.replacen(&format!(" {}\n", node(0, nn - 1)), "\n", 1);
-            assert!(!store(&missing, &mut tags, &mut conn));
+            for k in [5, CHUNK_LINES / 2 + 7, 2 * CHUNK_LINES] {
+                let line = |k: usize| format!("\n{} {} ", 41 + k, node(k, 0));
+                let two_lines =
+                    run.replacen(&line(k), &format!("\n{}\n{} ", 41 + k, node(k, 0)), 1);
+                assert_ne!(two_lines, run);
+                assert!(!store(&two_lines, &mut tags, &mut conn), "line {k}");
+                let unknown = run.replacen(&line(k), &format!("\n{} 1001 ", 41 + k), 1);
+                assert_ne!(unknown, run);
+                assert!(!store(&unknown, &mut tags, &mut conn), "line {k}");
+                let last = format!(" {}{tail}\n{} ", node(k, nn - 1), 42 + k);
+                let missing = run.replacen(&last, &format!("\n{} ", 42 + k), 1);
+                assert_ne!(missing, run);
+                assert!(!store(&missing, &mut tags, &mut conn), "line {k}");
+            }
         }
     }
 

@@ -305,22 +305,38 @@ impl Mesh {
         self.group_blocks(group).map(ElementBlock::len).sum()
     }
 
-    /// Sorted, distinct node indices of the elements of `group` (marked in parallel).
-    pub fn group_node_indices(&self, group: &PhysicalGroup) -> Vec<u32> {
+    /// Which nodes the elements of `group` use, one flag per node (marked in parallel).
+    fn group_node_marks(&self, group: &PhysicalGroup) -> Vec<AtomicBool> {
         let used: Vec<AtomicBool> = (0..self.num_nodes())
             .map(|_| AtomicBool::new(false))
             .collect();
+        let marks = used.as_slice();
         for b in self.group_blocks(group) {
             b.connectivity.par_chunks(1 << 16).for_each(|chunk| {
                 for &n in chunk {
-                    used[n as usize].store(true, Ordering::Relaxed);
+                    marks[n as usize].store(true, Ordering::Relaxed);
                 }
             });
         }
-        used.iter()
+        used
+    }
+
+    /// Sorted, distinct node indices of the elements of `group` (marked in parallel).
+    pub fn group_node_indices(&self, group: &PhysicalGroup) -> Vec<u32> {
+        self.group_node_marks(group)
+            .iter()
             .enumerate()
             .filter_map(|(i, u)| u.load(Ordering::Relaxed).then_some(i as u32))
             .collect()
+    }
+
+    /// The number of distinct nodes of the elements of `group`: the length of
+    /// [`Mesh::group_node_indices`] without building the list.
+    pub fn group_node_count(&self, group: &PhysicalGroup) -> usize {
+        self.group_node_marks(group)
+            .into_iter()
+            .map(|u| usize::from(u.into_inner()))
+            .sum()
     }
 
     /// Sorted node indices of the group called `name` (error if it does not exist or is empty).

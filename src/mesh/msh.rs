@@ -1655,10 +1655,10 @@ mod tests {
         assert_eq!(m.blocks[1].connectivity, vec![0, 1, 2, 3]);
         let g = m.group("solid body").expect("group");
         assert_eq!(m.group_element_count(g), 1);
-        assert_eq!(
-            m.group_node_indices(m.group("face").expect("face")),
-            vec![0, 1, 2]
-        );
+        let face = m.group("face").expect("face");
+        assert_eq!(m.group_node_indices(face), vec![0, 1, 2]);
+        assert_eq!(m.group_node_count(face), 3);
+        assert_eq!(m.group_node_count(g), 4);
     }
 
     #[test]
