@@ -125,9 +125,10 @@ fn separation_folds_are_the_same_with_the_structured_solve() {
     assert_eq!((sd.structured, sd.krylov), (0, 0));
     assert_eq!((ss.dense, ss.fallbacks), (0, 0), "{ss:?}");
     assert!(ss.structured > 0, "{ss:?}");
-    // most corrector steps after the first reuse the factors by GMRES
+    // most corrector steps and tangents after the first reuse the factors by GMRES: at least
+    // 20 times fewer factorisations than the dense run (measured 16 against 1 313)
     assert!(
-        ss.krylov > 100 && ss.factorizations < sd.factorizations,
+        ss.krylov > 100 && 20 * ss.factorizations <= sd.factorizations,
         "{ss:?} {sd:?}"
     );
     // the bordered systems alone give rank 2; the separating element adds to it
