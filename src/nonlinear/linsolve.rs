@@ -1092,6 +1092,20 @@ mod tests {
     use super::*;
 
     /// Deterministic numbers in [−0.5, 0.5).
+    /// `a` with its diagonal entry (20, 20) moved across the sign change of det A (det is
+    /// linear in it): the first of −20, −5, −1, 7, 20 whose determinant sign differs from `sd`.
+    fn other_sign(a: &Mat<f64>, b: &[f64], sd: f64) -> Mat<f64> {
+        [-20.0, -5.0, -1.0, 7.0, 20.0]
+            .iter()
+            .map(|&v| {
+                let mut m = a.clone();
+                m[(20, 20)] = v;
+                m
+            })
+            .find(|m| solve_dense_signed_ref(m.as_ref(), b).unwrap().1 != sd)
+            .expect("a matrix with the other determinant sign")
+    }
+
     fn noise(seed: usize) -> f64 {
         let s = (seed as u64)
             .wrapping_mul(6364136223846793005)
@@ -1243,15 +1257,7 @@ mod tests {
                 near[(i, j)] += 0.8 * noise(5000 + 3 * p + q) + if p == q { 0.5 } else { 0.0 };
             }
         }
-        let far = [-20.0, -5.0, -1.0, 7.0, 20.0]
-            .iter()
-            .map(|&v| {
-                let mut m = a.clone();
-                m[(20, 20)] = v;
-                m
-            })
-            .find(|m| solve_dense_signed_ref(m.as_ref(), &b).unwrap().1 != sd)
-            .expect("a matrix with the other determinant sign");
+        let far = other_sign(&a, &b, sd);
         for choice in [SolverChoice::Dense, SolverChoice::Structured] {
             let solver = LinearSolver::new(blocks.clone(), choice);
             for (what, m) in [("near", &near), ("other sign", &far)] {
@@ -1329,15 +1335,7 @@ mod tests {
             assert_eq!(sign, sd, "{choice:?}");
             // far: the diagonal entry moved across the sign change of det A (det is linear in
             // it; `sign_and_auto` finds both signs between −5 and 7)
-            let far = [-20.0, -5.0, -1.0, 7.0, 20.0]
-                .iter()
-                .map(|&v| {
-                    let mut m = a.clone();
-                    m[(20, 20)] = v;
-                    m
-                })
-                .find(|m| solve_dense_signed_ref(m.as_ref(), &b).unwrap().1 != sd)
-                .expect("a matrix with the other determinant sign");
+            let far = other_sign(&a, &b, sd);
             let (_, f) = solver.factor_solve(&mut Jacobian::Dense(far), &b).unwrap();
             assert!(solver
                 .solve_near(&f, &Jacobian::Dense(a.clone()), &b)
