@@ -1106,6 +1106,14 @@ mod tests {
             .expect("a matrix with the other determinant sign")
     }
 
+    /// max_i |x_i − y_i|.
+    fn max_difference(x: &[f64], y: &[f64]) -> f64 {
+        x.iter()
+            .zip(y)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0, f64::max)
+    }
+
     fn noise(seed: usize) -> f64 {
         let s = (seed as u64)
             .wrapping_mul(6364136223846793005)
@@ -1174,11 +1182,7 @@ mod tests {
                 } else {
                     assert!(rank > border_rank && rank <= 7 + border_rank, "{rank}");
                 }
-                let err = xs
-                    .iter()
-                    .zip(&xd)
-                    .map(|(p, q)| (p - q).abs())
-                    .fold(0.0, f64::max);
+                let err = max_difference(&xs, &xd);
                 let scale = xd.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
                 assert!(
                     err <= 1e-12 * scale,
@@ -1200,12 +1204,7 @@ mod tests {
         let b: Vec<f64> = (0..n).map(|i| noise(4000 + i)).collect();
         let (xd, _) = solve_dense_signed_ref(a.as_ref(), &b).unwrap();
         let scale = xd.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-        let err = |x: &[f64]| {
-            x.iter()
-                .zip(&xd)
-                .map(|(p, q)| (p - q).abs())
-                .fold(0.0, f64::max)
-        };
+        let err = |x: &[f64]| max_difference(x, &xd);
         let el = [4usize, 15, 40];
         for choice in [SolverChoice::Dense, SolverChoice::Structured] {
             let solver = LinearSolver::new(blocks.clone(), choice);
@@ -1270,11 +1269,7 @@ mod tests {
                 let (x, k, sign) = solver
                     .solve_krylov_signed(&f, &Jacobian::Dense(a.clone()), &b)
                     .unwrap();
-                let err = x
-                    .iter()
-                    .zip(&xd)
-                    .map(|(p, q)| (p - q).abs())
-                    .fold(0.0, f64::max);
+                let err = max_difference(&x, &xd);
                 assert!(err <= 1e-10 * scale, "{choice:?} {what}: {err:e}");
                 assert!((1..=5).contains(&k), "{choice:?} {what}: {k}");
                 assert_eq!(sign, sd, "{choice:?} {what}");
@@ -1326,11 +1321,7 @@ mod tests {
             let (x, sign) = solver
                 .solve_near(&f, &Jacobian::Dense(a.clone()), &b)
                 .unwrap();
-            let err = x
-                .iter()
-                .zip(&xd)
-                .map(|(p, q)| (p - q).abs())
-                .fold(0.0, f64::max);
+            let err = max_difference(&x, &xd);
             assert!(err <= 1e-11 * scale, "{choice:?}: {err:e}");
             assert_eq!(sign, sd, "{choice:?}");
             // far: the diagonal entry moved across the sign change of det A (det is linear in
