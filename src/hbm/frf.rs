@@ -143,7 +143,6 @@ pub fn frequency_response<F: HarmonicForce>(
 /// One jump of [`frequency_response`] after `path` left the range: the jump and the path traced
 /// from where it lands (its points not yet appended), or `None` when no solution was found
 /// there (or the furthest point is already at the end).
-#[allow(clippy::type_complexity)]
 fn jump_on<F: HarmonicForce>(
     fp: &FrequencyPath<'_, '_, F>,
     opts: &ContinuationOptions,
