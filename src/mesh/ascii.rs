@@ -322,12 +322,35 @@ fn element_tag(tags: &mut Option<&mut [u64]>, next: &mut u64, k: usize, tag: u64
     Some(())
 }
 
+/// The records of a run from its `k0`-th on, one at a time (what [`element_chunk`] has left
+/// after the records it reads side by side): the offset after the run's last line.
+#[inline(always)]
+fn element_rest<const NN: usize>(
+    i: &[u8],
+    (mut p, mut tags, mut next, conn): ElementRun<'_, '_>,
+    k0: usize,
+    nn: usize,
+    index: &impl Fn(u64) -> Option<u32>,
+) -> Option<usize> {
+    let nn = if NN > 0 { NN } else { nn };
+    for (k, nodes) in conn[k0 * nn..].chunks_exact_mut(nn).enumerate() {
+        let tag = uint_at(i, &mut p)?;
+        for c in nodes.iter_mut() {
+            *c = index(uint_at(i, &mut p)?)?;
+        }
+        p = line_end_at(i, p)?;
+        element_tag(&mut tags, &mut next, k0 + k, tag)?;
+    }
+    Some(p)
+}
+
 /// Two neighbouring runs of element records `tag node_1 … node_nn` (one per line) read side by
 /// side, one field of each in turn: each integer's position depends on the one before it, so
 /// a single run is a chain of dependent loads; two independent chains keep the core busy. The
-/// node tags are mapped by `index` into the runs' slots, `conn.len() / nn` records each (run
-/// `b` has at most as many as run `a`). `NN` is `nn` as a constant for the common element
-/// sizes (the node loop unrolled), 0 otherwise.
+/// node tags are mapped by `index` into the runs' slots, `conn.len() / nn` records each; the
+/// records of the longer run past the shorter one's are read alone ([`element_rest`]). Returns
+/// the offsets after the last lines of the runs. `NN` is `nn` as a constant for the common
+/// element sizes (the node loop unrolled), 0 otherwise.
 #[inline(always)]
 fn element_chunk<const NN: usize>(
     i: &[u8],
@@ -335,10 +358,9 @@ fn element_chunk<const NN: usize>(
     (mut pb, mut tags_b, mut next_b, conn_b): ElementRun<'_, '_>,
     nn: usize,
     index: &impl Fn(u64) -> Option<u32>,
-) -> Option<()> {
+) -> Option<(usize, usize)> {
     let nn = if NN > 0 { NN } else { nn };
-    let paired = conn_b.len() / nn;
-    let (conn_a, rest_a) = conn_a.split_at_mut(paired * nn);
+    let paired = conn_a.len().min(conn_b.len()) / nn;
     let records = conn_a.chunks_exact_mut(nn).zip(conn_b.chunks_exact_mut(nn));
     for (k, (nodes_a, nodes_b)) in records.enumerate() {
         let tag_a = uint_at(i, &mut pa)?;
@@ -352,23 +374,58 @@ fn element_chunk<const NN: usize>(
         element_tag(&mut tags_a, &mut next_a, k, tag_a)?;
         element_tag(&mut tags_b, &mut next_b, k, tag_b)?;
     }
-    for (k, nodes) in rest_a.chunks_exact_mut(nn).enumerate() {
-        let tag = uint_at(i, &mut pa)?;
-        for c in nodes.iter_mut() {
-            *c = index(uint_at(i, &mut pa)?)?;
-        }
-        pa = line_end_at(i, pa)?;
-        element_tag(&mut tags_a, &mut next_a, paired + k, tag)?;
-    }
-    Some(())
+    let end_a = element_rest::<NN>(i, (pa, tags_a, next_a, conn_a), paired, nn, index)?;
+    let end_b = element_rest::<NN>(i, (pb, tags_b, next_b, conn_b), paired, nn, index)?;
+    Some((end_a, end_b))
 }
 
-/// Reads `n` element records `tag node_1 … node_nn` starting at `i`, one per line, in parallel
-/// (as [`read_records`], each task reading two half-chunks side by side with
-/// [`element_chunk`]): node tags mapped to indices by `index` into `conn` (`nn` per record),
-/// element tags as `tags` says. Returns the input after the n-th line, or `None` if a record is
-/// not exactly one such line, names a node `index` does not know, or (with [`TagsOut::Run`])
-/// breaks the run of tags.
+/// The halves of a block of `n` element records whose tags run on from `first` (one record per
+/// line, the tag first), about `per` records each, found without counting the block's lines: a
+/// guessed offset (`per` records on from the previous half's start, at the bytes per record
+/// seen so far) is moved on to the next line start, where the line's tag names the index of
+/// its record. Returns (offset, number of records) per half, or `None` when a guess does not
+/// land on a later line of the run (a guess past the block, tags that do not run on, lines of
+/// very uneven length): the caller then counts the lines ([`line_chunks`]). Reading the halves
+/// checks the rest: each must end exactly where the next one starts.
+fn run_halves(i: &[u8], n: usize, per: usize, first: u64) -> Option<Vec<(usize, usize)>> {
+    let first_line = i.iter().position(|&c| c == b'\n')? + 1;
+    let most = 2 * n.div_ceil(per) + 2;
+    let mut starts: Vec<(usize, usize)> = vec![(0, 0)];
+    let mut bytes_per_record = first_line as f64;
+    while let Some(&(at, k)) = starts.last() {
+        if k + per >= n {
+            break;
+        }
+        if starts.len() == most {
+            return None;
+        }
+        let guess = at + (per as f64 * bytes_per_record) as usize;
+        let line = guess + i.get(guess..)?.iter().position(|&c| c == b'\n')? + 1;
+        let tag = uint(i.get(line..)?)?.1;
+        let idx = usize::try_from(tag.checked_sub(first)?).ok()?;
+        if idx <= k || idx >= n {
+            return None;
+        }
+        starts.push((line, idx));
+        bytes_per_record = line as f64 / idx as f64;
+    }
+    let ends = starts.iter().skip(1).map(|s| s.1).chain([n]);
+    Some(
+        starts
+            .iter()
+            .zip(ends)
+            .map(|(&(at, k), end)| (at, end - k))
+            .collect(),
+    )
+}
+
+/// Reads `n` element records `tag node_1 … node_nn` starting at `i`, one per line, in parallel:
+/// the block is cut into halves of whole lines — by the tags where they run on
+/// ([`run_halves`]), else by counting lines ([`line_chunks`]) — and each task reads two halves
+/// side by side ([`element_chunk`]). Node tags are mapped to indices by `index` into `conn`
+/// (`nn` per record), element tags go where `tags` says. Returns the input after the n-th
+/// line, or `None` if a record is not exactly one such line, names a node `index` does not
+/// know, or (with [`TagsOut::Run`]) breaks the run of tags.
 pub fn element_records<'a>(
     i: &'a [u8],
     n: usize,
@@ -382,49 +439,105 @@ pub fn element_records<'a>(
         return None;
     }
     let half = lines_per_chunk(n).div_ceil(2);
-    let (halves, end) = line_chunks(i, n, half)?;
-    let per = 2 * half;
-    // Task `c`: records `c * per ..` (halves 2c and 2c + 1), their tags stored into `tags` or
-    // checked to run on from `first` (the first tag of the block).
-    let task = |c: usize, (mut tags, first): (Option<&mut [u64]>, u64), conn: &mut [u32]| {
-        let (start_a, len_a) = halves[2 * c];
-        let start_b = halves.get(2 * c + 1).map_or(start_a, |h| h.0);
+    let halves = match tags {
+        TagsOut::Run(first) => run_halves(i, n, half, first),
+        TagsOut::Store(_) => None,
+    };
+    let halves = match halves {
+        Some(h) => h,
+        None => line_chunks(i, n, half)?.0,
+    };
+    let end = element_halves(i, &halves, tags, conn, nn, &index)?;
+    Some(&i[end..])
+}
+
+/// The element records of [`element_records`] cut into `halves` (offset of the first line,
+/// number of records): task `c` reads halves `2c` and `2c + 1` side by side into its slots and
+/// checks that each half ends where the next one starts. Returns the offset after the last
+/// half.
+fn element_halves(
+    i: &[u8],
+    halves: &[(usize, usize)],
+    tags: TagsOut<'_>,
+    conn: &mut [u32],
+    nn: usize,
+    index: &(impl Fn(u64) -> Option<u32> + Sync),
+) -> Option<usize> {
+    // The slots of each task, and the number of records before it.
+    let (mut conn_rest, mut before) = (conn, 0u64);
+    let mut tags_rest: Option<&mut [u64]> = None;
+    let first = match tags {
+        TagsOut::Run(first) => first,
+        TagsOut::Store(t) => {
+            tags_rest = Some(t);
+            0
+        }
+    };
+    let mut tasks = Vec::with_capacity(halves.len().div_ceil(2));
+    for pair in halves.chunks(2) {
+        let records: usize = pair.iter().map(|h| h.1).sum();
+        let (c, rest) = std::mem::take(&mut conn_rest).split_at_mut(records * nn);
+        conn_rest = rest;
+        let t = match tags_rest.take() {
+            Some(t) => {
+                let (t, rest) = t.split_at_mut(records);
+                tags_rest = Some(rest);
+                Some(t)
+            }
+            None => None,
+        };
+        tasks.push((pair, t, before, c));
+        before += records as u64;
+    }
+    // The offset where the half after `pair` (task `c`) starts, if there is one.
+    let next_start = |c: usize| halves.get(2 * c + 2).map(|h| h.0);
+    type Task<'h, 't, 'c> = (
+        &'h [(usize, usize)],
+        Option<&'t mut [u64]>,
+        u64,
+        &'c mut [u32],
+    );
+    let task = |c: usize, (pair, tags, before, conn): Task<'_, '_, '_>| {
+        let (start_a, len_a) = pair[0];
+        let start_b = pair.get(1).map_or(start_a, |h| h.0);
         let (conn_a, conn_b) = conn.split_at_mut(len_a * nn);
-        let (tags_a, tags_b) = match tags.as_deref_mut() {
+        let (tags_a, tags_b) = match tags {
             Some(t) => {
                 let (a, b) = t.split_at_mut(len_a);
                 (Some(a), Some(b))
             }
             None => (None, None),
         };
-        let first = first.wrapping_add((c * per) as u64);
+        let first = first.wrapping_add(before);
         let a = (start_a, tags_a, first, conn_a);
         let b = (start_b, tags_b, first.wrapping_add(len_a as u64), conn_b);
-        match nn {
-            3 => element_chunk::<3>(i, a, b, nn, &index),
-            4 => element_chunk::<4>(i, a, b, nn, &index),
-            6 => element_chunk::<6>(i, a, b, nn, &index),
-            8 => element_chunk::<8>(i, a, b, nn, &index),
-            10 => element_chunk::<10>(i, a, b, nn, &index),
-            _ => element_chunk::<0>(i, a, b, nn, &index),
-        }
-        .is_some()
+        let (end_a, end_b) = match nn {
+            3 => element_chunk::<3>(i, a, b, nn, index),
+            4 => element_chunk::<4>(i, a, b, nn, index),
+            6 => element_chunk::<6>(i, a, b, nn, index),
+            8 => element_chunk::<8>(i, a, b, nn, index),
+            10 => element_chunk::<10>(i, a, b, nn, index),
+            _ => element_chunk::<0>(i, a, b, nn, index),
+        }?;
+        let end = if pair.len() == 2 {
+            (end_a == start_b).then_some(end_b)?
+        } else {
+            end_a
+        };
+        next_start(c).is_none_or(|s| s == end).then_some(end)
     };
-    let ok = match tags {
+    let ends: Vec<usize> = if tasks.len() == 1 {
         // One task: on the calling thread.
-        TagsOut::Run(first) if halves.len() <= 2 => task(0, (None, first), conn),
-        TagsOut::Store(t) if halves.len() <= 2 => task(0, (Some(t), 0), conn),
-        TagsOut::Run(first) => conn
-            .par_chunks_mut(per * nn)
+        let one = tasks.pop().expect("one task");
+        vec![task(0, one)?]
+    } else {
+        tasks
+            .into_par_iter()
             .enumerate()
-            .all(|(c, conn)| task(c, (None, first), conn)),
-        TagsOut::Store(tags) => tags
-            .par_chunks_mut(per)
-            .zip(conn.par_chunks_mut(per * nn))
-            .enumerate()
-            .all(|(c, (t, conn))| task(c, (Some(t), 0), conn)),
+            .map(|(c, t)| task(c, t))
+            .collect::<Option<Vec<usize>>>()?
     };
-    ok.then(|| &i[end..])
+    ends.last().copied()
 }
 
 /// A signed integer that fits an `i32`, on the current line.
@@ -770,6 +883,16 @@ mod tests {
             assert_eq!(got.to_bits(), want.to_bits(), "{t}");
             assert_eq!(rest, b" \n", "{t}");
             exact += usize::from(float_exact(t.as_bytes()).is_some());
+            // The digits read 8 bytes at a time (room after the token) and byte by byte (the
+            // token at the end of the input) give the same value.
+            let padded = format!("{t}        \n");
+            let bits = |r: Option<(&[u8], f64)>| r.map(|(_, v)| v.to_bits());
+            assert_eq!(
+                bits(float_exact(padded.as_bytes())),
+                bits(float_exact(t.as_bytes())),
+                "{t}"
+            );
+            assert_eq!(bits(float(t.as_bytes())), Some(want.to_bits()), "{t}");
         }
         // Most of them take the exact path; the others (long or huge) the general parser.
         assert!(exact > tokens.len() / 2, "{exact} of {}", tokens.len());
@@ -864,7 +987,10 @@ mod tests {
             // A record over two lines, an unknown node, a missing node: refused, in either
             // half of a task.
             let store = |text: &str, tags: &mut [u64], conn: &mut [u32]| {
-                element_records(text.as_bytes(), n, TagsOut::Store(tags), conn, nn, index).is_some()
+                let run = element_records(text.as_bytes(), n, TagsOut::Run(41), conn, nn, index);
+                let stored =
+                    element_records(text.as_bytes(), n, TagsOut::Store(tags), conn, nn, index);
+                run.is_some() || stored.is_some()
             };
             for k in [5, CHUNK_LINES / 2 + 7, 2 * CHUNK_LINES] {
                 let line = |k: usize| format!("\n{} {} ", 41 + k, node(k, 0));
@@ -881,6 +1007,61 @@ mod tests {
                 assert!(!store(&missing, &mut tags, &mut conn), "line {k}");
             }
         }
+    }
+
+    #[test]
+    fn element_halves_found_by_the_tags_end_exactly_at_the_block_end() {
+        // Lines of very uneven length (the first ones short, later ones padded with up to 60
+        // blanks), and after the block the next one's header and records, whose tags run on:
+        // the run's halves are found by guessed offsets, and the block ends at its n-th line.
+        let nn = 4;
+        let n = 5 * CHUNK_LINES + 3;
+        let node = |k: usize, j: usize| ((k * 11 + j * 5) % 700 + 1) as u64;
+        let mut text = String::new();
+        for k in 0..n + 50 {
+            if k == n {
+                text += "3 1 4 50\n";
+            }
+            text += &(7 + k).to_string();
+            for j in 0..nn {
+                text += &format!(" {}", node(k, j));
+            }
+            text += &" ".repeat(k * 60 / n);
+            text += "\n";
+        }
+        text += "$EndElements";
+        let halves = run_halves(text.as_bytes(), n, CHUNK_LINES, 7).unwrap();
+        assert!(halves.len() >= 5, "{} halves", halves.len());
+        assert_eq!(halves.iter().map(|h| h.1).sum::<usize>(), n);
+        let index = |tag: u64| (tag <= 700).then(|| tag as u32 - 1);
+        let mut conn = vec![0u32; n * nn];
+        let rest = element_records(text.as_bytes(), n, TagsOut::Run(7), &mut conn, nn, index);
+        assert!(rest.unwrap().starts_with(b"3 1 4 50\n"));
+        assert!((0..n * nn).all(|c| u64::from(conn[c]) == node(c / nn, c % nn) - 1));
+        // More records than the block holds: refused (the next block's header is not a
+        // record of the run). Fewer: the rest starts at the first record not asked for.
+        let mut more = vec![0u32; (n + 20) * nn];
+        assert!(element_records(
+            text.as_bytes(),
+            n + 20,
+            TagsOut::Run(7),
+            &mut more,
+            nn,
+            index
+        )
+        .is_none());
+        let mut conn = vec![0u32; (n - 1) * nn];
+        let rest = element_records(
+            text.as_bytes(),
+            n - 1,
+            TagsOut::Run(7),
+            &mut conn,
+            nn,
+            index,
+        );
+        assert!(rest
+            .unwrap()
+            .starts_with(format!("{} ", 7 + n - 1).as_bytes()));
     }
 
     #[test]
