@@ -58,19 +58,24 @@ def case_text(path, step, periods, modes, gap):
     return text
 
 
-def run(nlrom, case, step, args, work):
-    name = f"h{step:.3e}"
+def march(nlrom, text, name, work):
+    """Writes the case `text` to WORK/NAME.toml and marches it into WORK/NAME.h5: the results
+    path and the JSON report of `nlrom march`."""
     path = os.path.join(work, name + ".toml")
     with open(path, "w") as f:
-        f.write(case_text(case, step, args.periods, args.modes, args.gap))
+        f.write(text)
     out = os.path.join(work, name + ".h5")
     proc = subprocess.run(
         [nlrom, "march", path, "-o", out, "--json", "-q"], capture_output=True, text=True
     )
     if proc.returncode != 0:
-        sys.exit(f"nlrom march failed at h = {step}: {proc.stderr}")
-    report = json.loads(proc.stdout)
-    return out, report
+        sys.exit(f"nlrom march failed on {path}: {proc.stderr}")
+    return out, json.loads(proc.stdout)
+
+
+def run(nlrom, case, step, args, work):
+    text = case_text(case, step, args.periods, args.modes, args.gap)
+    return march(nlrom, text, f"h{step:.3e}", work)
 
 
 def order(hs, es):
