@@ -23,6 +23,7 @@ import argparse
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -71,6 +72,12 @@ def march(nlrom, text, name, work):
     if proc.returncode != 0:
         sys.exit(f"nlrom march failed on {path}: {proc.stderr}")
     return out, json.loads(proc.stdout)
+
+
+def remove_work(work, keep):
+    """Removes the temporary folder `work` of the cases and results unless they are kept."""
+    if not keep:
+        shutil.rmtree(work)
 
 
 def run(nlrom, case, step, args, work):
@@ -141,10 +148,7 @@ def main():
         b.set_ylabel("max penetration (m)")
         fig.tight_layout()
         fig.savefig(args.plot, dpi=120)
-    if not args.keep:
-        for f in os.listdir(work):
-            os.remove(os.path.join(work, f))
-        os.rmdir(work)
+    remove_work(work, args.keep)
 
 
 if __name__ == "__main__":

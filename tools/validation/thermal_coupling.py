@@ -31,7 +31,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, HERE)
-from step_study import case_text, march  # noqa: E402
+from step_study import case_text, march, remove_work  # noqa: E402
 
 
 def uncoupled_text(text):
@@ -128,10 +128,7 @@ def main():
     print(json.dumps(result))
     if args.plot:
         plot(runs, args.plot)
-    if not args.keep:
-        for f in os.listdir(work):
-            os.remove(os.path.join(work, f))
-        os.rmdir(work)
+    remove_work(work, args.keep)
 
 
 if __name__ == "__main__":
