@@ -1145,38 +1145,86 @@ fn a_casing_case_refuses_an_interface_reduction() {
 // Step-size study (Thorin et al. 2018, Figs 4–5)
 // ---------------------------------------------------------------------------------------------
 
+/// Runs the study `script` (a path from the repository root) with `args` on the Craig–Bampton
+/// surrogate (`--modes 20`) with this build's `nlrom` and `--plot` into a temporary file (one per
+/// call), which must be written; its JSON stdout.
+fn reduced_study(script: &str, args: &[&str]) -> serde_json::Value {
+    static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let run = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let plot = std::env::temp_dir().join(format!("nlrom_study_{}_{run}.png", std::process::id()));
+    let mut all: Vec<&str> = args.to_vec();
+    all.extend([
+        "--modes",
+        "20",
+        "--nlrom",
+        env!("CARGO_BIN_EXE_nlrom"),
+        "--plot",
+        plot.to_str().unwrap(),
+    ]);
+    let report = python_json(script, all);
+    assert!(plot.exists(), "{script}: no {}", plot.display());
+    std::fs::remove_file(&plot).ok();
+    report
+}
+
+/// The errors of `key` ("gap", "temperature" or "force") in the JSON report of
+/// tools/validation/step_study.py, one per step in decreasing order of the step.
+fn study_errors(report: &serde_json::Value, key: &str) -> Vec<f64> {
+    report["errors"][key]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect()
+}
+
 #[test]
 fn step_study_errors_fall_at_first_order_with_the_step() {
     // tools/validation/step_study.py on the Craig–Bampton surrogate (20 modes), one revolution
     // (30 ms) from rest in contact (g0 = 0): h = 4e-5, 1e-5, 5e-6 s against h = 1.25e-6 s.
-    let r = python_json(
+    let r = reduced_study(
         "tools/validation/step_study.py",
-        [
-            "--steps",
-            "4e-5",
-            "1e-5",
-            "5e-6",
-            "--reference",
-            "1.25e-6",
-            "--modes",
-            "20",
-            "--nlrom",
-            env!("CARGO_BIN_EXE_nlrom"),
-        ],
+        &["--steps", "4e-5", "1e-5", "5e-6", "--reference", "1.25e-6"],
     );
     eprintln!("{r}");
     for key in ["gap", "temperature", "force"] {
-        let e: Vec<f64> = r["errors"][key]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_f64().unwrap())
-            .collect();
+        let e = study_errors(&r, key);
         assert!(e[0] > e[1] && e[1] > e[2], "{key}: {e:?}");
         let p = r["order"][key].as_f64().unwrap();
         assert!(p > 0.8, "{key}: order {p} ({e:?})");
         // The paper's accuracy at h = 1e-5 s: within a few per cent.
         assert!(e[1] < 0.02, "{key}: {e:?}");
+    }
+}
+
+#[test]
+fn moreau_jean_agrees_with_carpenter_at_carpenters_step_on_the_reduced_surrogate() {
+    // tools/validation/step_study.py with Carpenter's scheme as the reference: the Craig–Bampton
+    // surrogate (20 modes, 2/ω_max = 3.68e-7 s) over one revolution (30 ms) from rest in contact,
+    // Carpenter at h = 3.3e-7 s (0.9 of its limit) against Moreau–Jean at the same step and at
+    // 1e-5 s (Thorin et al. 2018, §3.3: the schemes agree; Moreau–Jean within a few per cent at
+    // steps far above Carpenter's limit). `--plot` draws the errors against h.
+    let r = reduced_study(
+        "tools/validation/step_study.py",
+        &[
+            "--steps",
+            "1e-5",
+            "3.3e-7",
+            "--reference",
+            "3.3e-7",
+            "--reference-scheme",
+            "carpenter",
+        ],
+    );
+    eprintln!("{r}");
+    assert_eq!(r["reference_scheme"], "carpenter");
+    let limit = r["reference_stability_limit"].as_f64().unwrap();
+    assert!((3.3e-7..3.7e-7).contains(&limit), "2/ω_max = {limit}");
+    for key in ["gap", "temperature", "force"] {
+        let e = study_errors(&r, key);
+        // [at 1e-5 s, at Carpenter's step]
+        assert!(e[1] < 0.01, "{key}: {e:?}");
+        assert!(e[0] < 0.02, "{key}: {e:?}");
     }
 }
 
@@ -1492,10 +1540,7 @@ fn frictional_heating_changes_the_forces_and_displacements_as_the_thermal_load_p
     assert!(theta_middle(&hc) > theta_middle(&hp) + 1.0);
     // tools/validation/thermal_coupling.py runs the same two marches through `nlrom march` and
     // the results files: every node's end force and temperature as above.
-    let r = python_json(
-        "tools/validation/thermal_coupling.py",
-        ["--modes", "20", "--nlrom", env!("CARGO_BIN_EXE_nlrom")],
-    );
+    let r = reduced_study("tools/validation/thermal_coupling.py", &[]);
     let names: Vec<&str> = r["nodes"]
         .as_array()
         .unwrap()
