@@ -500,6 +500,74 @@ fn an_insulated_blade_stores_all_frictional_heat_as_its_mean_temperature() {
     }
 }
 
+#[test]
+fn response_groups_record_the_temperatures_of_their_nodes() {
+    // The insulated coarse blade with `[response] groups = ["volume"]`: every node's temperature
+    // is recorded (the five contact nodes first), and weighted by the row sums of a capacity
+    // matrix assembled here from the FE layer, indexed by node tag, they give the mean rise
+    // α Σλ / (ρ c_p V) of the stored frictional heat: the tags name the right temperatures.
+    use nlrom::fe::thermal::{assemble_thermal, Capacity, ThermalMaterial};
+    use nlrom::fe::Material;
+    let text = thermal_blade("", 0.0, 0.1).replace(
+        "fixed = []",
+        "fixed = []\ncapacity = \"lumped\"\n\n[response]\ngroups = [\"volume\"]",
+    );
+    let nc = build(&text);
+    assert_eq!(nc.temperature_nodes.len(), 141);
+    let mesh = read_msh(&root().join("meshes/blade_coarse.msh")).unwrap();
+    let contact: Vec<u64> = mesh
+        .nodes_of("tip_contact")
+        .unwrap()
+        .iter()
+        .map(|&i| mesh.node_tags[i as usize])
+        .collect();
+    let mut first: Vec<u64> = nc.temperature_nodes[..5].to_vec();
+    first.sort_unstable();
+    let mut expected_first = contact.clone();
+    expected_first.sort_unstable();
+    assert_eq!(first, expected_first);
+    let s = NonsmoothSettings {
+        steps: 800,
+        ..nc.settings.clone()
+    };
+    let h = moreau_jean(&nc.system, &s).unwrap();
+    let total: f64 = h.impulse.iter().sum();
+    let capacity = assemble_thermal(
+        &mesh,
+        &Materials::uniform(Material {
+            young: 110e9,
+            poisson: 0.3,
+            density: 4430.0,
+        }),
+        &ThermalMaterial {
+            conductivity: 6.7,
+            specific_heat: 520.0,
+            expansion: 0.0,
+            capacity: Capacity::Lumped,
+        },
+        &Quadrature::default(),
+    )
+    .unwrap()
+    .capacity
+    .to_dense();
+    let (r, first_theta) = (h.dofs.len(), nc.response.len());
+    let theta = &h.x[s.steps * r + first_theta..(s.steps + 1) * r];
+    let stored: f64 = nc
+        .temperature_nodes
+        .iter()
+        .zip(theta)
+        .map(|(tag, t)| {
+            let i = mesh.node_tags.iter().position(|x| x == tag).unwrap();
+            (0..mesh.num_nodes()).map(|j| capacity[(i, j)]).sum::<f64>() * t
+        })
+        .sum();
+    assert!(
+        (stored - 0.1 * total).abs() < 1e-9 * 0.1 * total,
+        "Σ C θ = {stored} J vs α Σλ = {} J",
+        0.1 * total
+    );
+}
+
 // ---------------------------------------------------------------------------------------------
 // Bad input
 // ---------------------------------------------------------------------------------------------
