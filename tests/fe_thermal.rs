@@ -1,12 +1,13 @@
 //! Thermal and thermoelastic element matrices (src/fe/thermal.rs) against closed forms: capacity
 //! total ρc_pV, conductance null space, the linear-temperature patch test, steady conduction of
 //! a bar with a source, the decay rate of the first thermal mode, and free thermal expansion
-//! (zero stress, strain α_th ΔT) — on every element type, regular and distorted.
+//! (zero stress, strain α_th ΔT) — on every volume element type nlrom assembles (tetra4/10,
+//! hexa8/20/27, prism6/15/18, pyramid5/13), on structured boxes, regular and distorted.
 
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 use nlrom::fe::structured::StructuredBox;
-use nlrom::fe::thermal::{assemble_thermal, Capacity, ThermalMaterial};
+use nlrom::fe::thermal::{assemble_thermal, Capacity, ThermalAssembled, ThermalMaterial};
 use nlrom::fe::{assemble, Material, Materials, Quadrature};
 use nlrom::mesh::{ElementType, Mesh};
 
@@ -23,7 +24,7 @@ const TI_TH: ThermalMaterial = ThermalMaterial {
 };
 const SIZE: [f64; 3] = [0.6, 0.2, 0.1];
 
-const KINDS: [ElementType; 8] = [
+const KINDS: [ElementType; 10] = [
     ElementType::Tetra4,
     ElementType::Tetra10,
     ElementType::Hexa8,
@@ -32,6 +33,8 @@ const KINDS: [ElementType; 8] = [
     ElementType::Prism6,
     ElementType::Prism15,
     ElementType::Prism18,
+    ElementType::Pyramid5,
+    ElementType::Pyramid13,
 ];
 
 fn quadratic(kind: ElementType) -> bool {
@@ -44,6 +47,20 @@ fn boxes(kind: ElementType, cells: [usize; 3]) -> Vec<(String, Mesh)> {
         ("regular".into(), b.clone().build().unwrap()),
         ("distorted".into(), b.distorted(0.2, 7).build().unwrap()),
     ]
+}
+
+/// The thermal matrices of `mesh` in titanium with the thermal data `th`, default quadrature.
+fn thermal(mesh: &Mesh, th: &ThermalMaterial) -> ThermalAssembled {
+    assemble_thermal(mesh, &Materials::uniform(TI), th, &Quadrature::default()).unwrap()
+}
+
+/// The dense titanium stiffness matrix K^uu of `mesh`, default quadrature.
+fn stiffness(mesh: &Mesh) -> Mat<f64> {
+    dense(
+        &assemble(mesh, &Materials::uniform(TI), &Quadrature::default())
+            .unwrap()
+            .k,
+    )
 }
 
 fn dense(a: &faer::sparse::SparseColMat<usize, f64>) -> Mat<f64> {
@@ -77,13 +94,7 @@ fn capacity_total_and_conductance_null_space() {
     let volume = SIZE.iter().product::<f64>();
     for kind in KINDS {
         for (what, mesh) in boxes(kind, [3, 2, 1]) {
-            let t = assemble_thermal(
-                &mesh,
-                &Materials::uniform(TI),
-                &TI_TH,
-                &Quadrature::default(),
-            )
-            .unwrap();
+            let t = thermal(&mesh, &TI_TH);
             let c = dense(&t.capacity);
             let k = dense(&t.conductance);
             let n = c.nrows();
@@ -147,13 +158,7 @@ fn linear_temperature_patch_test() {
     let area = SIZE[1] * SIZE[2];
     for kind in KINDS {
         for (what, mesh) in boxes(kind, [3, 2, 2]) {
-            let t = assemble_thermal(
-                &mesh,
-                &Materials::uniform(TI),
-                &TI_TH,
-                &Quadrature::default(),
-            )
-            .unwrap();
+            let t = thermal(&mesh, &TI_TH);
             let k = dense(&t.conductance);
             let temp: Vec<f64> = mesh.coords.iter().map(|x| g * x[0] + 3.0).collect();
             let kt = matvec(&k, &temp);
@@ -192,43 +197,54 @@ fn linear_temperature_patch_test() {
     }
 }
 
+/// The largest nodal error, relative to the peak Q L²/(8k), of steady conduction with a uniform
+/// source Q in the box of `kind` with `cells` cells, its ends x = 0 and x = L held at 0:
+/// −k T'' = Q, T = Q x (L − x)/(2k), with the load f = ∫ Q Nₐ = (Q/ρc) C 1.
+fn bar_conduction_error(kind: ElementType, cells: [usize; 3]) -> f64 {
+    let (q, len) = (2.0e4, SIZE[0]);
+    let mesh = StructuredBox::new(kind, cells, SIZE).build().unwrap();
+    let t = thermal(&mesh, &TI_TH);
+    let k = dense(&t.conductance);
+    let c = dense(&t.capacity);
+    let n = k.nrows();
+    let rho_c = TI.density * TI_TH.specific_heat;
+    let f: Vec<f64> = matvec(&c, &vec![1.0; n])
+        .iter()
+        .map(|v| v * q / rho_c)
+        .collect();
+    let fixed: Vec<Option<f64>> = mesh
+        .coords
+        .iter()
+        .map(|x| (x[0].abs() < 1e-12 || (x[0] - len).abs() < 1e-12).then_some(0.0))
+        .collect();
+    let sol = solve_reduced(&k, &f, &fixed);
+    let peak = q * len * len / (8.0 * TI_TH.conductivity);
+    mesh.coords
+        .iter()
+        .zip(&sol)
+        .map(|(x, v)| (v - q * x[0] * (len - x[0]) / (2.0 * TI_TH.conductivity)).abs())
+        .fold(0.0, f64::max)
+        / peak
+}
+
 #[test]
 fn bar_conduction_with_a_source_matches_the_closed_form() {
-    // −k T'' = Q on 0 < x < L, T(0) = T(L) = 0: T = Q x (L − x)/(2k). f = ∫ Q Nₐ = (Q/ρc) C 1.
-    let (q, len) = (2.0e4, SIZE[0]);
     for kind in KINDS {
-        let mesh = StructuredBox::new(kind, [6, 1, 1], SIZE).build().unwrap();
-        let t = assemble_thermal(
-            &mesh,
-            &Materials::uniform(TI),
-            &TI_TH,
-            &Quadrature::default(),
-        )
-        .unwrap();
-        let k = dense(&t.conductance);
-        let c = dense(&t.capacity);
-        let n = k.nrows();
-        let rho_c = TI.density * TI_TH.specific_heat;
-        let f: Vec<f64> = matvec(&c, &vec![1.0; n])
-            .iter()
-            .map(|v| v * q / rho_c)
-            .collect();
-        let fixed: Vec<Option<f64>> = mesh
-            .coords
-            .iter()
-            .map(|x| (x[0].abs() < 1e-12 || (x[0] - len).abs() < 1e-12).then_some(0.0))
-            .collect();
-        let sol = solve_reduced(&k, &f, &fixed);
-        let peak = q * len * len / (8.0 * TI_TH.conductivity);
-        let worst = mesh
-            .coords
-            .iter()
-            .zip(&sol)
-            .map(|(x, v)| (v - q * x[0] * (len - x[0]) / (2.0 * TI_TH.conductivity)).abs())
-            .fold(0.0, f64::max)
-            / peak;
+        if kind == ElementType::Pyramid5 {
+            // The rational pyramid5 functions are not exact at the nodes: cubic cells of 0.1 m
+            // and 0.05 m, the nodal error falls at second order.
+            let (coarse, fine) = (
+                bar_conduction_error(kind, [6, 2, 1]),
+                bar_conduction_error(kind, [12, 4, 2]),
+            );
+            let order = (coarse / fine).log2();
+            println!("{kind}: nodal error {coarse:.3e}, {fine:.3e}: order {order:.2}");
+            assert!(order > 1.8, "{kind}: {coarse:.3e}, {fine:.3e}");
+            continue;
+        }
         // Quadratic elements reproduce the quadratic exactly; the linear ones are exact at the
         // nodes of this one-cell-thick mesh (the 1-D nodal exactness of linear elements).
+        let worst = bar_conduction_error(kind, [6, 1, 1]);
         assert!(worst < 1e-10, "{kind}: {worst}");
     }
 }
@@ -245,13 +261,7 @@ fn first_thermal_mode_decays_at_kappa_pi_over_l_squared() {
             let mesh = StructuredBox::new(kind, [cells, 1, 1], SIZE)
                 .build()
                 .unwrap();
-            let t = assemble_thermal(
-                &mesh,
-                &Materials::uniform(TI),
-                &TI_TH,
-                &Quadrature::default(),
-            )
-            .unwrap();
+            let t = thermal(&mesh, &TI_TH);
             let (k, c) = (dense(&t.conductance), dense(&t.capacity));
             // C = L Lᵀ, eigenvalues of L⁻¹ K L⁻ᵀ.
             let l = c.llt(faer::Side::Lower).unwrap().L().to_owned();
@@ -292,10 +302,8 @@ fn free_thermal_expansion_is_stress_free() {
     let dt = 150.0;
     for kind in KINDS {
         for (what, mesh) in boxes(kind, [2, 2, 1]) {
-            let mats = Materials::uniform(TI);
-            let quad = Quadrature::default();
-            let k = dense(&assemble(&mesh, &mats, &quad).unwrap().k);
-            let t = assemble_thermal(&mesh, &mats, &TI_TH, &quad).unwrap();
+            let k = stiffness(&mesh);
+            let t = thermal(&mesh, &TI_TH);
             let ku = dense(&t.coupling);
             let n = mesh.coords.len();
             let f: Vec<f64> = matvec(&ku, &vec![dt; n]).iter().map(|v| -v).collect();
@@ -338,10 +346,8 @@ fn clamped_bar_tip_moves_outward_by_alpha_delta_t_length() {
     let mesh = StructuredBox::new(ElementType::Hexa20, [4, 1, 1], SIZE)
         .build()
         .unwrap();
-    let mats = Materials::uniform(TI);
-    let quad = Quadrature::default();
-    let k = dense(&assemble(&mesh, &mats, &quad).unwrap().k);
-    let t = assemble_thermal(&mesh, &mats, &TI_TH, &quad).unwrap();
+    let k = stiffness(&mesh);
+    let t = thermal(&mesh, &TI_TH);
     let n = mesh.coords.len();
     let f: Vec<f64> = matvec(&dense(&t.coupling), &vec![dt; n])
         .iter()
@@ -387,13 +393,7 @@ fn lumped_capacity_is_a_positive_diagonal_with_the_total_and_the_hrz_shares() {
     let rho_c = TI.density * TI_TH.specific_heat;
     for kind in KINDS {
         for (what, mesh) in boxes(kind, [3, 2, 1]) {
-            let t = assemble_thermal(
-                &mesh,
-                &Materials::uniform(TI),
-                &lumped,
-                &Quadrature::default(),
-            )
-            .unwrap();
+            let t = thermal(&mesh, &lumped);
             let c = dense(&t.capacity);
             let n = c.nrows();
             let mut total = 0.0;
@@ -415,13 +415,7 @@ fn lumped_capacity_is_a_positive_diagonal_with_the_total_and_the_hrz_shares() {
     let mesh = StructuredBox::new(ElementType::Hexa20, [1, 1, 1], [side; 3])
         .build()
         .unwrap();
-    let t = assemble_thermal(
-        &mesh,
-        &Materials::uniform(TI),
-        &lumped,
-        &Quadrature::default(),
-    )
-    .unwrap();
+    let t = thermal(&mesh, &lumped);
     let c = dense(&t.capacity);
     let total = rho_c * side.powi(3);
     let (mut vertices, mut edges) = (0, 0);
@@ -476,12 +470,10 @@ fn mixed_meshes_with_pyramids_pass_the_patch_and_expansion_tests() {
         let path =
             std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("meshes/{name}.msh"));
         let mesh = nlrom::mesh::msh::read_msh(&path).unwrap();
-        let mats = Materials::uniform(TI);
-        let quad = Quadrature::default();
-        let t = assemble_thermal(&mesh, &mats, &TI_TH, &quad).unwrap();
+        let t = thermal(&mesh, &TI_TH);
         let (k, c) = (dense(&t.conductance), dense(&t.capacity));
         let n = mesh.coords.len();
-        let volume = nlrom::fe::mesh_volume(&mesh, &quad).unwrap();
+        let volume = nlrom::fe::mesh_volume(&mesh, &Quadrature::default()).unwrap();
         let total: f64 = matvec(&c, &vec![1.0; n]).iter().sum();
         let expected = TI.density * TI_TH.specific_heat * volume;
         assert!(
@@ -511,7 +503,7 @@ fn mixed_meshes_with_pyramids_pass_the_patch_and_expansion_tests() {
             .all(|v| v.abs() < 1e-12 * scale));
         // Free expansion; the nine DOF of three nodes spanning the body set to the exact field.
         let dt = 50.0;
-        let kk = dense(&assemble(&mesh, &mats, &quad).unwrap().k);
+        let kk = stiffness(&mesh);
         let f: Vec<f64> = matvec(&dense(&t.coupling), &vec![dt; n])
             .iter()
             .map(|v| -v)

@@ -1404,7 +1404,7 @@ fn the_temperature_runaway_is_the_thermoelastic_instability_of_the_blade_held_on
 #[test]
 fn frictional_heating_changes_the_forces_and_displacements_as_the_thermal_load_predicts() {
     // Thorin et al. 2018, Figs 6–7: the surrogate over five revolutions (150 ms) with and
-    // without the thermal expansion. Both marches share the load and the heating; their
+    // without the thermal expansion (`tools/validation/thermal_coupling.py` at the end). Both marches share the load and the heating; their
     // difference is the response to the thermal load K^uθ θ, quasi-static against the blade's
     // 1.3 kHz mode: in free flight (135 ms) Δu = −K⁻¹K^uθ θ, in contact (150 ms, every node
     // pressed) Δλ = S θ ([`thermal_sensitivity`]), with θ the coupled march's temperatures.
@@ -1490,6 +1490,38 @@ fn frictional_heating_changes_the_forces_and_displacements_as_the_thermal_load_p
         "{fc:?}"
     );
     assert!(theta_middle(&hc) > theta_middle(&hp) + 1.0);
+    // tools/validation/thermal_coupling.py runs the same two marches through `nlrom march` and
+    // the results files: every node's end force and temperature as above.
+    let r = python_json(
+        "tools/validation/thermal_coupling.py",
+        ["--modes", "20", "--nlrom", env!("CARGO_BIN_EXE_nlrom")],
+    );
+    let names: Vec<&str> = r["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    let scale = fc.iter().cloned().fold(0.0, f64::max);
+    for (run, hist, f) in [("coupled", &hc, &fc), ("uncoupled", &hp, &fp)] {
+        for (i, o) in sys.obstacles.iter().enumerate() {
+            let k = names.iter().position(|&name| name == o.name).unwrap();
+            let force = r[run]["force_end"][k].as_f64().unwrap();
+            let temperature = r[run]["temperature_end"][k].as_f64().unwrap();
+            let theta_i = hist.x[t * n + o.heated[0].0];
+            assert!(
+                (force - f[i]).abs() < 1e-9 * scale,
+                "{run} {}: {force} vs {}",
+                o.name,
+                f[i]
+            );
+            assert!(
+                (temperature - theta_i).abs() < 1e-9 * theta_i.abs().max(1.0),
+                "{run} {}: {temperature} vs {theta_i}",
+                o.name
+            );
+        }
+    }
 }
 
 /// The obstacles of a surrogate model in order along the chord (x of their node in

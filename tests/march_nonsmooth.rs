@@ -758,8 +758,10 @@ fn bad_step_and_gamma_are_errors_naming_the_key() {
     let (sys, _) = forced_oscillator();
     let e = moreau_jean(&sys, &settings(0.0, 10, 0.5)).unwrap_err();
     assert!(e.to_string().contains("march.time_step_s"), "{e}");
-    let e = moreau_jean(&sys, &settings(1e-5, 10, 0.4)).unwrap_err();
-    assert!(e.to_string().contains("march.gamma"), "{e}");
+    for gamma in [0.4, 1.01, f64::NAN] {
+        let e = moreau_jean(&sys, &settings(1e-5, 10, gamma)).unwrap_err();
+        assert!(e.to_string().contains("march.gamma"), "γ = {gamma}: {e}");
+    }
     let mut s = settings(1e-5, 10, 0.5);
     s.gamma_thermal = 1.2;
     let e = moreau_jean(&sys, &s).unwrap_err();
@@ -838,6 +840,12 @@ fn bad_obstacle_and_gamma_keys_are_reported_with_their_path() {
     );
     for (from, to, key) in [
         ("gamma = 0.5", "gamma = 0.4", "march.gamma"),
+        ("gamma = 0.5", "gamma = 1.2", "march.gamma"),
+        (
+            "time_step_s = 1e-5",
+            "time_step_s = 0.0",
+            "march.time_step_s",
+        ),
         (
             "time_step_s = 1e-5",
             "time_step_s = -1e-5",

@@ -2,10 +2,13 @@
 //!
 //! A box [x₀, x₀ + Lx] × [y₀, y₀ + Ly] × [z₀, z₀ + Lz] is divided into nx × ny × nz cells. Each
 //! cell becomes one hexahedron (hexa8/20/27), two prisms (prism6/15/18: the cell's xy face split
-//! along its (0,0)–(1,1) diagonal and extruded along z) or six tetrahedra (tetra4/10: the Kuhn
-//! split along the cell's main diagonal, conforming between cells). Higher-order nodes are the
-//! mid-points of straight edges (and face/body centres for hexa27/prism18), so every element is
-//! straight-sided and the box volume is exact.
+//! along its (0,0)–(1,1) diagonal and extruded along z), six tetrahedra (tetra4/10: the Kuhn
+//! split along the cell's main diagonal, conforming between cells) or three pyramids
+//! (pyramid5/13: the apex at the cell's vertex whose grid indices are all odd, the bases the three
+//! faces away from it; neighbouring cells then share either a whole base or the same two
+//! triangles, so the mesh is conforming). Higher-order nodes are the mid-points of straight edges
+//! (and face/body centres for hexa27/prism18), so every element is straight-sided and the box
+//! volume is exact.
 //!
 //! Optionally the interior vertices are moved by a deterministic pseudo-random amount (each
 //! coordinate by up to `distortion` × the cell size) while the boundary stays flat: a distorted
@@ -13,7 +16,8 @@
 //!
 //! The mesh has the physical groups `volume` (dim 3, tag 1) and the six faces `xmin`, `xmax`,
 //! `ymin`, `ymax`, `zmin`, `zmax` (dim 2, tags 2..7) as surface elements (triangles or quads of
-//! the matching order, oriented outward), so `Mesh::group_node_indices` and `faces::group_faces`
+//! the matching order, oriented outward; a pyramid box has both triangles and quadrilaterals on
+//! a face, one block of each), so `Mesh::group_node_indices` and `faces::group_faces`
 //! work on them. Node tags are 1.. in ascending grid order (x fastest), element tags 1.. (volume
 //! elements first).
 
@@ -32,7 +36,7 @@ pub const FACE_GROUPS: [&str; 6] = ["xmin", "xmax", "ymin", "ymax", "zmin", "zma
 /// A structured box mesh specification; [`StructuredBox::build`] makes the [`Mesh`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct StructuredBox {
-    /// Element type: tetra4/10, hexa8/20/27 or prism6/15/18.
+    /// Element type: tetra4/10, hexa8/20/27, prism6/15/18 or pyramid5/13.
     pub kind: ElementType,
     /// Number of cells along x, y, z (each ≥ 1).
     pub cells: [usize; 3],
@@ -111,10 +115,19 @@ impl StructuredBox {
         use ElementType::*;
         if !matches!(
             self.kind,
-            Tetra4 | Tetra10 | Hexa8 | Hexa20 | Hexa27 | Prism6 | Prism15 | Prism18
+            Tetra4
+                | Tetra10
+                | Hexa8
+                | Hexa20
+                | Hexa27
+                | Prism6
+                | Prism15
+                | Prism18
+                | Pyramid5
+                | Pyramid13
         ) {
             return Err(Error::input(format!(
-                "structured box: {} elements are not generated; use tetra4/10, hexa8/20/27 or prism6/15/18",
+                "structured box: {} elements are not generated; use tetra4/10, hexa8/20/27, prism6/15/18 or pyramid5/13",
                 self.kind
             )));
         }
@@ -158,6 +171,17 @@ impl StructuredBox {
                 .iter()
                 .map(|p| p.iter().map(|&c| at(c)).collect())
                 .collect(),
+            ElementType::Pyramid5 => {
+                // The bases: the cube faces away from the apex (`CUBE` is in Gmsh hexahedron
+                // order, whose faces are outward), reversed to face the apex.
+                let apex = pyramid_apex(cell);
+                ElementType::Hexa8
+                    .faces()
+                    .into_iter()
+                    .filter(|(_, f)| !f.contains(&apex))
+                    .map(|(_, f)| f.iter().rev().chain([&apex]).map(|&c| at(c)).collect())
+                    .collect()
+            }
             _ => KUHN
                 .iter()
                 .map(|t| {
@@ -170,6 +194,15 @@ impl StructuredBox {
                 .collect(),
         }
     }
+}
+
+/// The corner of cell `cell` (index into `CUBE`) whose vertex has odd grid indices in every
+/// direction: the apex of the cell's three pyramids. Cells sharing a face then agree on it.
+fn pyramid_apex(cell: [usize; 3]) -> usize {
+    let odd = cell.map(|i| usize::from(i % 2 == 0));
+    CUBE.iter()
+        .position(|&o| o == odd)
+        .expect("every offset triple is a cube corner")
 }
 
 /// Sign of the volume of the tetrahedron with these cube corners.
@@ -331,24 +364,31 @@ impl NodeSet {
         }];
         let mut next_tag = n_vol as u64 + 1;
         for (g, faces) in self.faces.iter().enumerate() {
-            let Some(&(face_kind, _)) = faces.first() else {
-                continue;
-            };
-            let tags = ElementTags::Run {
-                first: next_tag,
-                len: faces.len(),
-            };
-            next_tag += faces.len() as u64;
-            blocks.push(ElementBlock {
-                kind: face_kind,
-                entity: g as i32 + 1,
-                physicals: vec![g as i32 + 2],
-                tags,
-                connectivity: faces
+            let mut kinds: Vec<ElementType> = faces.iter().map(|(kind, _)| *kind).collect();
+            kinds.sort_by_key(|k| k.num_nodes());
+            kinds.dedup();
+            for face_kind in kinds {
+                let of_kind: Vec<&Vec<usize>> = faces
                     .iter()
-                    .flat_map(|(_, k)| k.iter().map(|&k| index[k]))
-                    .collect(),
-            });
+                    .filter(|(kind, _)| *kind == face_kind)
+                    .map(|(_, keys)| keys)
+                    .collect();
+                let tags = ElementTags::Run {
+                    first: next_tag,
+                    len: of_kind.len(),
+                };
+                next_tag += of_kind.len() as u64;
+                blocks.push(ElementBlock {
+                    kind: face_kind,
+                    entity: g as i32 + 1,
+                    physicals: vec![g as i32 + 2],
+                    tags,
+                    connectivity: of_kind
+                        .iter()
+                        .flat_map(|keys| keys.iter().map(|&k| index[k]))
+                        .collect(),
+                });
+            }
         }
         let mut groups = vec![PhysicalGroup {
             name: "volume".into(),
@@ -439,6 +479,7 @@ mod tests {
             ElementType::Tetra10,
             ElementType::Hexa20,
             ElementType::Prism6,
+            ElementType::Pyramid13,
         ] {
             let m = StructuredBox::new(kind, [2, 2, 2], [1.0, 2.0, 3.0])
                 .distorted(0.2, 7)
@@ -473,6 +514,47 @@ mod tests {
     }
 
     #[test]
+    fn pyramid_boxes_are_conforming_and_fill_the_box() {
+        // Every face of a volume element is shared by exactly two elements or lies on the box
+        // boundary (one of the face groups), with all its nodes (mid-edge ones included); the
+        // element volumes add up to the box's.
+        use std::collections::HashMap;
+        let size = [1.0, 2.0, 3.0];
+        for kind in [ElementType::Pyramid5, ElementType::Pyramid13] {
+            let spec = StructuredBox::new(kind, [3, 2, 3], size).distorted(0.2, 5);
+            let m = spec.build().unwrap();
+            assert_eq!(m.blocks[0].len(), 3 * 18, "{kind}");
+            let mut count: HashMap<Vec<u32>, usize> = HashMap::new();
+            for element in m.blocks[0].elements() {
+                for (_, local) in kind.faces() {
+                    let mut key: Vec<u32> = local.iter().map(|&l| element[l]).collect();
+                    key.sort_unstable();
+                    *count.entry(key).or_default() += 1;
+                }
+            }
+            let mut boundary: Vec<Vec<u32>> = Vec::new();
+            for block in &m.blocks[1..] {
+                for face in block.elements() {
+                    let mut key = face.to_vec();
+                    key.sort_unstable();
+                    boundary.push(key);
+                }
+            }
+            for (key, n) in &count {
+                let on_boundary = boundary.contains(key);
+                assert_eq!(*n, if on_boundary { 1 } else { 2 }, "{kind}: face {key:?}");
+            }
+            assert_eq!(
+                count.values().filter(|&&n| n == 1).count(),
+                boundary.len(),
+                "{kind}"
+            );
+            let volume = crate::fe::mesh_volume(&m, &crate::fe::Quadrature::default()).unwrap();
+            assert!((volume - 6.0).abs() < 1e-12, "{kind}: {volume}");
+        }
+    }
+
+    #[test]
     fn bad_specifications_are_errors() {
         let ok = StructuredBox::new(ElementType::Hexa8, [1, 1, 1], [1.0; 3]);
         assert!(StructuredBox {
@@ -489,12 +571,12 @@ mod tests {
         .is_err());
         assert!(ok.clone().distorted(0.5, 1).build().is_err());
         let e = StructuredBox {
-            kind: ElementType::Pyramid5,
+            kind: ElementType::Pyramid14,
             ..ok
         }
         .build()
         .unwrap_err()
         .to_string();
-        assert!(e.contains("pyramid5"), "{e}");
+        assert!(e.contains("pyramid14"), "{e}");
     }
 }

@@ -23,6 +23,7 @@ import argparse
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -58,19 +59,30 @@ def case_text(path, step, periods, modes, gap):
     return text
 
 
-def run(nlrom, case, step, args, work):
-    name = f"h{step:.3e}"
+def march(nlrom, text, name, work):
+    """Writes the case `text` to WORK/NAME.toml and marches it into WORK/NAME.h5: the results
+    path and the JSON report of `nlrom march`."""
     path = os.path.join(work, name + ".toml")
     with open(path, "w") as f:
-        f.write(case_text(case, step, args.periods, args.modes, args.gap))
+        f.write(text)
     out = os.path.join(work, name + ".h5")
     proc = subprocess.run(
         [nlrom, "march", path, "-o", out, "--json", "-q"], capture_output=True, text=True
     )
     if proc.returncode != 0:
-        sys.exit(f"nlrom march failed at h = {step}: {proc.stderr}")
-    report = json.loads(proc.stdout)
-    return out, report
+        sys.exit(f"nlrom march failed on {path}: {proc.stderr}")
+    return out, json.loads(proc.stdout)
+
+
+def remove_work(work, keep):
+    """Removes the temporary folder `work` of the cases and results unless they are kept."""
+    if not keep:
+        shutil.rmtree(work)
+
+
+def run(nlrom, case, step, args, work):
+    text = case_text(case, step, args.periods, args.modes, args.gap)
+    return march(nlrom, text, f"h{step:.3e}", work)
 
 
 def order(hs, es):
@@ -136,10 +148,7 @@ def main():
         b.set_ylabel("max penetration (m)")
         fig.tight_layout()
         fig.savefig(args.plot, dpi=120)
-    if not args.keep:
-        for f in os.listdir(work):
-            os.remove(os.path.join(work, f))
-        os.rmdir(work)
+    remove_work(work, args.keep)
 
 
 if __name__ == "__main__":
