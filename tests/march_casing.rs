@@ -500,6 +500,74 @@ fn an_insulated_blade_stores_all_frictional_heat_as_its_mean_temperature() {
     }
 }
 
+#[test]
+fn response_groups_record_the_temperatures_of_their_nodes() {
+    // The insulated coarse blade with `[response] groups = ["volume"]`: every node's temperature
+    // is recorded (the five contact nodes first), and weighted by the row sums of a capacity
+    // matrix assembled here from the FE layer, indexed by node tag, they give the mean rise
+    // α Σλ / (ρ c_p V) of the stored frictional heat: the tags name the right temperatures.
+    use nlrom::fe::thermal::{assemble_thermal, Capacity, ThermalMaterial};
+    use nlrom::fe::Material;
+    let text = thermal_blade("", 0.0, 0.1).replace(
+        "fixed = []",
+        "fixed = []\ncapacity = \"lumped\"\n\n[response]\ngroups = [\"volume\"]",
+    );
+    let nc = build(&text);
+    assert_eq!(nc.temperature_nodes.len(), 141);
+    let mesh = read_msh(&root().join("meshes/blade_coarse.msh")).unwrap();
+    let contact: Vec<u64> = mesh
+        .nodes_of("tip_contact")
+        .unwrap()
+        .iter()
+        .map(|&i| mesh.node_tags[i as usize])
+        .collect();
+    let mut first: Vec<u64> = nc.temperature_nodes[..5].to_vec();
+    first.sort_unstable();
+    let mut expected_first = contact.clone();
+    expected_first.sort_unstable();
+    assert_eq!(first, expected_first);
+    let s = NonsmoothSettings {
+        steps: 800,
+        ..nc.settings.clone()
+    };
+    let h = moreau_jean(&nc.system, &s).unwrap();
+    let total: f64 = h.impulse.iter().sum();
+    let capacity = assemble_thermal(
+        &mesh,
+        &Materials::uniform(Material {
+            young: 110e9,
+            poisson: 0.3,
+            density: 4430.0,
+        }),
+        &ThermalMaterial {
+            conductivity: 6.7,
+            specific_heat: 520.0,
+            expansion: 0.0,
+            capacity: Capacity::Lumped,
+        },
+        &Quadrature::default(),
+    )
+    .unwrap()
+    .capacity
+    .to_dense();
+    let (r, first_theta) = (h.dofs.len(), nc.response.len());
+    let theta = &h.x[s.steps * r + first_theta..(s.steps + 1) * r];
+    let stored: f64 = nc
+        .temperature_nodes
+        .iter()
+        .zip(theta)
+        .map(|(tag, t)| {
+            let i = mesh.node_tags.iter().position(|x| x == tag).unwrap();
+            (0..mesh.num_nodes()).map(|j| capacity[(i, j)]).sum::<f64>() * t
+        })
+        .sum();
+    assert!(
+        (stored - 0.1 * total).abs() < 1e-9 * 0.1 * total,
+        "Σ C θ = {stored} J vs α Σλ = {} J",
+        0.1 * total
+    );
+}
+
 // ---------------------------------------------------------------------------------------------
 // Bad input
 // ---------------------------------------------------------------------------------------------
@@ -1145,38 +1213,86 @@ fn a_casing_case_refuses_an_interface_reduction() {
 // Step-size study (Thorin et al. 2018, Figs 4–5)
 // ---------------------------------------------------------------------------------------------
 
+/// Runs the study `script` (a path from the repository root) with `args` on the Craig–Bampton
+/// surrogate (`--modes 20`) with this build's `nlrom` and `--plot` into a temporary file (one per
+/// call), which must be written; its JSON stdout.
+fn reduced_study(script: &str, args: &[&str]) -> serde_json::Value {
+    static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let run = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let plot = std::env::temp_dir().join(format!("nlrom_study_{}_{run}.png", std::process::id()));
+    let mut all: Vec<&str> = args.to_vec();
+    all.extend([
+        "--modes",
+        "20",
+        "--nlrom",
+        env!("CARGO_BIN_EXE_nlrom"),
+        "--plot",
+        plot.to_str().unwrap(),
+    ]);
+    let report = python_json(script, all);
+    assert!(plot.exists(), "{script}: no {}", plot.display());
+    std::fs::remove_file(&plot).ok();
+    report
+}
+
+/// The errors of `key` ("gap", "temperature" or "force") in the JSON report of
+/// tools/validation/step_study.py, one per step in decreasing order of the step.
+fn study_errors(report: &serde_json::Value, key: &str) -> Vec<f64> {
+    report["errors"][key]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect()
+}
+
 #[test]
 fn step_study_errors_fall_at_first_order_with_the_step() {
     // tools/validation/step_study.py on the Craig–Bampton surrogate (20 modes), one revolution
     // (30 ms) from rest in contact (g0 = 0): h = 4e-5, 1e-5, 5e-6 s against h = 1.25e-6 s.
-    let r = python_json(
+    let r = reduced_study(
         "tools/validation/step_study.py",
-        [
-            "--steps",
-            "4e-5",
-            "1e-5",
-            "5e-6",
-            "--reference",
-            "1.25e-6",
-            "--modes",
-            "20",
-            "--nlrom",
-            env!("CARGO_BIN_EXE_nlrom"),
-        ],
+        &["--steps", "4e-5", "1e-5", "5e-6", "--reference", "1.25e-6"],
     );
     eprintln!("{r}");
     for key in ["gap", "temperature", "force"] {
-        let e: Vec<f64> = r["errors"][key]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_f64().unwrap())
-            .collect();
+        let e = study_errors(&r, key);
         assert!(e[0] > e[1] && e[1] > e[2], "{key}: {e:?}");
         let p = r["order"][key].as_f64().unwrap();
         assert!(p > 0.8, "{key}: order {p} ({e:?})");
         // The paper's accuracy at h = 1e-5 s: within a few per cent.
         assert!(e[1] < 0.02, "{key}: {e:?}");
+    }
+}
+
+#[test]
+fn moreau_jean_agrees_with_carpenter_at_carpenters_step_on_the_reduced_surrogate() {
+    // tools/validation/step_study.py with Carpenter's scheme as the reference: the Craig–Bampton
+    // surrogate (20 modes, 2/ω_max = 3.68e-7 s) over one revolution (30 ms) from rest in contact,
+    // Carpenter at h = 3.3e-7 s (0.9 of its limit) against Moreau–Jean at the same step and at
+    // 1e-5 s (Thorin et al. 2018, §3.3: the schemes agree; Moreau–Jean within a few per cent at
+    // steps far above Carpenter's limit). `--plot` draws the errors against h.
+    let r = reduced_study(
+        "tools/validation/step_study.py",
+        &[
+            "--steps",
+            "1e-5",
+            "3.3e-7",
+            "--reference",
+            "3.3e-7",
+            "--reference-scheme",
+            "carpenter",
+        ],
+    );
+    eprintln!("{r}");
+    assert_eq!(r["reference_scheme"], "carpenter");
+    let limit = r["reference_stability_limit"].as_f64().unwrap();
+    assert!((3.3e-7..3.7e-7).contains(&limit), "2/ω_max = {limit}");
+    for key in ["gap", "temperature", "force"] {
+        let e = study_errors(&r, key);
+        // [at 1e-5 s, at Carpenter's step]
+        assert!(e[1] < 0.01, "{key}: {e:?}");
+        assert!(e[0] < 0.02, "{key}: {e:?}");
     }
 }
 
@@ -1492,10 +1608,7 @@ fn frictional_heating_changes_the_forces_and_displacements_as_the_thermal_load_p
     assert!(theta_middle(&hc) > theta_middle(&hp) + 1.0);
     // tools/validation/thermal_coupling.py runs the same two marches through `nlrom march` and
     // the results files: every node's end force and temperature as above.
-    let r = python_json(
-        "tools/validation/thermal_coupling.py",
-        ["--modes", "20", "--nlrom", env!("CARGO_BIN_EXE_nlrom")],
-    );
+    let r = reduced_study("tools/validation/thermal_coupling.py", &[]);
     let names: Vec<&str> = r["nodes"]
         .as_array()
         .unwrap()

@@ -12,7 +12,7 @@
 //! | `active` | [T, E] | – | 1 when the obstacle was in the step's active set |
 //! | `lcp_residual` | \[T\] | – | complementarity residual of the step's LCP |
 //! | `energy_terms` | [T, 8] | J | cumulative (kinetic, strain, damping, numerical, external, thermal, contact, residual) (`moreau-jean`) |
-//! | `temperature` | [T, N] | K | temperature rise of the contact nodes (with `[thermal]`) |
+//! | `temperature` | [T, N] | K | temperature rise of the contact nodes, then of the other `[response]` nodes (with `[thermal]`) |
 //! | `temperature_nodes` | \[N\] | – | their Gmsh node tags |
 //! | `heat_terms` | [T, 4] | J | cumulative (stored, exchanged, frictional, residual) heat (with `[thermal]`) |
 //!
@@ -267,7 +267,7 @@ fn march_data(
                 &[t, nt],
                 Data::F64(columns(r..recorded)),
                 "K",
-                "temperature rise of the contact nodes above the reference temperature",
+                "temperature rise above the reference temperature of the contact nodes, then of the other response nodes",
             ),
         );
         g.add(

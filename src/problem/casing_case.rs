@@ -327,8 +327,9 @@ pub fn casing_model(case: &Case, sm: &StructuralModel) -> Result<CasingModel> {
             }
         }
     }
-    // Recorded DOF: the response groups (else the contact nodes), then the contact nodes'
-    // temperatures.
+    // Recorded DOF: the response groups (else the contact nodes), then the temperatures of the
+    // contact nodes and of the other response nodes (nodes with a prescribed temperature have
+    // none).
     let response_nodes: Vec<usize> = match case.response.as_ref().filter(|r| !r.groups.is_empty()) {
         Some(r) => {
             let mut nodes = Vec::new();
@@ -357,7 +358,8 @@ pub fn casing_model(case: &Case, sm: &StructuralModel) -> Result<CasingModel> {
         }
     }
     let mut temperature_nodes = Vec::new();
-    for &i in &contact_nodes {
+    let others = response_nodes.iter().filter(|i| !contact_nodes.contains(i));
+    for &i in contact_nodes.iter().chain(others) {
         if let Some(&row) = theta_of.get(&i) {
             record.push(row);
             temperature_nodes.push(mesh.node_tags[i]);

@@ -2,7 +2,8 @@
 """Error and residual penetration of the Moreau-Jean march against the time step.
 
     python3 tools/validation/step_study.py [CASE] [--steps H ...] [--reference H]
-        [--periods P] [--modes M] [--gap G] [--nlrom PATH] [--plot study.png] [--keep DIR]
+        [--reference-scheme moreau-jean|carpenter] [--periods P] [--modes M] [--gap G]
+        [--nlrom PATH] [--plot study.png] [--keep DIR]
 
 The convergence study of Thorin et al. (ASME GT2018-75959, 2018, Fig. 5, and Fig. 4 for the
 penetration): CASE (default `cases/blade_casing.toml`) is marched with `nlrom march --scheme
@@ -13,11 +14,15 @@ the relative L1 errors of eq. (19) against the reference at the contact node wit
 total impulse (the gap, i.e. the radial displacement up to sign and initial gap, its temperature
 and its contact force, as `tools/post/plot_nonsmooth.py` computes them), the largest
 penetration max(0, -g) over nodes and time, and the march's wall time; then the observed order
-of each error, the least-squares slope of log(error) against log(h).
+of each error, the least-squares slope of log(error) against log(h). With `--reference-scheme
+carpenter` the reference is Carpenter's explicit scheme at the reference step (below its
+stability limit 2/omega_max, which `nlrom march --json` reports): Moreau-Jean at that same step
+and at larger ones against it (the paper's "the two schemes agree").
 
-JSON on stdout: {"steps": [...], "reference": h, "errors": {"gap": [...], "temperature": [...],
-"force": [...]}, "penetration": [...], "reference_penetration": p, "order": {...},
-"wall_seconds": [...]}.
+JSON on stdout: {"steps": [...], "reference": h, "reference_scheme": s, "node": name,
+"errors": {"gap": [...], "temperature": [...], "force": [...]}, "penetration": [...],
+"reference_penetration": p, "reference_stability_limit": 2/omega_max (s, carpenter, else null),
+"order": {...}, "wall_seconds": [...]}.
 """
 import argparse
 import json
@@ -36,7 +41,7 @@ sys.path.insert(0, os.path.join(ROOT, "tools", "post"))
 from plot_nonsmooth import errors, load  # noqa: E402
 
 
-def case_text(path, step, periods, modes, gap):
+def case_text(path, step, periods, modes, gap, scheme="moreau-jean"):
     """The case at `path` with the step, the period count, the scheme, optionally a
     `[reduction]` and a uniform initial gap; relative paths made absolute."""
     text = open(path).read()
@@ -50,7 +55,7 @@ def case_text(path, step, periods, modes, gap):
     text = re.sub(r"^\s*(time_step_s|periods|scheme)\s*=.*\n", "", text, flags=re.M)
     text = text.replace(
         "[march]\n",
-        f'[march]\ntime_step_s = {step!r}\nperiods = {periods}\nscheme = "moreau-jean"\n',
+        f'[march]\ntime_step_s = {step!r}\nperiods = {periods}\nscheme = "{scheme}"\n',
     )
     if gap is not None:
         text = re.sub(r"^\s*(gap|radius)\s*=.*\n", f"gap = {gap!r}\n", text, flags=re.M)
@@ -80,9 +85,9 @@ def remove_work(work, keep):
         shutil.rmtree(work)
 
 
-def run(nlrom, case, step, args, work):
-    text = case_text(case, step, args.periods, args.modes, args.gap)
-    return march(nlrom, text, f"h{step:.3e}", work)
+def run(nlrom, case, step, args, work, scheme="moreau-jean"):
+    text = case_text(case, step, args.periods, args.modes, args.gap, scheme)
+    return march(nlrom, text, f"{scheme}_h{step:.3e}", work)
 
 
 def order(hs, es):
@@ -99,6 +104,7 @@ def main():
     ap.add_argument("case", nargs="?", default=os.path.join(ROOT, "cases", "blade_casing.toml"))
     ap.add_argument("--steps", nargs="+", type=float, default=[1e-4, 5e-5, 2e-5, 1e-5, 5e-6, 2e-6])
     ap.add_argument("--reference", type=float, default=5e-7)
+    ap.add_argument("--reference-scheme", choices=["moreau-jean", "carpenter"], default="moreau-jean")
     ap.add_argument("--periods", type=int, default=1)
     ap.add_argument("--modes", type=int, default=None)
     ap.add_argument("--gap", type=float, default=None)
@@ -108,16 +114,20 @@ def main():
     args = ap.parse_args()
     work = args.keep or tempfile.mkdtemp(prefix="nlrom_step_study_")
     os.makedirs(work, exist_ok=True)
-    ref_path, ref_report = run(args.nlrom, args.case, args.reference, args, work)
+    ref_path, ref_report = run(
+        args.nlrom, args.case, args.reference, args, work, args.reference_scheme
+    )
     ref = load(ref_path)
     steps = sorted(args.steps, reverse=True)
     result = {
         "steps": steps,
         "reference": args.reference,
+        "reference_scheme": args.reference_scheme,
         "node": ref["name"],
         "errors": {"gap": [], "temperature": [], "force": []},
         "penetration": [],
         "reference_penetration": ref_report["max_penetration_m"],
+        "reference_stability_limit": ref_report.get("stability_limit_s"),
         "wall_seconds": [],
     }
     for h in steps:
