@@ -17,23 +17,14 @@ use nlrom::fe::{
 use nlrom::mesh::msh::read_msh;
 use nlrom::mesh::{ElementType, Mesh};
 
+// Every volume element type the assembly supports; structured boxes are built of each.
+use nlrom::fe::shape::SUPPORTED as BOX_KINDS;
+
 const STEEL: Material = Material {
     young: 210e9,
     poisson: 0.3,
     density: 7800.0,
 };
-
-/// The element types the structured generator builds.
-const BOX_TYPES: [ElementType; 8] = [
-    ElementType::Tetra4,
-    ElementType::Tetra10,
-    ElementType::Hexa8,
-    ElementType::Hexa20,
-    ElementType::Hexa27,
-    ElementType::Prism6,
-    ElementType::Prism15,
-    ElementType::Prism18,
-];
 
 fn bundled(name: &str) -> Mesh {
     read_msh(
@@ -137,7 +128,7 @@ fn patch_test(mesh: &Mesh) -> (f64, usize) {
 
 #[test]
 fn patch_test_reproduces_linear_fields_on_distorted_meshes() {
-    for kind in BOX_TYPES {
+    for kind in BOX_KINDS {
         let (err, n_interior) = patch_test(&distorted_box(kind));
         eprintln!("patch {kind}: {n_interior} interior nodes, relative error {err:.1e}");
         assert!(n_interior >= 8, "{kind}: {n_interior} interior nodes");
@@ -163,7 +154,7 @@ fn patch_test_on_mixed_gmsh_meshes_with_pyramids() {
 
 #[test]
 fn rigid_body_modes_are_in_the_null_space_of_k() {
-    let mut meshes: Vec<(String, Mesh)> = BOX_TYPES
+    let mut meshes: Vec<(String, Mesh)> = BOX_KINDS
         .iter()
         .map(|&k| (k.to_string(), distorted_box(k)))
         .collect();
@@ -198,7 +189,7 @@ fn total_mass_is_density_times_volume() {
         density: rho,
     };
     let size = [1.0, 0.5, 2.0];
-    for kind in BOX_TYPES {
+    for kind in BOX_KINDS {
         for distortion in [0.0, 0.2] {
             let mesh = StructuredBox::new(kind, [2, 3, 2], size)
                 .distorted(distortion, 3)

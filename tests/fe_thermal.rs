@@ -11,6 +11,9 @@ use nlrom::fe::thermal::{assemble_thermal, Capacity, ThermalAssembled, ThermalMa
 use nlrom::fe::{assemble, Material, Materials, Quadrature};
 use nlrom::mesh::{ElementType, Mesh};
 
+// Every volume element type the assembly supports; structured boxes are built of each.
+use nlrom::fe::shape::SUPPORTED as BOX_KINDS;
+
 const TI: Material = Material {
     young: 110e9,
     poisson: 0.3,
@@ -23,19 +26,6 @@ const TI_TH: ThermalMaterial = ThermalMaterial {
     capacity: Capacity::Consistent,
 };
 const SIZE: [f64; 3] = [0.6, 0.2, 0.1];
-
-const KINDS: [ElementType; 10] = [
-    ElementType::Tetra4,
-    ElementType::Tetra10,
-    ElementType::Hexa8,
-    ElementType::Hexa20,
-    ElementType::Hexa27,
-    ElementType::Prism6,
-    ElementType::Prism15,
-    ElementType::Prism18,
-    ElementType::Pyramid5,
-    ElementType::Pyramid13,
-];
 
 fn quadratic(kind: ElementType) -> bool {
     kind.first_order() != kind
@@ -92,7 +82,7 @@ fn solve_reduced(a: &Mat<f64>, b: &[f64], fixed: &[Option<f64>]) -> Vec<f64> {
 #[test]
 fn capacity_total_and_conductance_null_space() {
     let volume = SIZE.iter().product::<f64>();
-    for kind in KINDS {
+    for kind in BOX_KINDS {
         for (what, mesh) in boxes(kind, [3, 2, 1]) {
             let t = thermal(&mesh, &TI_TH);
             let c = dense(&t.capacity);
@@ -156,7 +146,7 @@ fn linear_temperature_patch_test() {
     // summing to ∓ k g A on x = 0 and x = L; with the ends prescribed, T is recovered exactly.
     let g = 40.0;
     let area = SIZE[1] * SIZE[2];
-    for kind in KINDS {
+    for kind in BOX_KINDS {
         for (what, mesh) in boxes(kind, [3, 2, 2]) {
             let t = thermal(&mesh, &TI_TH);
             let k = dense(&t.conductance);
@@ -229,7 +219,7 @@ fn bar_conduction_error(kind: ElementType, cells: [usize; 3]) -> f64 {
 
 #[test]
 fn bar_conduction_with_a_source_matches_the_closed_form() {
-    for kind in KINDS {
+    for kind in BOX_KINDS {
         if kind == ElementType::Pyramid5 {
             // The rational pyramid5 functions are not exact at the nodes: cubic cells of 0.1 m
             // and 0.05 m, the nodal error falls at second order.
@@ -255,7 +245,7 @@ fn first_thermal_mode_decays_at_kappa_pi_over_l_squared() {
     // (consistent capacity), converging with the mesh.
     let kappa = TI_TH.conductivity / (TI.density * TI_TH.specific_heat);
     let exact = kappa * (std::f64::consts::PI / SIZE[0]).powi(2);
-    for kind in KINDS {
+    for kind in BOX_KINDS {
         let mut errs = Vec::new();
         for cells in [4, 8] {
             let mesh = StructuredBox::new(kind, [cells, 1, 1], SIZE)
@@ -300,7 +290,7 @@ fn free_thermal_expansion_is_stress_free() {
     // Uniform ΔT on a body held by a 3-2-1 support at the origin corner: K u = −K^uθ θ gives
     // u = α_th ΔT x exactly (zero stress), on regular and distorted meshes.
     let dt = 150.0;
-    for kind in KINDS {
+    for kind in BOX_KINDS {
         for (what, mesh) in boxes(kind, [2, 2, 1]) {
             let k = stiffness(&mesh);
             let t = thermal(&mesh, &TI_TH);
@@ -391,7 +381,7 @@ fn lumped_capacity_is_a_positive_diagonal_with_the_total_and_the_hrz_shares() {
     };
     let volume = SIZE.iter().product::<f64>();
     let rho_c = TI.density * TI_TH.specific_heat;
-    for kind in KINDS {
+    for kind in BOX_KINDS {
         for (what, mesh) in boxes(kind, [3, 2, 1]) {
             let t = thermal(&mesh, &lumped);
             let c = dense(&t.capacity);
