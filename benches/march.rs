@@ -11,13 +11,17 @@
 //!   stick (Δτ = 0.15 𝕋_stick, at most 1/300 of the period), the quasi-static method at 300 steps
 //!   per period.
 //!
-//! Per model and scheme: steps, corrector iterations and single-iteration steps; the wall time of
-//! one whole march (minimum over rounds interleaving the schemes, so a changing machine load hits
-//! them alike) and its ratio to standard Newmark; and the largest difference of the contact forces from standard Newmark's
-//! over the last period (relative to standard Newmark's largest force), the "same loops" check.
-//! Then criterion's wall-time estimates on the damper and the oscillator. The sector ROM
-//! (several minutes: the step compatible with full stick is short on 289 coordinates) runs only
-//! with `NLROM_BENCH_SECTOR=1`.
+//! Per model and scheme: steps, corrector iterations, single-iteration steps and step-matrix
+//! factorisations; the wall time and the CPU time (user + system, of the process) of one whole
+//! march (minimum over rounds interleaving the schemes, so a changing machine load hits them
+//! alike) and their ratios to standard Newmark; and the largest difference of the contact forces
+//! from standard Newmark's over the last period (relative to standard Newmark's largest force),
+//! the "same loops" check. Then criterion's wall-time estimates on the damper and the oscillator.
+//! The sector ROM (one round, each march's times printed as it ends: the step compatible with full
+//! stick is 0.14 µs, 41 917 steps per period, and the adaptive step meets thousands of contact
+//! states, each with an eigenproblem and a factorisation) runs only with `NLROM_BENCH_SECTOR=1`
+//! (every scheme) or `NLROM_BENCH_SECTOR=piecewise-linear,quasi-static` (standard Newmark and
+//! the schemes named).
 //!
 //! `cargo bench --bench march` — the printed tables are those of docs/performance.md.
 
@@ -26,6 +30,7 @@ use std::time::Instant;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nlrom::case::{Case, MarchScheme};
+use nlrom::commands::batch::records::process_cpu_seconds;
 use nlrom::march::element::{Direction, Element};
 use nlrom::march::law::FrictionParams;
 use nlrom::march::signal::Harmonic;
@@ -46,6 +51,10 @@ struct Model {
     system: MarchSystem,
     settings: MarchSettings,
     rounds: usize,
+    /// Print each march's wall and CPU times as it ends (the long sector marches).
+    progress: bool,
+    /// The schemes compared, standard Newmark first.
+    schemes: Vec<MarchScheme>,
 }
 
 fn case(name: &str) -> Case {
@@ -65,6 +74,8 @@ fn damper() -> Model {
             ..cm.settings
         },
         rounds: 40,
+        progress: false,
+        schemes: schemes(),
     }
 }
 
@@ -112,6 +123,8 @@ fn jenkins() -> Model {
             ..MarchSettings::default()
         },
         rounds: 40,
+        progress: false,
+        schemes: schemes(),
     }
 }
 
@@ -130,7 +143,24 @@ fn jenkins_quasi_static() -> Model {
             ..MarchSettings::default()
         },
         rounds: 20,
+        progress: false,
+        schemes: schemes(),
     }
+}
+
+/// The schemes of the sector ROM: all, or standard Newmark and those named in
+/// `NLROM_BENCH_SECTOR` (comma-separated, e.g. `piecewise-linear,quasi-static`; the adaptive
+/// schemes take tens of minutes on a loaded machine).
+fn sector_schemes() -> Vec<MarchScheme> {
+    let names = std::env::var("NLROM_BENCH_SECTOR").unwrap_or_default();
+    let named: Vec<&str> = names.split(',').map(str::trim).collect();
+    let all = schemes();
+    if !all.iter().any(|s| named.contains(&s.as_str())) {
+        return all;
+    }
+    all.into_iter()
+        .filter(|&s| s == MarchScheme::Newmark || named.contains(&s.as_str()))
+        .collect()
 }
 
 fn sector() -> Model {
@@ -151,7 +181,9 @@ fn sector() -> Model {
             stop_at_steady: false,
             ..cm.settings
         },
-        rounds: 2,
+        rounds: 1,
+        progress: true,
+        schemes: sector_schemes(),
     }
 }
 
@@ -163,26 +195,42 @@ fn with_scheme(model: &Model, scheme: MarchScheme) -> MarchSettings {
     }
 }
 
-/// The outcome of each scheme and the minimum wall time (s) of one march per scheme over the
-/// model's interleaved rounds (the first round's marches give the outcomes).
-fn timing(model: &Model) -> (Vec<MarchOutcome>, Vec<f64>) {
-    let settings: Vec<MarchSettings> = schemes()
-        .into_iter()
+/// CPU time (user + system, s) of this process so far (NaN where it cannot be measured).
+fn cpu_seconds() -> f64 {
+    process_cpu_seconds().unwrap_or(f64::NAN)
+}
+
+/// The outcome of each scheme and the minimum wall and CPU times (s) of one march per scheme
+/// over the model's interleaved rounds (the first round's marches give the outcomes).
+fn timing(model: &Model) -> (Vec<MarchOutcome>, Vec<f64>, Vec<f64>) {
+    let settings: Vec<MarchSettings> = model
+        .schemes
+        .iter()
+        .copied()
         .map(|s| with_scheme(model, s))
         .collect();
     let mut best = vec![f64::INFINITY; settings.len()];
+    let mut best_cpu = vec![f64::INFINITY; settings.len()];
     let mut outs = Vec::new();
     for round in 0..model.rounds {
-        for (s, b) in settings.iter().zip(&mut best) {
-            let t0 = Instant::now();
+        for ((s, b), c) in settings.iter().zip(&mut best).zip(&mut best_cpu) {
+            let (t0, c0) = (Instant::now(), cpu_seconds());
             let out = march(&model.system, s).expect("march");
-            *b = b.min(t0.elapsed().as_secs_f64());
+            let (wall, cpu) = (t0.elapsed().as_secs_f64(), cpu_seconds() - c0);
+            *b = b.min(wall);
+            *c = c.min(cpu);
+            if model.progress {
+                eprintln!(
+                    "  round {round}: {} wall {wall:.2} s, CPU {cpu:.2} s, {} factorisations",
+                    s.scheme, out.factorisations
+                );
+            }
             if round == 0 {
                 outs.push(out);
             }
         }
     }
-    (outs, best)
+    (outs, best, best_cpu)
 }
 
 /// Largest |f(t) − f_ref(t)| over the last period of `out` (both components of every element,
@@ -216,20 +264,23 @@ fn force_difference(out: &MarchOutcome, reference: &MarchOutcome) -> f64 {
 
 /// Prints the comparison table of one model.
 fn table(model: &Model) {
-    let (outs, times) = timing(model);
-    let (r_out, r_time) = (&outs[0], times[0]);
+    let (outs, times, cpus) = timing(model);
+    let (r_out, r_time, r_cpu) = (&outs[0], times[0], cpus[0]);
     eprintln!("\n{} — {} period(s)", model.name, model.settings.periods);
-    eprintln!("scheme | steps (ratio) | iterations (ratio) | one-iteration steps | wall ms (ratio) | force difference");
-    for ((s, out), wall) in schemes().iter().zip(&outs).zip(&times) {
+    eprintln!("scheme | steps (ratio) | iterations (ratio) | one-iteration steps | factorisations | wall ms (ratio) | CPU ms (ratio) | force difference");
+    for (((s, out), wall), cpu) in model.schemes.iter().zip(&outs).zip(&times).zip(&cpus) {
         eprintln!(
-            "{s} | {} ({:.3}) | {} ({:.3}) | {:.1} % | {:.3} ({:.3}) | {:.2e}",
+            "{s} | {} ({:.3}) | {} ({:.3}) | {:.1} % | {} | {:.3} ({:.3}) | {:.3} ({:.3}) | {:.2e}",
             out.steps,
             out.steps as f64 / r_out.steps as f64,
             out.total_iterations,
             out.total_iterations as f64 / r_out.total_iterations as f64,
             100.0 * out.single_iteration_fraction(),
+            out.factorisations,
             wall * 1e3,
             wall / r_time,
+            cpu * 1e3,
+            cpu / r_cpu,
             force_difference(out, r_out),
         );
     }

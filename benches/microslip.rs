@@ -1,13 +1,17 @@
 //! The analytic single-harmonic friction point (Cigeroglu, An & Menq 2007; `evaluation =
 //! "analytic"`) against the AFT evaluation of the same 1-D element at H = 1 (criterion).
 //!
-//! `microslip/...`: one 1-D element with one tangential direction and normal load variation,
-//! evaluated with its Jacobian from its converged slider state (as in a Newton iteration), in
-//! stick–slip without separation and with separation; the AFT at N_t = 64, 256, 1024 and 4096.
-//! Before timing, each AFT prints its force error against the exact cycle (largest difference of
-//! the harmonic coefficients over the largest coefficient), so the N_t that reaches a given
-//! accuracy can be read off next to its time.
-//! Run: `cargo bench --bench microslip` (about 30 s).
+//! `microslip/...`: one 1-D element with one tangential direction and normal load variation
+//! (`common/microslip_input.rs`), evaluated with its Jacobian (forces, end slider state and the
+//! local Jacobian with the ∂n0 column) from its converged slider state, as in a Newton iteration,
+//! by both paths on the same element and the same motion, in four regimes of the paper (§2.2):
+//! complete stick, stick–slip at constant load (Jenkins), stick–slip with normal load variation
+//! and stick–slip–separation; the AFT at N_t = 64, 256, 1024 and 4096. Before timing, each case
+//! prints the regime of its exact cycle and each AFT its force error against it (largest
+//! difference of the harmonic coefficients over the largest coefficient), so the N_t that reaches
+//! a given accuracy can be read off next to its time.
+//! Run: `cargo bench --bench microslip` (about 1 min). Load-independent instruction counts and
+//! CPU times of the same evaluations: `tools/benchmarks/contact_cost.rs` (`microslip`).
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -15,9 +19,13 @@ use std::time::Duration;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use nlrom::case::Evaluation;
 use nlrom::contact::aft::Aft;
-use nlrom::contact::element::{evaluate_as, LocalElement, Workspace};
-use nlrom::contact::law::{ContactParams, Variant};
+use nlrom::contact::element::{evaluate_as, Workspace};
+use nlrom::contact::microslip;
 use nlrom::harmonics::HarmonicLayout;
+
+#[path = "common/microslip_input.rs"]
+mod microslip_input;
+use microslip_input::{microslip_element, microslip_motions};
 
 fn microslip(c: &mut Criterion) {
     let mut g = c.benchmark_group("microslip");
@@ -25,15 +33,10 @@ fn microslip(c: &mut Criterion) {
         .warm_up_time(Duration::from_millis(300))
         .measurement_time(Duration::from_secs(1))
         .throughput(Throughput::Elements(1));
-    let el = LocalElement {
-        params: ContactParams::new(2.0, 5.0, 0.4, 0.7, "bench").unwrap(),
-        variant: Variant::OneD,
-        tangential: 1,
-        normal: true,
-    };
-    // u = 0.7 sin τ; v with b̄ = 0.3 (contact kept) and b̄ = 0.8 (separation), φ = 2.
-    for (name, b) in [("stickslip", 0.084), ("separation", 0.224)] {
-        let x = [0.0, 0.0, -0.7, 0.01, b * 2f64.sin(), -b * 2f64.cos()];
+    let el = microslip_element();
+    for (name, x) in microslip_motions() {
+        let cycle = microslip::cycle(&el.params, [x[0], x[1], x[2]], [x[3], x[4], x[5]], 0.0);
+        eprintln!("{name}: {}", cycle.unwrap().regime.name());
         let mut exact = [0.0; 6];
         for (evaluation, n_t, label) in [
             (Evaluation::Analytic, 64, "analytic".to_string()),

@@ -1,20 +1,21 @@
 //! The blade-to-ground damper of Cigeroglu, An & Menq (2007, §4.2, Figs 11–15; check C8 of the
-//! method notes) on a synthetic blade: a two-mode modal model (f₁ = 300 Hz, f₂ = 900 Hz, unit
-//! modal masses, 0.5 % modal damping) whose platform rubs on rigid ground along a `[[strip]]`
-//! s ∈ [0, 1] (20 integration points). The modes move the platform tangentially and normally
-//! (weights linear in s: mode 1 slides and lifts, more at s = 1; mode 2 rocks), so the normal
-//! load varies over the period and the platform can separate. The total preload is swept
-//! (`strip.platform.preload`) from initial gaps (negative) to a nearly stuck platform, and each
-//! curve is traced at H = 1 with the exact cycle and Hill's stability.
+//! method notes) on the bundled synthetic blade `cases/blade_ground.toml`: a two-mode modal model
+//! (f₁ = 300 Hz, f₂ = 900 Hz, unit modal masses, 0.5 % modal damping) whose platform rubs on rigid
+//! ground along a `[[strip]]` s ∈ [0, 1] (20 integration points). The modes move the platform
+//! tangentially and normally (weights linear in s: mode 1 slides and lifts, more at s = 1; mode 2
+//! rocks), so the normal load varies over the period and the platform can separate. The total
+//! preload is swept (`strip.platform.preload`) from initial gaps (negative) to a nearly stuck
+//! platform, and each curve is traced at H = 1 with the exact cycle and Hill's stability.
 //!
 //! The linear limits are independent closed forms: the free blade (no contact) and the stuck one
-//! (modal stiffness plus ∫ k_u φ_t φ_tᵀ + k_v φ_n φ_nᵀ ds, exact for weights linear in s).
+//! (modal stiffness plus ∫ k_u φ_t φ_tᵀ + k_v φ_n φ_nᵀ ds, exact for weights linear in s), from
+//! the constants below, which the first test checks against the bundled case.
 
 use std::f64::consts::{PI, TAU};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use faer::c64;
-use nlrom::case::Case;
+use nlrom::case::{Case, Damping, Evaluation, ExcitationLoad};
 use nlrom::commands::progress::Reporter;
 use nlrom::commands::solve::{solve_case, SolveOptions};
 use nlrom::output::{FrfData, ResultsFile};
@@ -32,86 +33,70 @@ const NORMAL: [[f64; 2]; 2] = [[0.5, 0.5], [-1.0, 2.0]];
 const PRELOADS: [f64; 12] = [
     -100.0, -30.0, 1.0, 3.0, 10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0, 10000.0, 30000.0,
 ];
+/// The map frequency (Hz), inside the softening fold of P = 3.
+const MAP_HZ: f64 = 347.0;
 
-fn case(dir: &Path) -> Case {
-    let w2: Vec<f64> = F.iter().map(|f| (TAU * f).powi(2)).collect();
-    std::fs::write(
-        dir.join("K.mtx"),
-        format!(
-            "%%MatrixMarket matrix coordinate real symmetric\n2 2 2\n1 1 {:e}\n2 2 {:e}\n",
-            w2[0], w2[1]
-        ),
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("M.mtx"),
-        "%%MatrixMarket matrix coordinate real symmetric\n2 2 2\n1 1 1\n2 2 1\n",
-    )
-    .unwrap();
-    let stations: Vec<f64> = (0..=10).map(|j| j as f64 / 10.0).collect();
-    let rows = |w: [[f64; 2]; 2]| {
-        let r: Vec<String> = stations
-            .iter()
-            .map(|s| format!("[{:e}, {:e}]", w[0][0] + w[0][1] * s, w[1][0] + w[1][1] * s))
+fn case_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/blade_ground.toml")
+}
+
+fn case() -> Case {
+    Case::load(&case_path()).unwrap()
+}
+
+/// The bundled case is the model of the closed forms: the modal stiffness and mass matrices, the
+/// damping, the force, the strip's stiffness, friction and weights (a + b s at every station, to
+/// rounding of the printed decimals), the preload sweep and the map frequency.
+#[test]
+fn bundled_blade_case_is_the_model_of_the_closed_forms() {
+    let case = case();
+    let dir = case_path().parent().unwrap().to_path_buf();
+    let diagonal = |file: &str| -> Vec<f64> {
+        let text = std::fs::read_to_string(dir.join(file)).unwrap();
+        let rows: Vec<Vec<f64>> = text
+            .lines()
+            .filter(|l| !l.starts_with('%'))
+            .skip(1)
+            .map(|l| l.split_whitespace().map(|x| x.parse().unwrap()).collect())
             .collect();
-        format!("[{}]", r.join(", "))
+        assert!(rows.iter().all(|r| r[0] == r[1]), "{file}: diagonal");
+        rows.iter().map(|r| r[2]).collect()
     };
-    let list = |v: &[f64]| {
-        format!(
-            "[{}]",
-            v.iter()
-                .map(|x| format!("{x:e}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        )
-    };
-    let text = format!(
-        r#"
-[model]
-stiffness = "K.mtx"
-mass = "M.mtx"
-damping = {{ modal = {ZETA} }}
-
-[excitation]
-dofs = [0, 1]
-force = {force}
-
-[response]
-dofs = [0, 1]
-
-[[strip]]
-name = "platform"
-dofs = [0, 1]
-stations = {stations}
-tangential = {tangential}
-normal = {normal}
-kt = {KT:e}
-kn = {KN:e}
-mu = {MU}
-preload = 1000.0
-evaluation = "analytic"
-map = 360
-map_hz = [347.0]
-
-[harmonic_balance]
-harmonics = 1
-
-[continuation]
-start_hz = 250.0
-end_hz = 550.0
-step_hz = 0.5
-max_step_hz = 1.0
-
-[sweep]
-"strip.platform.preload" = {preloads}
-"#,
-        force = list(&FORCE),
-        stations = list(&stations),
-        tangential = rows(TANGENTIAL),
-        normal = rows(NORMAL),
-        preloads = list(&PRELOADS),
+    let k = diagonal("blade_ground/K.mtx");
+    for (kr, f) in k.iter().zip(F) {
+        assert!((kr - (TAU * f).powi(2)).abs() <= 1e-15 * kr, "{kr}");
+    }
+    assert_eq!(diagonal("blade_ground/M.mtx"), vec![1.0, 1.0]);
+    assert_eq!(case.model.damping, Some(Damping::Modal(ZETA)));
+    let load = &case.excitation.as_ref().unwrap().load;
+    assert_eq!(
+        load,
+        &ExcitationLoad::Dofs {
+            dofs: vec![0, 1],
+            force: FORCE.to_vec()
+        }
     );
-    Case::from_str(&text, &dir.join("blade.toml")).unwrap()
+    let strip = &case.strip[0];
+    assert_eq!((strip.kt, strip.kn, strip.mu), (KT, KN, MU));
+    assert_eq!(strip.dofs, vec![0, 1]);
+    assert_eq!(strip.evaluation, Evaluation::Analytic);
+    assert_eq!(strip.map_hz, Some(vec![MAP_HZ]));
+    assert_eq!(strip.stations.len(), 11);
+    let normal = strip.normal.as_ref().unwrap();
+    for (j, &s) in strip.stations.iter().enumerate() {
+        assert!((s - j as f64 / 10.0).abs() <= 1e-15);
+        for r in 0..2 {
+            let t = TANGENTIAL[r][0] + TANGENTIAL[r][1] * s;
+            let n = NORMAL[r][0] + NORMAL[r][1] * s;
+            assert!((strip.tangential[j][r] - t).abs() <= 1e-15, "station {j}");
+            assert!((normal[j][r] - n).abs() <= 1e-15, "station {j}");
+        }
+    }
+    assert_eq!(
+        case.sweep.get("strip.platform.preload"),
+        Some(&PRELOADS.to_vec())
+    );
+    assert_eq!(case.harmonic_balance.harmonics, 1);
 }
 
 /// |Q₁| of mode 1 at every point of a curve, with ω (Hz) and the stability flag.
@@ -153,10 +138,10 @@ fn linear_peak(stuck: bool) -> (f64, f64) {
         .fold((0.0, 0.0), |a, b| if b.1 > a.1 { b } else { a })
 }
 
-fn solve(dir: &Path) -> ResultsFile {
+fn solve() -> ResultsFile {
     let mut opts = SolveOptions::new(RomPolicy::ReadIfMatching);
     opts.stability = true;
-    solve_case(&case(dir), &opts, &Reporter::silent())
+    solve_case(&case(), &opts, &Reporter::silent())
         .unwrap()
         .results
 }
@@ -169,7 +154,7 @@ fn turns(c: &[(f64, f64, Option<bool>)]) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// C8 on the synthetic blade, preload P (N) swept from gaps to a stuck platform:
+/// C8 on the bundled synthetic blade, preload P (N) swept from gaps to a stuck platform:
 /// * limits: P = −100 (the gap never closes) is the free linear response and P = 30 000 the
 ///   stuck one at every point (1e-6);
 /// * (i) every curve's peak lies between the linear ones: its frequency between the free and
@@ -190,8 +175,7 @@ fn turns(c: &[(f64, f64, Option<bool>)]) -> Vec<(f64, f64)> {
 ///   measured 31 of 360 angles on the small-amplitude branch).
 #[test]
 fn blade_preload_sweep_has_the_papers_properties() {
-    let dir = tempfile::tempdir().unwrap();
-    let results = solve(dir.path());
+    let results = solve();
     assert_eq!(results.frfs.len(), PRELOADS.len());
     let curves: Vec<_> = results.frfs.iter().map(curve).collect();
     let at = |p: f64| PRELOADS.iter().position(|&x| x == p).unwrap();
@@ -275,7 +259,7 @@ fn blade_preload_sweep_has_the_papers_properties() {
     let mut separated = Vec::new();
     let mut all_three = 0;
     for m in &maps {
-        assert_eq!(m.omega, 2.0 * PI * 347.0);
+        assert_eq!(m.omega, 2.0 * PI * MAP_HZ);
         let amp = results.frfs[m.curve].points[m.point].harmonics[1].norm();
         let frac = m.state.iter().filter(|&&s| s == 2).count() as f64 / m.state.len() as f64;
         let (e, n) = (m.position.len(), m.phase.len());

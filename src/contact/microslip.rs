@@ -306,21 +306,54 @@ impl Wave {
     /// Where the sinusoid equals A·r (r in [−1, 1]), rising (τ = −α − arccos r) or falling
     /// (τ = −α + arccos r); sin τ and cos τ by the addition theorems.
     fn crossing(&self, r: f64, rising: bool) -> At {
-        let r = r.clamp(-1.0, 1.0);
-        let b = r.acos();
-        let sb = ((1.0 - r) * (1.0 + r)).sqrt();
+        let arc = Arc::new(r);
         if rising {
-            At {
-                t: -self.alpha - b,
-                s: -(self.sa * r + self.ca * sb),
-                c: self.ca * r - self.sa * sb,
-            }
+            self.rising(arc)
         } else {
-            At {
-                t: b - self.alpha,
-                s: sb * self.ca - r * self.sa,
-                c: r * self.ca + sb * self.sa,
-            }
+            self.falling(arc)
+        }
+    }
+
+    /// The rising crossing of A·r, τ = −α − β with β = arccos r.
+    #[inline]
+    fn rising(&self, arc: Arc) -> At {
+        let (r, b, sb) = (arc.r, arc.b, arc.sb);
+        At {
+            t: -self.alpha - b,
+            s: -(self.sa * r + self.ca * sb),
+            c: self.ca * r - self.sa * sb,
+        }
+    }
+
+    /// The falling crossing of A·r, τ = −α + β with β = arccos r.
+    #[inline]
+    fn falling(&self, arc: Arc) -> At {
+        let (r, b, sb) = (arc.r, arc.b, arc.sb);
+        At {
+            t: b - self.alpha,
+            s: sb * self.ca - r * self.sa,
+            c: r * self.ca + sb * self.sa,
+        }
+    }
+}
+
+/// A level r of a sinusoid relative to its amplitude (clamped to [−1, 1]) with β = arccos r
+/// (rad) and sin β, shared by the level's rising and falling crossings (one arccos for both).
+#[derive(Clone, Copy, Debug)]
+struct Arc {
+    r: f64,
+    b: f64,
+    sb: f64,
+}
+
+impl Arc {
+    #[inline]
+    fn new(r: f64) -> Self {
+        let r = r.clamp(-1.0, 1.0);
+        Arc {
+            r,
+            b: r.acos(),
+            sb: ((1.0 - r) * (1.0 + r)).sqrt(),
         }
     }
 }
@@ -402,10 +435,11 @@ impl Motion {
                 nv.alpha = angle(nv.x1, nv.x2, vamp);
                 // Re-contact (n rising through 0) at τ + α_V = −arccos ρ; contact length
                 // 2 arccos ρ.
-                let recontact = nv.crossing(rho, true);
+                let arc = Arc::new(rho);
+                let recontact = nv.rising(arc);
                 let recontact = recontact.labelled(wrap(recontact.t));
-                let len = 2.0 * rho.min(1.0).acos();
-                let separation = nv.crossing(rho, false).labelled(recontact.t + len);
+                let len = 2.0 * arc.b;
+                let separation = nv.falling(arc).labelled(recontact.t + len);
                 Window::Part {
                     recontact,
                     separation,

@@ -575,6 +575,10 @@ impl<'a> Marcher<'a> {
 /// arrays (filled once by [`Marcher::new`]).
 #[derive(Default)]
 struct StepTable {
+    /// DOF n and elements E of a row (kept, instead of dividing the lengths by the step count
+    /// at every step).
+    n: usize,
+    ne: usize,
     /// End time of each step within the period (s).
     t: Vec<f64>,
     /// Step size (s).
@@ -589,6 +593,8 @@ struct StepTable {
 
 impl StepTable {
     fn push(&mut self, t: f64, dt: f64, exc: &Excitation) {
+        self.n = exc.force.len();
+        self.ne = exc.pt.len();
         self.t.push(t);
         self.dt.push(dt);
         self.force.extend_from_slice(&exc.force);
@@ -602,8 +608,7 @@ impl StepTable {
 
     /// (end time within the period, step, excitation at the end) of step `j`.
     fn get(&self, j: usize) -> (f64, f64, ExcitationAt<'_>) {
-        let n = self.force.len() / self.len();
-        let ne = self.pt.len() / self.len();
+        let (n, ne) = (self.n, self.ne);
         (
             self.t[j],
             self.dt[j],

@@ -203,6 +203,13 @@ impl Workspace {
 /// this the cached factors of that step are dropped and rebuilt as the states recur.
 pub const MAX_CACHED_BYTES: usize = 256 << 20;
 
+/// Most memory (bytes) the matrices and factors of all the step sizes together may take: the
+/// adaptive step gives each contact-state combination its own size (paper §4.2, eq. 8), and a
+/// reduced sector meets hundreds of combinations, each with n × n matrices (0.67 MB at n = 289).
+/// Beyond this every step size but the one being entered is dropped and rebuilt on its next use
+/// (the same matrices: the results do not change).
+pub const MAX_CACHED_TOTAL_BYTES: usize = 1 << 30;
+
 /// Most f64 entries of a low-rank factor kept per state (4 MiB): larger ones (a travelling wave's
 /// hundreds of slipping elements on thousands of coordinates, where nearly every step meets a new
 /// state) are only held as the working factor and updated from state to state.
@@ -258,6 +265,16 @@ struct StepSize {
 }
 
 impl StepSize {
+    /// Memory held (bytes): the n × n matrices and the factors of the states.
+    fn bytes(&self) -> usize {
+        let matrices = [&self.inertia, &self.structural, &self.stick]
+            .iter()
+            .map(|m| m.as_ref().map_or(0, Vec::len))
+            .sum::<usize>();
+        let working = self.working.as_ref().map_or(0, LowRank::len);
+        (matrices + self.held + working) * std::mem::size_of::<f64>()
+    }
+
     fn new(bits: u64) -> Self {
         StepSize {
             bits,
@@ -306,6 +323,11 @@ impl Cache {
         let i = match self.index.get(&bits) {
             Some(&i) => i,
             None => {
+                let held: usize = self.sizes.iter().map(StepSize::bytes).sum();
+                if held > MAX_CACHED_TOTAL_BYTES {
+                    self.sizes.clear();
+                    self.index.clear();
+                }
                 self.sizes.push(StepSize::new(bits));
                 self.index.insert(bits, self.sizes.len() - 1);
                 self.sizes.len() - 1

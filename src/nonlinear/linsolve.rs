@@ -15,14 +15,21 @@
 //! E, so the bordered matrix is solved exactly, at folds too (where J is singular but A is not).
 //!
 //! E is split into the connected components of its graph (rows and columns linked by an entry:
-//! for a contact interface, groups of neighbouring elements in transition), and each component's
-//! dense block E_k (rows R_k, columns C_k) is compressed by a column-pivoted QR to E_k = Q_k (Q_kᵀ
-//! E_k) of rank r_k (the columns of R with |r_ii| > 1e-13 max |r_ii|). With U = (Q_k)_k, Vᵀ = (Q_kᵀ
-//! E_k)_k, the components side by side (r = Σ r_k columns),
+//! for a contact interface, groups of neighbouring elements in transition), each component's
+//! rows into the diagonal blocks they lie in, and each such dense part E_kb (rows R_kb of block b,
+//! columns C_k) is compressed by a column-pivoted QR to E_kb = Q_kb (Q_kbᵀ E_kb) of rank r_kb
+//! (the columns of R with |r_ii| > 1e-13 max |r_ii|). With U = (Q_kb), Vᵀ = (Q_kbᵀ E_kb), the
+//! parts side by side (r = Σ r_kb columns),
 //!
 //!   A⁻¹ b = P⁻¹ b − P⁻¹U (I_r + Vᵀ P⁻¹ U)⁻¹ Vᵀ P⁻¹ b,   det A = det P · det(I_r + Vᵀ P⁻¹ U)
 //!
-//! (the matrix determinant lemma), each solve checked by its backward error
+//! (the matrix determinant lemma). Each column of U lies in one diagonal block, and so does its
+//! column of X = P⁻¹U: X is formed and stored block by block (P_b⁻¹ on the r_b columns of block
+//! b: 2 s_b² r_b flops and s_b r_b numbers, against 2 n s_b r and n r for columns that span
+//! every block). A contact element's Jacobian is Bᵀ K(t) B (B its interpolation of the
+//! element's DOFs to the contact point's three directions; SAMA paper eq. 26), so its rows in one
+//! harmonic have at most the rank of B's, and Σ_b r_kb stays close to rank E_k (4–10 % above it
+//! on the bundled sector, `docs/performance.md`). Each solve is checked by its backward error
 //! ‖b − A x‖∞ / (‖A‖∞ ‖x‖∞ + ‖b‖∞) and refined; a solve that stays above
 //! [`BACKWARD_ERROR`] goes to the dense LU.
 //!
@@ -46,16 +53,17 @@
 //! the Hessenberg matrix of the GMRES cycle (the continuation tangent where the refinement of
 //! [`LinearSolver::solve_near`] does not converge).
 //!
-//! Cost for n unknowns, blocks s_b, rank r (flops): dense LU (2/3)n³; structured
-//! Σ_b (2/3)s_b³ + 2 Σ_b s_b² r + 2 r Σ_k r_k |C_k| + (2/3) r³, plus the QRs (Σ_k 2|R_k||C_k|²).
-//! At n_c = 690, H = 3 (n = 4830) in microslip (r ≈ 13 % of n) that is about 5× fewer; fully stuck
+//! Cost for n unknowns, blocks s_b, r_b columns of U in block b, r = Σ_b r_b (flops): dense LU
+//! (2/3)n³; structured Σ_b (2/3)s_b³ + 2 Σ_b s_b² r_b + 2 Σ_kb r_kb Σ_b' |C_k ∩ b'| r_b' +
+//! (2/3) r³ (block LUs, P⁻¹U, Vᵀ X and the capacitance LU), plus the QRs
+//! (Σ_kb 2|R_kb||C_k| min(|R_kb|, |C_k|)); a border column adds 2 Σ_b s_b² to P⁻¹U. Fully stuck
 //! (E = 0) it is the blocks alone, (8H + 1) / (2H + 1)³ of the dense LU. [`SolverChoice::Auto`]
 //! takes the cheaper path by this flop count for every matrix it sees.
 
 use std::cell::Cell;
 use std::sync::Mutex;
 
-use faer::linalg::solvers::{PartialPivLu, Solve};
+use faer::linalg::solvers::{PartialPivLu, ShapeCore, Solve};
 use faer::{Accum, Mat, MatRef};
 use rayon::prelude::*;
 
@@ -795,14 +803,35 @@ fn starts_of(blocks: &[usize]) -> Vec<usize> {
     starts
 }
 
-/// One component of E: rows, columns, and E_k = U_k V_kᵀ.
+/// One piece of E = Σ_p U_p V_pᵀ: the rows of U_p lie inside one diagonal block (a component of
+/// E restricted to that block's rows), or it is a border term.
 struct Piece {
+    /// The diagonal block of the rows (`None`: a border term).
+    block: Option<usize>,
     rows: Vec<usize>,
+    /// Ascending.
     cols: Vec<usize>,
-    /// |rows| × r_k, orthonormal columns.
+    /// |rows| × r_p (orthonormal columns for a block piece).
     u: Mat<f64>,
-    /// r_k × |cols|.
+    /// r_p × |cols|.
     vt: Mat<f64>,
+}
+
+/// V_pᵀ of a [`Piece`] once X = P⁻¹U is formed (U_p is no longer needed).
+struct Coupling {
+    /// Ascending.
+    cols: Vec<usize>,
+    /// r_p × |cols|.
+    vt: Mat<f64>,
+}
+
+/// The columns `first`..`first + x.ncols()` of X = P⁻¹U on the rows `start`..`start +
+/// x.nrows()`, zero elsewhere: the pieces of one diagonal block (P⁻¹ keeps them in it), or a
+/// border term.
+struct Segment {
+    start: usize,
+    first: usize,
+    x: Mat<f64>,
 }
 
 /// The factors of A = P + U Vᵀ (module documentation).
@@ -812,13 +841,12 @@ struct Woodbury {
     starts: Vec<usize>,
     /// LU of each diagonal block (the border's block is the identity).
     blocks: Vec<PartialPivLu<f64>>,
-    /// The components of E and the border terms as pieces (the border's column pieces have all
-    /// rows, its row pieces one row).
-    pieces: Vec<Piece>,
+    /// V_pᵀ of each piece, in the order of U's columns.
+    couplings: Vec<Coupling>,
     /// First column of each piece in U.
     offsets: Vec<usize>,
-    /// X = P⁻¹ U, n × r.
-    x: Mat<f64>,
+    /// X = P⁻¹ U by row ranges (Σ_b s_b r_b numbers, not n r).
+    segments: Vec<Segment>,
     /// LU of the capacitance matrix I + Vᵀ X.
     capacitance: PartialPivLu<f64>,
     /// sign det A.
@@ -852,6 +880,239 @@ pub(crate) fn lu_sign(lu: &PartialPivLu<f64>) -> Option<f64> {
     })
 }
 
+/// The connected components of the graph of E (rows 0..inner and columns linked by an entry;
+/// `entries` per column): (rows, columns) of each, both ascending.
+fn components(entries: &[Vec<(usize, f64)>]) -> Vec<(Vec<usize>, Vec<usize>)> {
+    let inner = entries.len();
+    // rows are nodes 0..inner, columns inner..2 inner
+    let mut parent: Vec<usize> = (0..2 * inner).collect();
+    fn find(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    let mut touched = vec![false; 2 * inner];
+    for (j, col) in entries.iter().enumerate() {
+        for &(i, _) in col {
+            touched[i] = true;
+            touched[inner + j] = true;
+            let (ri, rj) = (find(&mut parent, i), find(&mut parent, inner + j));
+            if ri != rj {
+                parent[ri] = rj;
+            }
+        }
+    }
+    let mut index = vec![usize::MAX; 2 * inner];
+    let mut groups: Vec<(Vec<usize>, Vec<usize>)> = Vec::new();
+    for node in (0..2 * inner).filter(|&v| touched[v]) {
+        let root = find(&mut parent, node);
+        if index[root] == usize::MAX {
+            index[root] = groups.len();
+            groups.push((Vec::new(), Vec::new()));
+        }
+        let g = &mut groups[index[root]];
+        if node < inner {
+            g.0.push(node);
+        } else {
+            g.1.push(node - inner);
+        }
+    }
+    groups
+}
+
+/// The rows of each component of E split by diagonal block: (block, rows, columns of the
+/// component), ordered by block.
+fn block_parts(
+    groups: Vec<(Vec<usize>, Vec<usize>)>,
+    starts: &[usize],
+) -> Vec<(usize, Vec<usize>, Vec<usize>)> {
+    let mut parts: Vec<(usize, Vec<usize>, Vec<usize>)> = Vec::new();
+    for (rows, cols) in groups {
+        for b in 0..starts.len() - 1 {
+            let (lo, hi) = (
+                rows.partition_point(|&i| i < starts[b]),
+                rows.partition_point(|&i| i < starts[b + 1]),
+            );
+            if lo < hi {
+                parts.push((b, rows[lo..hi].to_vec(), cols.clone()));
+            }
+        }
+    }
+    parts.sort_by_key(|p| p.0);
+    parts
+}
+
+/// E restricted to `rows` × `cols` (`entries` per column) compressed by a column-pivoted QR
+/// to U Vᵀ, U = Q of rank r (|r_ii| > [`RANK_TOLERANCE`] max |r_ii|), Vᵀ = Qᵀ E.
+fn compress(entries: &[Vec<(usize, f64)>], rows: &[usize], cols: &[usize]) -> (Mat<f64>, Mat<f64>) {
+    let mut e = Mat::<f64>::zeros(rows.len(), cols.len());
+    for (q, &j) in cols.iter().enumerate() {
+        for &(i, v) in &entries[j] {
+            if let Ok(p) = rows.binary_search(&i) {
+                e[(p, q)] = v;
+            }
+        }
+    }
+    let qr = e.col_piv_qr();
+    let r = qr.thin_R();
+    let d = r.nrows().min(r.ncols());
+    let max = (0..d).map(|i| r[(i, i)].abs()).fold(0.0, f64::max);
+    let rank = (0..d)
+        .filter(|&i| r[(i, i)].abs() > RANK_TOLERANCE * max)
+        .count();
+    let q = qr.compute_thin_Q();
+    let u = q.get(.., ..rank).to_owned();
+    let vt = u.transpose() * &e;
+    (u, vt)
+}
+
+/// The border terms of a bordered matrix as pieces: for border index c, the column (minus the
+/// identity block's 1) as a piece of all `n` rows, and the row over the `inner` block columns as
+/// a piece of row c.
+fn border_pieces(
+    n: usize,
+    inner: usize,
+    border_cols: &[Vec<f64>],
+    border_rows: &[Vec<f64>],
+) -> Vec<Piece> {
+    let mut pieces = Vec::new();
+    for (t, (col, row)) in border_cols.iter().zip(border_rows).enumerate() {
+        let c = inner + t;
+        let mut u = Mat::<f64>::from_fn(n, 1, |i, _| col[i]);
+        u[(c, 0)] -= 1.0;
+        pieces.push(Piece {
+            block: None,
+            rows: (0..n).collect(),
+            cols: vec![c],
+            u,
+            vt: Mat::from_fn(1, 1, |_, _| 1.0),
+        });
+        pieces.push(Piece {
+            block: None,
+            rows: vec![c],
+            cols: (0..inner).collect(),
+            u: Mat::from_fn(1, 1, |_, _| 1.0),
+            vt: Mat::from_fn(1, inner, |_, j| row[j]),
+        });
+    }
+    pieces
+}
+
+/// Flops of Vᵀ X on the segments of [`solve_segments`]: 2 r_p times the columns of X that
+/// piece p meets, each once per row of V_pᵀ in the segment's rows (a block's pieces meet only
+/// that block's columns of X).
+fn product_flops(pieces: &[Piece], starts: &[usize]) -> f64 {
+    let mut widths = vec![0usize; starts.len() - 1];
+    let mut ranges: Vec<(usize, usize, usize)> = Vec::new();
+    for p in pieces {
+        match p.block {
+            Some(b) => widths[b] += p.u.ncols(),
+            None => ranges.push((p.rows[0], p.rows[0] + p.rows.len(), p.u.ncols())),
+        }
+    }
+    for (b, w) in starts.windows(2).enumerate() {
+        ranges.push((w[0], w[1], widths[b]));
+    }
+    pieces
+        .iter()
+        .map(|p| {
+            let met: usize = ranges
+                .iter()
+                .map(|&(lo, hi, width)| {
+                    let n =
+                        p.cols.partition_point(|&j| j < hi) - p.cols.partition_point(|&j| j < lo);
+                    n * width
+                })
+                .sum();
+            2.0 * (p.u.ncols() * met) as f64
+        })
+        .sum()
+}
+
+/// X = P⁻¹ U by segments: one per diagonal block holding pieces (P_b⁻¹ of their U_p, side by
+/// side, in parallel over the blocks), one per border piece (its rows: all for a border column
+/// — whose block rows P⁻¹ solves —, row c for a border row, where P is the identity).
+fn solve_segments(
+    pieces: &[Piece],
+    offsets: &[usize],
+    starts: &[usize],
+    lus: &[PartialPivLu<f64>],
+) -> Vec<Segment> {
+    let mut ranges: Vec<(Option<usize>, usize, usize)> = Vec::new();
+    for (k, p) in pieces.iter().enumerate() {
+        match ranges.last_mut() {
+            Some(last) if p.block.is_some() && last.0 == p.block => last.2 = k + 1,
+            _ => ranges.push((p.block, k, k + 1)),
+        }
+    }
+    ranges
+        .into_par_iter()
+        .map(|(block, k0, k1)| {
+            let first = offsets[k0];
+            let width: usize = pieces[k0..k1].iter().map(|p| p.u.ncols()).sum();
+            let start = match block {
+                Some(b) => starts[b],
+                None => pieces[k0].rows[0],
+            };
+            let height = match block {
+                Some(b) => starts[b + 1] - starts[b],
+                None => pieces[k0].rows.len(),
+            };
+            let mut x = Mat::<f64>::zeros(height, width);
+            for (p, &o) in pieces[k0..k1].iter().zip(&offsets[k0..k1]) {
+                for (q, &i) in p.rows.iter().enumerate() {
+                    for l in 0..p.u.ncols() {
+                        x[(i - start, o - first + l)] = p.u[(q, l)];
+                    }
+                }
+            }
+            match block {
+                Some(b) => lus[b].solve_in_place(x.as_mut()),
+                None if height > 1 => {
+                    for (w, lu) in starts.windows(2).zip(lus) {
+                        lu.solve_in_place(x.as_mut().subrows_mut(w[0], w[1] - w[0]));
+                    }
+                }
+                None => {}
+            }
+            Segment { start, first, x }
+        })
+        .collect()
+}
+
+/// The rows of the capacitance matrix I + Vᵀ X of one coupling (at column offset `offset`, of
+/// `m` columns): V_pᵀ times the rows of X at its columns, segment by segment.
+fn capacitance_rows(c: &Coupling, offset: usize, m: usize, segments: &[Segment]) -> Mat<f64> {
+    let r = c.vt.nrows();
+    let mut out = Mat::<f64>::zeros(r, m);
+    for l in 0..r {
+        out[(l, offset + l)] = 1.0;
+    }
+    for s in segments {
+        let (lo, hi) = (
+            c.cols.partition_point(|&j| j < s.start),
+            c.cols.partition_point(|&j| j < s.start + s.x.nrows()),
+        );
+        if lo == hi {
+            continue;
+        }
+        let gathered = Mat::from_fn(hi - lo, s.x.ncols(), |q, l| {
+            s.x[(c.cols[lo + q] - s.start, l)]
+        });
+        faer::linalg::matmul::matmul(
+            out.as_mut().subcols_mut(s.first, s.x.ncols()),
+            Accum::Add,
+            c.vt.get(.., lo..hi),
+            gathered.as_ref(),
+            1.0,
+            faer::Par::Seq,
+        );
+    }
+    out
+}
+
 impl Woodbury {
     /// Compresses E of `split` and factorises; with `auto`, returns [`Decision::Dense`] as soon
     /// as the flop model says the dense LU is cheaper.
@@ -865,98 +1126,32 @@ impl Woodbury {
             border_rows,
         } = split;
         let inner = starts[starts.len() - 1];
-        // connected components: rows are nodes 0..inner, columns inner..2 inner
-        let mut parent: Vec<usize> = (0..2 * inner).collect();
-        fn find(p: &mut [usize], mut i: usize) -> usize {
-            while p[i] != i {
-                p[i] = p[p[i]];
-                i = p[i];
-            }
-            i
-        }
-        for (j, col) in entries.iter().enumerate() {
-            for &(i, _) in col {
-                let (ri, rj) = (find(&mut parent, i), find(&mut parent, inner + j));
-                if ri != rj {
-                    parent[ri] = rj;
-                }
-            }
-        }
-        let mut index = vec![usize::MAX; 2 * inner];
-        let mut groups: Vec<(Vec<usize>, Vec<usize>)> = Vec::new();
-        let mut touched = vec![false; 2 * inner];
-        for (j, col) in entries.iter().enumerate() {
-            for &(i, _) in col {
-                touched[i] = true;
-                touched[inner + j] = true;
-            }
-        }
-        for (node, _) in touched.iter().enumerate().filter(|(_, &t)| t) {
-            let root = find(&mut parent, node);
-            if index[root] == usize::MAX {
-                index[root] = groups.len();
-                groups.push((Vec::new(), Vec::new()));
-            }
-            let g = &mut groups[index[root]];
-            if node < inner {
-                g.0.push(node);
-            } else {
-                g.1.push(node - inner);
-            }
-        }
+        let parts = block_parts(components(&entries), &starts);
         let dense_flops = lu_flops(n);
         let blocks_flops: f64 = blocks.iter().map(|b| lu_flops(b.nrows())).sum();
-        let sq: f64 = blocks.iter().map(|b| (b.nrows() * b.nrows()) as f64).sum();
-        let qr_flops: f64 = groups
+        let qr_flops: f64 = parts
             .iter()
-            .map(|(r, c)| 2.0 * r.len() as f64 * (c.len().min(r.len()) as f64).powi(2))
+            .map(|(_, r, c)| 2.0 * (r.len() * c.len() * c.len().min(r.len())) as f64)
             .sum();
         if auto && blocks_flops + qr_flops > 0.5 * dense_flops {
             return Decision::Dense;
         }
-        // compress each component: E_k = Q (Qᵀ E_k)
-        let mut pieces: Vec<Piece> = groups
+        // compress each component's rows in each block: E_kb = Q (Qᵀ E_kb)
+        let mut pieces: Vec<Piece> = parts
             .into_par_iter()
-            .map(|(rows, cols)| {
-                let mut pos = vec![usize::MAX; inner];
-                rows.iter().enumerate().for_each(|(p, &i)| pos[i] = p);
-                let mut e = Mat::<f64>::zeros(rows.len(), cols.len());
-                for (q, &j) in cols.iter().enumerate() {
-                    for &(i, v) in &entries[j] {
-                        e[(pos[i], q)] = v;
-                    }
+            .map(|(b, rows, cols)| {
+                let (u, vt) = compress(&entries, &rows, &cols);
+                Piece {
+                    block: Some(b),
+                    rows,
+                    cols,
+                    u,
+                    vt,
                 }
-                let qr = e.col_piv_qr();
-                let r = qr.thin_R();
-                let d = r.nrows().min(r.ncols());
-                let max = (0..d).map(|i| r[(i, i)].abs()).fold(0.0, f64::max);
-                let rank = (0..d)
-                    .filter(|&i| r[(i, i)].abs() > RANK_TOLERANCE * max)
-                    .count();
-                let q = qr.compute_thin_Q();
-                let u = q.get(.., ..rank).to_owned();
-                let vt = u.transpose() * &e;
-                Piece { rows, cols, u, vt }
             })
             .collect();
-        // the border: columns inner.. (minus the identity block) and rows inner.. (inner columns)
-        for (t, (col, row)) in border_cols.iter().zip(&border_rows).enumerate() {
-            let c = inner + t;
-            let mut u = Mat::<f64>::from_fn(n, 1, |i, _| col[i]);
-            u[(c, 0)] -= 1.0;
-            pieces.push(Piece {
-                rows: (0..n).collect(),
-                cols: vec![c],
-                u,
-                vt: Mat::from_fn(1, 1, |_, _| 1.0),
-            });
-            pieces.push(Piece {
-                rows: vec![c],
-                cols: (0..inner).collect(),
-                u: Mat::from_fn(1, 1, |_, _| 1.0),
-                vt: Mat::from_fn(1, inner, |_, j| row[j]),
-            });
-        }
+        drop(entries);
+        pieces.extend(border_pieces(n, inner, &border_cols, &border_rows));
         let offsets: Vec<usize> = pieces
             .iter()
             .scan(0, |s, p| {
@@ -966,11 +1161,17 @@ impl Woodbury {
             })
             .collect();
         let rank: usize = pieces.iter().map(|p| p.u.ncols()).sum();
-        let vx_flops: f64 = pieces
+        // P⁻¹U: 2 s_b² per column of a block piece, 2 Σ_b s_b² per border column
+        let sq: f64 = blocks.iter().map(|b| (b.nrows() * b.nrows()) as f64).sum();
+        let solve_flops: f64 = pieces
             .iter()
-            .map(|p| 2.0 * (p.u.ncols() * p.cols.len() * rank) as f64)
+            .map(|p| {
+                let s = p.block.map_or(sq, |b| (blocks[b].nrows().pow(2)) as f64);
+                2.0 * s * p.u.ncols() as f64
+            })
             .sum();
-        let structured_flops = blocks_flops + 2.0 * sq * rank as f64 + vx_flops + lu_flops(rank);
+        let vx_flops = product_flops(&pieces, &starts);
+        let structured_flops = blocks_flops + solve_flops + vx_flops + lu_flops(rank);
         if auto && structured_flops > 0.5 * dense_flops {
             return Decision::Dense;
         }
@@ -986,31 +1187,27 @@ impl Woodbury {
             return Decision::Failed;
         };
         let mut sign: f64 = lus.iter().map(|lu| lu_sign(lu).unwrap_or(1.0)).product();
-        // X = P⁻¹ U
-        let mut x = Mat::<f64>::zeros(n, rank);
-        for (p, &o) in pieces.iter().zip(&offsets) {
-            for (q, &i) in p.rows.iter().enumerate() {
-                for l in 0..p.u.ncols() {
-                    x[(i, o + l)] = p.u[(q, l)];
-                }
-            }
+        let segments = solve_segments(&pieces, &offsets, &starts, &lus);
+        let couplings: Vec<Coupling> = pieces
+            .into_iter()
+            .map(|p| Coupling {
+                cols: p.cols,
+                vt: p.vt,
+            })
+            .collect();
+        // capacitance I + Vᵀ X, by the rows of each coupling (in parallel)
+        let rows: Vec<Mat<f64>> = couplings
+            .par_iter()
+            .zip(&offsets)
+            .map(|(c, &o)| capacitance_rows(c, o, rank, &segments))
+            .collect();
+        let mut c = Mat::<f64>::zeros(rank, rank);
+        for (part, &o) in rows.iter().zip(&offsets) {
+            c.as_mut()
+                .subrows_mut(o, part.nrows())
+                .copy_from(part.as_ref());
         }
-        for (w, lu) in starts.windows(2).zip(&lus) {
-            lu.solve_in_place(x.as_mut().subrows_mut(w[0], w[1] - w[0]));
-        }
-        // capacitance I + Vᵀ X
-        let mut c = Mat::<f64>::identity(rank, rank);
-        for (p, &o) in pieces.iter().zip(&offsets) {
-            let gathered = Mat::from_fn(p.cols.len(), rank, |q, l| x[(p.cols[q], l)]);
-            faer::linalg::matmul::matmul(
-                c.as_mut().subrows_mut(o, p.u.ncols()),
-                Accum::Add,
-                p.vt.as_ref(),
-                gathered.as_ref(),
-                1.0,
-                faer::get_global_parallelism(),
-            );
-        }
+        drop(rows);
         let capacitance = c.partial_piv_lu();
         match lu_sign(&capacitance) {
             Some(s) => sign *= s,
@@ -1020,9 +1217,9 @@ impl Woodbury {
             n,
             starts,
             blocks: lus,
-            pieces,
+            couplings,
             offsets,
-            x,
+            segments,
             capacitance,
             sign,
         }))
@@ -1030,7 +1227,7 @@ impl Woodbury {
 
     /// r, the number of columns of U.
     fn rank(&self) -> usize {
-        self.x.ncols()
+        self.capacitance.nrows()
     }
 
     /// x = A⁻¹ b by the Woodbury formula.
@@ -1040,25 +1237,27 @@ impl Woodbury {
             lu.solve_in_place(y.as_mut().subrows_mut(w[0], w[1] - w[0]));
         }
         let mut s = Mat::<f64>::zeros(self.rank(), 1);
-        for (p, &o) in self.pieces.iter().zip(&self.offsets) {
-            for l in 0..p.vt.nrows() {
-                s[(o + l, 0)] = p
+        for (c, &o) in self.couplings.iter().zip(&self.offsets) {
+            for l in 0..c.vt.nrows() {
+                s[(o + l, 0)] = c
                     .cols
                     .iter()
                     .enumerate()
-                    .map(|(q, &j)| p.vt[(l, q)] * y[(j, 0)])
+                    .map(|(q, &j)| c.vt[(l, q)] * y[(j, 0)])
                     .sum();
             }
         }
         self.capacitance.solve_in_place(s.as_mut());
-        faer::linalg::matmul::matmul(
-            y.as_mut(),
-            Accum::Add,
-            self.x.as_ref(),
-            s.as_ref(),
-            -1.0,
-            faer::get_global_parallelism(),
-        );
+        for seg in &self.segments {
+            faer::linalg::matmul::matmul(
+                y.as_mut().subrows_mut(seg.start, seg.x.nrows()),
+                Accum::Add,
+                seg.x.as_ref(),
+                s.as_ref().subrows(seg.first, seg.x.ncols()),
+                -1.0,
+                faer::Par::Seq,
+            );
+        }
         (0..self.n).map(|i| y[(i, 0)]).collect()
     }
 

@@ -2,10 +2,13 @@
 """Plot nlrom frequency responses: FRFs and the performance curves of the SAMA paper.
 
     python3 tools/post/plot_frf.py RESULT.h5 [RESULT2.h5 ...] --out DIR [--labels A B ...] [--dof R]
+        [--log]
 
 writes, into DIR (created if needed):
   <stem>_frf.png          per result file: first-harmonic amplitude vs frequency, one curve per
-                          sweep value (the SAMA paper's Figs 19-20)
+                          sweep value (the SAMA paper's Figs 19-20); points that Hill's method
+                          marks unstable (`nlrom solve --stability`) as crosses; --log: logarithmic
+                          amplitude axis
   frf_compare.png         with several files: all their curves in one plot, one line style per file
                           (Figs 21-22, 26-27: conforming vs non-conforming / misaligned)
   performance.png         when the files have a one-parameter sweep: resonance frequency, amplitude
@@ -92,8 +95,18 @@ def segments(frf):
     return [slice(a, b) for a, b in zip(bounds, bounds[1:])]
 
 
-def plot_file(plt, tree, path, label, dof):
+def unstable_points(frf):
+    """Indices of the points Hill's method marks unstable (`/frf/<i>/stable` = 0; none without
+    the stability data)."""
+    stable = frf.get("stable")
+    if stable is None:
+        return np.array([], dtype=int)
+    return np.flatnonzero(np.asarray(stable) == 0)
+
+
+def plot_file(plt, tree, path, label, dof, log=False):
     fig, ax = plt.subplots(figsize=(7, 4.5))
+    marked = False
     for frf in tree["frf"]:
         if not len(frf["frequency_hz"]):
             continue
@@ -103,6 +116,14 @@ def plot_file(plt, tree, path, label, dof):
             line, = ax.plot(frf["frequency_hz"][part], frf["amplitude"][part, r],
                             color=line.get_color() if line else None,
                             label=None if line else (sweep_label(frf) or label))
+        bad = unstable_points(frf)
+        if len(bad):
+            ax.plot(np.asarray(frf["frequency_hz"])[bad], np.asarray(frf["amplitude"])[bad, r],
+                    "x", color=line.get_color(), markersize=4,
+                    label=None if marked else "unstable (Hill)")
+            marked = True
+    if log:
+        ax.set_yscale("log")
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("first-harmonic amplitude (m)")
     ax.set_title(label)
@@ -162,6 +183,7 @@ def main():
     parser.add_argument("--labels", nargs="+", help="one label per file (default: file stem)")
     parser.add_argument("--dof", type=int, help="response DOF index for the metrics and plots")
     parser.add_argument("--no-plots", action="store_true", help="only print the table")
+    parser.add_argument("--log", action="store_true", help="logarithmic amplitude axis")
     args = parser.parse_args()
     labels = args.labels or [os.path.splitext(os.path.basename(f))[0] for f in args.files]
     if len(labels) != len(args.files):
@@ -192,7 +214,7 @@ def main():
     written = []
     for tree, label, f in zip(trees, labels, args.files):
         path = os.path.join(args.out, os.path.splitext(os.path.basename(f))[0] + "_frf.png")
-        plot_file(plt, tree, path, label, args.dof)
+        plot_file(plt, tree, path, label, args.dof, args.log)
         written.append(path)
     if len(trees) > 1:
         path = os.path.join(args.out, "frf_compare.png")

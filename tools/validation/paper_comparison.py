@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The SAMA paper's experiment (seed 004, §6.2) on the bundled shrouded sector, in one command.
 
-    python3 tools/validation/paper_comparison.py [--modes m1 m2] [--skip-solve] [--out results/paper] [--figures docs/paper]
+    python3 tools/validation/paper_comparison.py [--modes m1 m2] [--harmonics H] [--skip-solve] [--out results/paper] [--figures docs/paper]
 
 Modes (default: both): M1 = the first stuck-shroud mode of harmonic index 3 (bending, 791 Hz fully
 stuck), M2 = the first torsional blade mode of harmonic index 3 (5126 Hz fully stuck); see
@@ -19,6 +19,9 @@ For every mode (cases/paper/<mode>_{conforming,nonconforming,misaligned}.toml) i
     using tools/post/plot_frf.py (same metric definitions as `nlrom solve`);
   - copies the comparison table and the PNGs to --figures (default docs/paper/, committed: the
     README shows them).
+With --harmonics H (other than the cases' H = 1) every case is solved with H harmonics instead (a
+copy of the case with `harmonics = H`, written beside it and removed after the run); the results,
+the table (comparison_h<H>.md) and the figures go to results/paper_h<H> and docs/paper/h<H>.
 Exit status 1 when, in any mode, a SAMA-vs-conforming difference exceeds the tolerance, a
 conforming or SAMA path stops inside the window (its peak is then unknown), there are no
 conforming results, or a case differs from m1's in [model], [cyclic], [reduction] or [[contact]]
@@ -45,12 +48,32 @@ FREQ_TOL = 0.5e-2
 AMP_TOL = 3e-2
 
 
-def solve(case, out):
+def with_harmonics(case, harmonics):
+    """`case` (a path under ROOT) itself when `harmonics` is None, else a copy beside it (the same
+    relative mesh paths) whose [harmonic_balance] asks for `harmonics` harmonics."""
+    if harmonics is None:
+        return case
+    lines = open(os.path.join(ROOT, case)).read().splitlines()
+    found = [i for i, line in enumerate(lines) if line.strip().startswith("harmonics =")]
+    if len(found) != 1:
+        raise SystemExit(f"{case}: expected one 'harmonics =' line, found {len(found)}")
+    lines[found[0]] = f"harmonics = {harmonics}"
+    head, name = os.path.split(case)
+    copy = os.path.join(head, f".h{harmonics}_{name}")
+    with open(os.path.join(ROOT, copy), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    return copy
+
+
+def solve(case, out, harmonics=None):
+    case = with_harmonics(case, harmonics)
     exe = os.path.join(ROOT, "target", "release", "nlrom")
     cmd = [exe] if os.path.exists(exe) else ["cargo", "run", "--release", "-q", "--"]
     cmd += ["solve", case, "-o", out, "--quiet"]
     print("$", " ".join(cmd), flush=True)
     done = subprocess.run(cmd, cwd=ROOT)
+    if harmonics is not None:
+        os.remove(os.path.join(ROOT, case))
     if done.returncode != 0:
         print(f"nlrom solve {case} exited {done.returncode} (the converged points are kept)")
 
@@ -112,7 +135,7 @@ def same_model_as_m1(mode):
     return problems
 
 
-def run_mode(mode, out_dir, skip_solve):
+def run_mode(mode, out_dir, skip_solve, harmonics):
     """Solves (unless `skip_solve`) and loads the variants of `mode`: ({variant: tree},
     {variant: {n0: (f_r, A_r, Q)}})."""
     trees, tables = {}, {}
@@ -122,7 +145,7 @@ def run_mode(mode, out_dir, skip_solve):
             continue
         out = os.path.join(out_dir, f"{mode}_{v}.h5")
         if not skip_solve:
-            solve(case, out)
+            solve(case, out, harmonics)
         if os.path.exists(out):
             trees[v], tables[v] = table_of(out)
     return trees, tables
@@ -194,22 +217,32 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--modes", nargs="+", default=list(MODES),
                         help="modes to run (default: m1 m2), e.g. --modes m2")
+    parser.add_argument("--harmonics", type=int, default=None,
+                        help="solve every case with this many harmonics (default: the cases' H = 1)")
     parser.add_argument("--skip-solve", action="store_true", help="reuse existing result files")
-    parser.add_argument("--out", default=os.path.join(ROOT, "results", "paper"))
-    parser.add_argument("--figures", default=os.path.join(ROOT, "docs", "paper"),
+    parser.add_argument("--out", default=None, help="default: results/paper (results/paper_h<H>)")
+    parser.add_argument("--figures", default=None,
                         help="where the README's copies of the PNGs and comparison.md go "
-                             "(default: docs/paper, committed)")
+                             "(default: docs/paper, committed; docs/paper/h<H> with --harmonics)")
     args = parser.parse_args()
+    harmonics = None if args.harmonics in (None, 1) else args.harmonics
+    suffix = "" if harmonics is None else f"_h{harmonics}"
+    if args.out is None:
+        args.out = os.path.join(ROOT, "results", "paper" + suffix)
+    if args.figures is None:
+        args.figures = os.path.join(ROOT, "docs", "paper", *([f"h{harmonics}"] if harmonics else []))
     os.makedirs(args.out, exist_ok=True)
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    lines = ["# SAMA paper §6.2 on the bundled sector (tools/validation/paper_comparison.py)", ""]
+    title = "# SAMA paper §6.2 on the bundled sector (tools/validation/paper_comparison.py"
+    title += ")" if harmonics is None else f" --harmonics {harmonics}; H = {harmonics})"
+    lines = [title, ""]
     failures = []
     for mode in args.modes:
         failures += same_model_as_m1(mode)
-        trees, tables = run_mode(mode, args.out, args.skip_solve)
+        trees, tables = run_mode(mode, args.out, args.skip_solve, harmonics)
         if "conforming" not in tables:
             print(f"{mode}: no conforming results")
             failures.append(f"{mode}: no conforming results")
@@ -221,7 +254,8 @@ def main():
     text = "\n".join(lines)
     print(text)
     # comparison.md holds every mode; a subset (--modes m2) goes to comparison_m2.md
-    name = "comparison" + ("" if args.modes == list(MODES) else "_" + "_".join(args.modes))
+    name = "comparison" + suffix
+    name += "" if args.modes == list(MODES) else "_" + "_".join(args.modes)
     path = os.path.join(args.out, name + ".md")
     with open(path + ".tmp", "w") as f:
         f.write(text)
