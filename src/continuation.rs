@@ -149,6 +149,9 @@ pub enum PathEnd {
     LeftRange,
     /// The corrector failed at the minimum step; the message says where and why.
     Failed(String),
+    /// The path came back onto itself, going the same way: it runs round a closed loop
+    /// (`LoopWatch`) and would never reach the end.
+    Closed,
 }
 
 /// A traced path: the converged points in path order and how it ended.
@@ -249,6 +252,7 @@ pub fn trace_from<S: ParameterSystem>(
     let mut current = point_from(start, 0.0, tangent[tangent.len() - 1]);
     on_point(&current);
     path.points.push(current.clone());
+    let mut watch = LoopWatch::default();
     while path.points.len() < opts.max_points {
         let y = scaled(&current, &scales);
         let predicted: Vec<f64> = y.iter().zip(&tangent).map(|(y, t)| y + step * t).collect();
@@ -323,6 +327,16 @@ pub fn trace_from<S: ParameterSystem>(
                         min_step,
                         opts,
                     )
+                })
+                .or_else(|| {
+                    full_step(
+                        system,
+                        &current,
+                        (&tangent, orientation),
+                        &scales,
+                        min_step,
+                        opts,
+                    )
                 });
                 let Some(found) = corner else {
                     path.end = PathEnd::Failed(format!(
@@ -363,12 +377,99 @@ pub fn trace_from<S: ParameterSystem>(
         }
         on_point(&next);
         path.points.push(next.clone());
+        if watch.closes(&path.points, &scales) {
+            path.end = PathEnd::Closed;
+            return Ok(path);
+        }
         current = next;
         tangent = rescale(new_tangent.t, &mut scales, norm(&current.x));
         let factor = (opts.target_iterations as f64 / iterations.max(1) as f64).clamp(0.5, 2.0);
         step = (step * factor).clamp(min_step, max_step);
     }
     Ok(path)
+}
+
+/// Detection of a path that runs round a closed loop (Brent's cycle detection, Brent 1980): the
+/// point at index 2^j is kept as a mark; a later step (8 or more points on) whose segment passes
+/// through the mark — within 1e-3 of the segment's length, in the current scales — going the
+/// same way as the mark's own step (cosine > 0.9) closes the loop. The sampled friction law is
+/// piecewise linear, so a path round a loop passes through its earlier points, not merely near
+/// them. It can hold closed loops of solutions; a path that reaches one through a branch point
+/// of the law circles it for ever.
+#[derive(Default)]
+struct LoopWatch {
+    /// Index of the mark in the path, its unknowns, parameter and last step (unscaled).
+    mark: Option<(usize, Vec<f64>, f64, Vec<f64>)>,
+}
+
+impl LoopWatch {
+    /// Whether the last point of `points` closes a loop; moves the mark to it at powers of two.
+    fn closes<T>(&mut self, points: &[PathPoint<T>], s: &Scales) -> bool {
+        let n = points.len();
+        if n < 2 {
+            return false;
+        }
+        let (prev, last) = (&points[n - 2], &points[n - 1]);
+        let step: Vec<f64> = raw_difference(last, prev);
+        let closed = self
+            .mark
+            .as_ref()
+            .is_some_and(|(at, x, lambda, mark_step)| {
+                // the mark relative to the point before the last, in the scaled variables
+                let from_prev: Vec<f64> = x
+                    .iter()
+                    .zip(&prev.x)
+                    .map(|(a, b)| a - b)
+                    .chain(std::iter::once(lambda - prev.parameter))
+                    .collect();
+                let (m, d) = (
+                    scaled_difference(&from_prev, s),
+                    scaled_difference(&step, s),
+                );
+                let length = norm(&d);
+                if n - 1 < at + 8 || length == 0.0 {
+                    return false;
+                }
+                // the mark's distance from the last step's segment
+                let along = (dot(&m, &d) / (length * length)).clamp(0.0, 1.0);
+                let off: Vec<f64> = m.iter().zip(&d).map(|(m, d)| m - along * d).collect();
+                let same_way = dot(&scaled_unit(&step, s), &scaled_unit(mark_step, s)) > 0.9;
+                norm(&off) <= 1e-3 * length && same_way
+            });
+        if n.is_power_of_two() {
+            self.mark = Some((n - 1, last.x.clone(), last.parameter, step));
+        }
+        closed
+    }
+}
+
+/// (x_a − x_b, λ_a − λ_b) of two path points.
+fn raw_difference<T>(a: &PathPoint<T>, b: &PathPoint<T>) -> Vec<f64> {
+    a.x.iter()
+        .zip(&b.x)
+        .map(|(p, q)| p - q)
+        .chain(std::iter::once(a.parameter - b.parameter))
+        .collect()
+}
+
+/// The unit vector of an unscaled difference in the scaled variables (zero for a zero one).
+fn scaled_unit(d: &[f64], s: &Scales) -> Vec<f64> {
+    let v = scaled_difference(d, s);
+    let len = norm(&v);
+    if len > 0.0 {
+        v.iter().map(|a| a / len).collect()
+    } else {
+        v
+    }
+}
+
+/// (Δx / x_s, Δλ / λ_s).
+fn scaled_difference(d: &[f64], s: &Scales) -> Vec<f64> {
+    let last = d.len() - 1;
+    d.iter()
+        .enumerate()
+        .map(|(i, v)| if i == last { v / s.lambda } else { v / s.x })
+        .collect()
 }
 
 /// The point at exactly λ_end, by Newton at fixed λ from the linear interpolation between the
@@ -928,6 +1029,119 @@ fn corner_step<S: ParameterSystem>(
         }
     }
     None
+}
+
+/// The full-step corrector: the next point when the damped corrector, the kink step and the
+/// corner step all fail at the minimum step h_min.
+///
+/// On a piecewise-linear residual (the sampled friction law) Newton's full step from one facet
+/// lands on the facet that holds the root, and the next step finds it exactly; a step damped
+/// until the residual decreases stays on the first facet, where the residual's local minimum is
+/// not a root, and stalls there. Here every step is taken in full and the residual may grow on
+/// the way, as in Newton's method for piecewise-differentiable equations (Kojima & Shindo
+/// 1986), which on a piecewise-linear map ends as soon as an iterate's facet holds the root
+/// (its linearisation is the map there).
+///
+/// From the prediction y_p = y_c + h t (h = 1, 4, 16 h_min) the point is sought on three
+/// hyperplanes through y_p: the one orthogonal to the tangent t (pseudo-arc length); the one of
+/// fixed parameter λ = λ_p (the frequency response's own parametrisation, whose Jacobian ∂r/∂x
+/// alone is regular off folds); and the one of fixed u_k = (y_p)_k, k the unknown along which
+/// t moves most (regular at a fold in λ; Rheinboldt 1986). A point is accepted within 4h of
+/// the current one and ahead of it: on the first hyperplane its tangent, oriented as the path,
+/// points away from it; on the others it lies ahead in the fixed coordinate, and its tangent is
+/// directed onwards in that coordinate ([`onward_along`]). Returns as [`corner_step`].
+#[allow(clippy::type_complexity)]
+fn full_step<S: ParameterSystem>(
+    system: &S,
+    current: &PathPoint<S::State>,
+    (tangent, orientation): (&[f64], f64),
+    s: &Scales,
+    min_step: f64,
+    opts: &ContinuationOptions,
+) -> Option<(NewtonSolution<S::State>, Tangent, f64)> {
+    let undamped = ContinuationOptions {
+        newton: NewtonOptions {
+            max_halvings: 0,
+            ..opts.newton
+        },
+        ..opts.clone()
+    };
+    let y_c = scaled(current, s);
+    let last = y_c.len() - 1;
+    // the coordinate along which the path moves most (an unknown at a fold in λ)
+    let k = (0..last)
+        .max_by(|&a, &b| tangent[a].abs().total_cmp(&tangent[b].abs()))
+        .unwrap_or(last);
+    let axis = |i: usize| -> Vec<f64> {
+        let mut e = vec![0.0; y_c.len()];
+        e[i] = 1.0;
+        e
+    };
+    let (fixed_parameter, fixed_unknown) = (axis(last), axis(k));
+    for h in [1.0, 4.0, 16.0].map(|f| f * min_step) {
+        let predicted: Vec<f64> = y_c.iter().zip(tangent).map(|(y, t)| y + h * t).collect();
+        for (border, along) in [
+            (tangent, None),
+            (fixed_parameter.as_slice(), Some(last)),
+            (fixed_unknown.as_slice(), Some(k)),
+        ] {
+            let res = correct_on(
+                system,
+                &current.state,
+                &predicted,
+                border,
+                tangent,
+                s,
+                &undamped,
+                None,
+            );
+            let Ok((sol, Some(t))) = res else {
+                continue;
+            };
+            let mut y: Vec<f64> = sol.x.iter().map(|x| x / s.x).collect();
+            y.push(sol.parameter / s.lambda);
+            let moved: Vec<f64> = y.iter().zip(&y_c).map(|(a, b)| a - b).collect();
+            let length = norm(&moved);
+            if length > 4.0 * h {
+                continue;
+            }
+            match along {
+                None => {
+                    let t = t.oriented(orientation);
+                    if dot(&moved, &t.t) > 0.0 {
+                        return Some((sol, t, length));
+                    }
+                }
+                Some(i) => {
+                    if let Some(t) = onward_along(t, tangent, moved[i], i) {
+                        return Some((sol, t, length));
+                    }
+                }
+            }
+        }
+    }
+    None
+}
+
+/// The tangent at a point found with the coordinate i of y = (u, μ) fixed ahead of the current
+/// point ([`full_step`]), directed as the path goes on: with its component i of the sign of the
+/// incoming tangent's, when both are clearly non-zero (> 1e-6) and the point lies ahead in
+/// that coordinate (`moved_i` of that sign too). The orientation σ is then the one of that
+/// direction: at a corner where several facets of the sampled law meet, σ can change (a
+/// branch point of the piecewise-linear path), while the coordinate keeps its sense of travel.
+/// `None` where the point is not ahead or the path turns in that coordinate.
+fn onward_along(t: Tangent, incoming: &[f64], moved_i: f64, i: usize) -> Option<Tangent> {
+    let sense = incoming[i];
+    let ahead = moved_i * sense > 0.0;
+    let clear = sense.abs() > 1e-6 && t.t[i].abs() > 1e-6;
+    if !(ahead && clear) {
+        return None;
+    }
+    Some(if t.t[i] * sense > 0.0 {
+        t
+    } else {
+        t.reversed()
+    })
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {

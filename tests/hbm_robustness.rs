@@ -204,3 +204,102 @@ fn a_resonance_of_high_amplitude_is_passed_once() {
     );
     assert!(frf.points.len() < 1000, "{} points", frf.points.len());
 }
+
+/// Corpus case `i` (N_t ≤ 256) with the AFT, whose label contains `kind`: traced to its end,
+/// and every point's residual evaluated anew from its harmonics and frequency (with the force
+/// memory of the point before it) within the tolerance.
+fn aft_case_to_its_end(i: u64, kind: &str) -> (corpus::Case, Frf<Vec<f64>>) {
+    use nlrom::hbm::system::FrequencyPath;
+    use nlrom::nonlinear::ParameterSystem;
+    let case = corpus::evaluated(corpus::case(i, 256), corpus::Evaluation::Aft);
+    assert!(case.label.contains(kind), "{}", case.label);
+    let frf = corpus::trace(&case).expect("a path");
+    assert_eq!(frf.end, PathEnd::ReachedEnd, "{}", case.label);
+    let system =
+        nlrom::hbm::HbmSystem::new(case.layout, &case.model, &case.force).expect("valid system");
+    let fp = FrequencyPath {
+        system: &system,
+        level: 1.0,
+    };
+    let mut memory = fp.initial_state();
+    let mut r = vec![0.0; fp.dim()];
+    for p in &frf.points {
+        fp.evaluate_residual(&p.q, p.omega, &memory, &mut r)
+            .expect("an evaluation");
+        let scaled = r.iter().map(|v| v * v).sum::<f64>().sqrt() / fp.residual_scale();
+        assert!(
+            p.residual <= TOLERANCE && scaled <= TOLERANCE,
+            "{}: residual {} (evaluated anew {scaled:.2e}) at {}",
+            case.label,
+            p.residual,
+            p.omega
+        );
+        memory = p.state.clone();
+    }
+    (case, frf)
+}
+
+/// Where the damped corrector stalls on the sampled law, Newton with full steps goes on.
+/// Corpus case #188 (a chain of 4 masses, H = 3, N_t = 8) stopped at 0.82430 rad/s: just
+/// beyond, the path turns by more than 90° in the unknowns at a corner of the sampled law while
+/// ω keeps rising, and every damped iteration stalled on the facet before the corner. The path
+/// now reaches 2.5 rad/s without a jump, every point within the tolerance (evaluated anew).
+#[test]
+fn a_corrector_stalled_at_a_corner_goes_on_with_full_newton_steps() {
+    let (case, frf) = aft_case_to_its_end(188, "chain n=4 H=3 Nt=8");
+    assert!(frf.jumps.is_empty(), "{}: {:?}", case.label, frf.jumps);
+    assert!(
+        frf.points.iter().any(|p| p.omega > 0.8244),
+        "{}: the former stop is passed",
+        case.label
+    );
+}
+
+/// A response that grows without bound at a nearly fixed frequency is jumped over. Corpus case
+/// #211 (a separating pair, H = 1, N_t = 4: the sampled law with 4 samples is not dissipative)
+/// runs up at 1.2986 rad/s to ‖Q‖ ≈ 1.7e8 under forces of order 1, where the residual's
+/// round-off reaches the tolerance. The sweep jumps there (cause `Unbounded`); the points of the
+/// run-up whose residual double precision cannot verify are not kept: the point before the
+/// jump has ‖Q‖ > 1e6 and a round-off noise below a quarter of the tolerance, every kept point
+/// is within the tolerance evaluated anew, and the curve reaches its end.
+#[test]
+fn a_response_that_grows_without_bound_is_jumped_over() {
+    use nlrom::hbm::frf::{residual_noise, JumpCause};
+    let (case, frf) = aft_case_to_its_end(211, "pair H=1 Nt=4");
+    let jump = frf
+        .jumps
+        .iter()
+        .find(|j| j.cause == JumpCause::Unbounded)
+        .unwrap_or_else(|| panic!("{}: no unbounded jump in {:?}", case.label, frf.jumps));
+    let before = &frf.points[jump.point - 1];
+    let amplitude = before.q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    assert!(amplitude > 1e6, "{}: ‖Q‖ = {amplitude:.3e}", case.label);
+    let system =
+        nlrom::hbm::HbmSystem::new(case.layout, &case.model, &case.force).expect("valid system");
+    let fp = nlrom::hbm::system::FrequencyPath {
+        system: &system,
+        level: 1.0,
+    };
+    let noise = residual_noise(&fp, &before.q, before.omega, &before.state).expect("an evaluation");
+    assert!(
+        noise < 0.25 * TOLERANCE,
+        "{}: noise {noise:.2e}",
+        case.label
+    );
+}
+
+/// A path that comes back onto itself is jumped over. Corpus case #120 (a chain of 2 masses,
+/// H = 5, N_t = 12) reaches a closed loop of solutions of the sampled law, which it ran round
+/// until its 20 000 points were spent. The loop is detected (cause `Closed`), the sweep jumps
+/// beyond the path's furthest frequency, and the curve reaches its end.
+#[test]
+fn a_path_round_a_closed_loop_is_jumped_over() {
+    use nlrom::hbm::frf::JumpCause;
+    let (case, frf) = aft_case_to_its_end(120, "chain n=2 H=5 Nt=12");
+    assert!(
+        frf.jumps.iter().any(|j| j.cause == JumpCause::Closed),
+        "{}: {:?}",
+        case.label,
+        frf.jumps
+    );
+}

@@ -601,8 +601,9 @@ fn trace_curve<F: HarmonicForce>(
             }
             for jump in &traced.jumps {
                 rep.warn(&format!(
-                    "{label}: the path turned back at {:.6} Hz and left the range; the sweep jumped to {:.6} Hz and went on from there (point {})",
+                    "{label}: at {:.6} Hz {}; the sweep jumped to {:.6} Hz and went on from there (point {})",
                     jump.from / (2.0 * PI),
+                    jump.cause.describe(),
                     jump.to / (2.0 * PI),
                     jump.point
                 ));
@@ -663,6 +664,7 @@ fn trace_curve<F: HarmonicForce>(
                     ("max_points", None)
                 }
                 PathEnd::LeftRange => ("left_range", None),
+                PathEnd::Closed => ("closed", None),
                 PathEnd::Failed(msg) => {
                     let last = frf.points.last().map_or(opts.start, |p| p.omega);
                     (

@@ -48,33 +48,65 @@ pub struct Frf<S> {
     pub jumps: Vec<Jump>,
 }
 
-/// A jump of a frequency sweep: the path turned back at ω = `from` (its furthest point towards
-/// the end of the range) and left the range; the response goes on from the solution at ω = `to`
-/// = `from` ± the initial step, on another branch, as a stepped-sine sweep jumps at a fold.
+/// A jump of a frequency sweep: the path could not be followed towards the end of the range
+/// beyond ω = `from` (its furthest point towards the end), for the [`JumpCause`]; the response
+/// goes on from the solution at ω = `to` = `from` ± the initial step, on another branch, as a
+/// stepped-sine sweep jumps at a fold.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Jump {
     /// Index in [`Frf::points`] of the first point after the jump (the solution at `to`).
     pub point: usize,
-    /// The frequency the path turned back at (rad/s).
+    /// The furthest frequency of the path before the jump (rad/s).
     pub from: f64,
     /// The frequency the sweep went on from (rad/s).
     pub to: f64,
+    /// Why the path before the jump ended.
+    pub cause: JumpCause,
+}
+
+/// Why a sweep jumped ([`Jump`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JumpCause {
+    /// The path turned back and left the range on the start side.
+    TurnedBack,
+    /// The path came back onto itself and ran round a closed loop ([`PathEnd::Closed`]).
+    Closed,
+    /// The response grew without bound at a nearly fixed frequency, until the residual's
+    /// round-off in double precision reached the Newton tolerance ([`residual_noise`]): the
+    /// branch has no continuation that can be verified.
+    Unbounded,
+}
+
+impl JumpCause {
+    /// What happened, for the log.
+    pub fn describe(self) -> &'static str {
+        match self {
+            JumpCause::TurnedBack => "the path turned back and left the range",
+            JumpCause::Closed => "the path came back onto itself (a closed loop of solutions)",
+            JumpCause::Unbounded => {
+                "the response grew without bound (the residual's round-off reached the tolerance)"
+            }
+        }
+    }
 }
 
 /// Traces the frequency response of `system` (excitation level 1) and recovers the outputs.
 /// `on_point` sees every converged point (for progress). The start point is solved by Newton
 /// from the linear solution or, when that does not converge, reached by continuation in the
 /// excitation level at the start frequency (from λ₀ = ½, ¼, … 2⁻¹⁰ × the force up to 1; the
-/// λ₀ used is [`Frf::start_level`]).
+/// λ₀ used is [`Frf::start_level`]); when that fails too, by Newton from the linear solution
+/// with every step taken in full.
 ///
-/// A path that turns back and leaves its range on the start side ([`PathEnd::LeftRange`]: the
-/// branch through the start folds back, e.g. a superharmonic resonance met at the start) does
-/// not cover the range. The sweep then jumps, at most [`ContinuationOptions::max_jumps`] times
-/// ([`Jump`]): from the path's furthest point towards the end, ω_f, to ω_f ± the initial step,
-/// where the solution is found by Newton from the furthest point's or, failing that, as a start
-/// point (linear solution, then level continuation); the path goes on from there, and its
-/// points follow the earlier ones. A jump that finds no solution ends the response as
-/// `LeftRange`.
+/// A path that cannot be followed to the end of the range does not cover it: it turns back and
+/// leaves the range on the start side ([`PathEnd::LeftRange`]: the branch through the start
+/// folds back, e.g. a superharmonic resonance met at the start), comes back onto itself
+/// ([`PathEnd::Closed`]), or grows without bound until its residual's round-off reaches the
+/// tolerance ([`JumpCause::Unbounded`]). The sweep then jumps, at most
+/// [`ContinuationOptions::max_jumps`] times ([`Jump`]): from the path's furthest point towards
+/// the end, ω_f, to ω_f ± the initial step (or two or four steps where no solution is found
+/// there), where the solution is found by Newton from the furthest point's or, failing that,
+/// as a start point; the path goes on from there, and its points follow the earlier ones. A
+/// jump that finds no solution ends the response as the path before it ended.
 pub fn frequency_response<F: HarmonicForce>(
     system: &HbmSystem<'_, F>,
     opts: &ContinuationOptions,
@@ -96,8 +128,14 @@ pub fn frequency_response<F: HarmonicForce>(
     };
     let mut path = trace_from(&fp, &frequency_opts, start, on_point)?;
     let mut jumps = Vec::new();
-    while path.end == PathEnd::LeftRange && jumps.len() < opts.max_jumps {
-        let Some((jump, segment)) = jump_on(&fp, &frequency_opts, &path, on_point)? else {
+    while jumps.len() < opts.max_jumps {
+        let Some(cause) = jump_cause(&fp, &path, opts.newton.tolerance)? else {
+            break;
+        };
+        if cause == JumpCause::Unbounded {
+            drop_unverifiable(&fp, &mut path, opts.newton.tolerance)?;
+        }
+        let Some((jump, segment)) = jump_on(&fp, &frequency_opts, &path, cause, on_point)? else {
             break;
         };
         jumps.push(jump);
@@ -147,6 +185,7 @@ fn jump_on<F: HarmonicForce>(
     fp: &FrequencyPath<'_, '_, F>,
     opts: &ContinuationOptions,
     path: &Path<F::State>,
+    cause: JumpCause,
     on_point: &mut dyn FnMut(&PathPoint<F::State>),
 ) -> Result<Option<(Jump, Path<F::State>)>> {
     let direction = (opts.end - opts.start).signum();
@@ -159,30 +198,124 @@ fn jump_on<F: HarmonicForce>(
         return Ok(None);
     };
     let from = furthest.parameter;
-    let to = from + direction * opts.initial_step;
     let remaining = opts.max_points.saturating_sub(path.points.len());
-    if direction * (opts.end - to) <= 0.0 || remaining == 0 {
+    if remaining == 0 {
         return Ok(None);
     }
-    let segment_opts = ContinuationOptions {
-        start: to,
-        max_points: remaining,
-        ..opts.clone()
-    };
-    let landed = match solve_fixed(fp, &furthest.x, to, &furthest.state, &opts.newton) {
-        Ok(sol) => sol,
-        Err(_) => match start_point(fp, &segment_opts) {
-            Ok((sol, _)) => sol,
-            Err(_) => return Ok(None),
-        },
+    // one initial step on; where no solution is found there, two and four steps
+    let mut found = None;
+    for steps in [1.0, 2.0, 4.0] {
+        let to = from + direction * steps * opts.initial_step;
+        if direction * (opts.end - to) <= 0.0 {
+            break;
+        }
+        let segment_opts = ContinuationOptions {
+            start: to,
+            max_points: remaining,
+            ..opts.clone()
+        };
+        let landed = match solve_fixed(fp, &furthest.x, to, &furthest.state, &opts.newton) {
+            Ok(sol) => Some(sol),
+            Err(_) => start_point(fp, &segment_opts).ok().map(|(sol, _)| sol),
+        };
+        if let Some(sol) = landed {
+            found = Some((to, segment_opts, sol));
+            break;
+        }
+    }
+    let Some((to, segment_opts, landed)) = found else {
+        return Ok(None);
     };
     let segment = trace_from(fp, &segment_opts, landed, on_point)?;
     let jump = Jump {
         point: path.points.len(),
         from,
         to,
+        cause,
     };
     Ok(Some((jump, segment)))
+}
+
+/// Whether the sweep jumps at the end of `path`, and why: a path that left its range on the
+/// start side ([`JumpCause::TurnedBack`]), or one that stopped (failed or ran out of points)
+/// where the residual's round-off noise at its last point is at least a quarter of the Newton
+/// `tolerance` ([`JumpCause::Unbounded`]).
+fn jump_cause<F: HarmonicForce>(
+    fp: &FrequencyPath<'_, '_, F>,
+    path: &Path<F::State>,
+    tolerance: f64,
+) -> Result<Option<JumpCause>> {
+    match path.end {
+        PathEnd::LeftRange => Ok(Some(JumpCause::TurnedBack)),
+        PathEnd::Closed => Ok(Some(JumpCause::Closed)),
+        PathEnd::ReachedEnd => Ok(None),
+        PathEnd::MaxPoints | PathEnd::Failed(_) => {
+            let Some(last) = path.points.last() else {
+                return Ok(None);
+            };
+            let noise = residual_noise(fp, &last.x, last.parameter, &last.state)?;
+            Ok((noise >= 0.25 * tolerance).then_some(JumpCause::Unbounded))
+        }
+    }
+}
+
+/// Removes from the end of a path that grew without bound the points that double precision
+/// cannot verify: those whose residual noise ([`residual_noise`]) is at least a quarter of the
+/// Newton `tolerance` (their accepted residual is within the noise). The first point is kept.
+fn drop_unverifiable<F: HarmonicForce>(
+    fp: &FrequencyPath<'_, '_, F>,
+    path: &mut Path<F::State>,
+    tolerance: f64,
+) -> Result<()> {
+    while path.points.len() > 1 {
+        let Some(last) = path.points.last() else {
+            break;
+        };
+        if residual_noise(fp, &last.x, last.parameter, &last.state)? < 0.25 * tolerance {
+            break;
+        }
+        path.points.pop();
+    }
+    Ok(())
+}
+
+/// The round-off noise of the scaled residual ‖r‖₂ / r_s at the harmonics `x` and frequency
+/// `omega` (rad/s), from the force memory `state`: the larger change of it
+/// when every unknown is moved by 4 units of round-off (relative 4ε, ε = 2.2e-16), with two
+/// patterns of signs. r = D̄(ω) Q − F̄_e + F̄_nl(Q) sums terms that cancel; where ‖Q‖ has grown
+/// so large that ε ‖D̄‖ ‖Q‖ reaches the tolerance times the force level, no point can be
+/// verified to the tolerance any more, whatever the corrector does.
+pub fn residual_noise<F: HarmonicForce>(
+    fp: &FrequencyPath<'_, '_, F>,
+    x: &[f64],
+    omega: f64,
+    state: &F::State,
+) -> Result<f64> {
+    let n = fp.dim();
+    let scale = fp.residual_scale();
+    let mut base = vec![0.0; n];
+    fp.evaluate_residual(x, omega, state, &mut base)?;
+    let mut noise: f64 = 0.0;
+    for pattern in [1usize, 2] {
+        let moved: Vec<f64> = x
+            .iter()
+            .enumerate()
+            .map(|(i, x)| {
+                let sign = if (i / pattern) % 2 == 0 { 1.0 } else { -1.0 };
+                x * (1.0 + sign * 4.0 * f64::EPSILON)
+            })
+            .collect();
+        let mut r = vec![0.0; n];
+        fp.evaluate_residual(&moved, omega, state, &mut r)?;
+        let change: f64 = r
+            .iter()
+            .zip(&base)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+            .sqrt();
+        noise = noise.max(change / scale);
+    }
+    Ok(noise)
 }
 
 /// The points of a traced response at chosen frequencies ([`land_at`]).
@@ -311,6 +444,7 @@ fn start_point<F: HarmonicForce>(
         Ok(sol) => return Ok((sol, None)),
         Err(f) => f.message,
     };
+
     let fail = |why: String, from: f64| {
         Error::Compute(format!(
             "Newton from the linear solution failed ({direct}), and so did the continuation in the \
@@ -320,15 +454,27 @@ fn start_point<F: HarmonicForce>(
     };
     let level = level_continuation(fp.system, opts);
     let from = level.from;
-    let (x, state) = level.end.map_err(|why| fail(why, from))?;
-    let sol = solve_fixed(fp, &x, opts.start, &state, &opts.newton).map_err(|f| {
-        let why = format!(
-            "Newton at the full force from the end of that path: {}",
-            f.message
-        );
-        fail(why, from)
-    })?;
-    Ok((sol, Some(from)))
+    let why = match level.end {
+        Ok((x, state)) => match solve_fixed(fp, &x, opts.start, &state, &opts.newton) {
+            Ok(sol) => return Ok((sol, Some(from))),
+            Err(f) => format!(
+                "Newton at the full force from the end of that path: {}",
+                f.message
+            ),
+        },
+        Err(why) => why,
+    };
+    // last, Newton from the linear solution with every step taken in full (as the
+    // continuation's full-step corrector): on the piecewise-linear sampled law a damped step
+    // can stall on a facet that does not hold the root
+    let undamped = NewtonOptions {
+        max_halvings: 0,
+        max_iterations: 2 * opts.newton.max_iterations,
+        ..opts.newton
+    };
+    solve_fixed(fp, &x0, opts.start, &fp.initial_state(), &undamped)
+        .map(|sol| (sol, None))
+        .map_err(|_| fail(why, from))
 }
 
 /// How the continuation in the excitation level of [`start_point`] ended.
@@ -386,6 +532,10 @@ fn level_continuation<F: HarmonicForce>(
                 }
                 PathEnd::MaxPoints => {
                     why = format!("the level path took more than {} points", lopts.max_points);
+                    break;
+                }
+                PathEnd::Closed => {
+                    why = "the level path came back onto itself (a closed loop)".into();
                     break;
                 }
             },
