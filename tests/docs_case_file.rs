@@ -310,11 +310,13 @@ fn case_keys(
     }
 }
 
-/// A sweep path in the documentation's spelling: `contact.<name>.p`, `element.<index>.p`.
+/// A sweep path in the documentation's spelling: `contact.<name>.p`, `element.<index>.p`,
+/// `strip.<name>.p`.
 fn sweep_pattern(path: &str) -> String {
     let parts: Vec<&str> = path.split('.').collect();
     match parts.as_slice() {
         ["contact", _, p] => format!("contact.<name>.{p}"),
+        ["strip", _, p] => format!("strip.<name>.{p}"),
         ["element", i, p] if i.parse::<usize>().is_ok() => format!("element.<index>.{p}"),
         _ => path.to_string(),
     }
