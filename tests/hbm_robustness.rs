@@ -41,12 +41,12 @@ fn run_first(cases: u64, evaluation: corpus::Evaluation) -> (usize, Vec<String>)
 }
 
 /// The first 32 cases of the corpus with the AFT. The goal is that every curve reaches its end;
-/// today 26 of these 32 do (measured; `docs/validation.md` lists the classes that still stop:
+/// today 28 of these 32 do (measured; `docs/validation.md` lists the classes that still stop:
 /// N_t close to 2H + 2, tangential–normal pairs that separate at low frequency, gross slip with
 /// tiny steps). The test keeps that floor and checks every accepted point against the tolerance.
 #[test]
 fn generated_curves_reach_their_end_within_the_tolerance() {
-    const REACHED_AT_LEAST: usize = 26;
+    const REACHED_AT_LEAST: usize = 28;
     let (reached, stopped) = run_first(32, corpus::Evaluation::Aft);
     assert!(
         reached >= REACHED_AT_LEAST,
