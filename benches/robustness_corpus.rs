@@ -4,17 +4,29 @@
 //! force, damping 0.1–5 %, steps 0.005–0.08 rad/s). Prints one line per case and the success
 //! rate, points, Newton iterations and time per curve.
 //!
-//! `cargo bench --bench robustness_corpus` (add `-- N` for the first N cases, `-- analytic` to
-//! evaluate every friction element by the exact continuous-time cycle instead of the AFT).
+//! `cargo bench --bench robustness_corpus` (add `-- N` for the first N cases, `-- only=3,17,188`
+//! for chosen cases, `-- analytic` to evaluate every friction element by the exact
+//! continuous-time cycle instead of the AFT).
 
 #[path = "../tests/corpus/mod.rs"]
 mod corpus;
 
+/// The case numbers to run: `only=a,b,…` when given, else the first N (a plain number; 320).
+fn case_numbers() -> Vec<u64> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if let Some(list) = args.iter().find_map(|a| a.strip_prefix("only=")) {
+        return list
+            .split(',')
+            .filter_map(|c| c.trim().parse().ok())
+            .collect();
+    }
+    let count: u64 = args.iter().find_map(|a| a.parse().ok()).unwrap_or(320);
+    (0..count).collect()
+}
+
 fn main() {
-    let count: u64 = std::env::args()
-        .skip(1)
-        .find_map(|a| a.parse().ok())
-        .unwrap_or(320);
+    let numbers = case_numbers();
+    let count = numbers.len() as u64;
     let evaluation = if std::env::args().any(|a| a == "analytic") {
         corpus::Evaluation::Analytic
     } else {
@@ -23,7 +35,7 @@ fn main() {
     let (mut reached, mut points, mut iterations, mut seconds) = (0, 0, 0, 0.0);
     let mut jumped = 0;
     let mut worst: f64 = 0.0;
-    for i in 0..count {
+    for i in numbers {
         let case = corpus::evaluated(corpus::case(i, 4096), evaluation);
         let o = corpus::run(&case);
         println!(
