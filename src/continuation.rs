@@ -398,8 +398,8 @@ pub fn trace_from<S: ParameterSystem>(
 /// of the law circles it for ever.
 #[derive(Default)]
 struct LoopWatch {
-    /// Index of the mark in the path, its unknowns, parameter and last step (unscaled).
-    mark: Option<(usize, Vec<f64>, f64, Vec<f64>)>,
+    /// The mark: its index in the path, its (x, λ) and its last step (unscaled).
+    mark: Option<(usize, Vec<f64>, Vec<f64>)>,
 }
 
 impl LoopWatch {
@@ -409,47 +409,43 @@ impl LoopWatch {
         if n < 2 {
             return false;
         }
-        let (prev, last) = (&points[n - 2], &points[n - 1]);
-        let step: Vec<f64> = raw_difference(last, prev);
-        let closed = self
-            .mark
-            .as_ref()
-            .is_some_and(|(at, x, lambda, mark_step)| {
-                // the mark relative to the point before the last, in the scaled variables
-                let from_prev: Vec<f64> = x
-                    .iter()
-                    .zip(&prev.x)
-                    .map(|(a, b)| a - b)
-                    .chain(std::iter::once(lambda - prev.parameter))
-                    .collect();
-                let (m, d) = (
-                    scaled_difference(&from_prev, s),
-                    scaled_difference(&step, s),
-                );
-                let length = norm(&d);
-                if n - 1 < at + 8 || length == 0.0 {
-                    return false;
-                }
-                // the mark's distance from the last step's segment
-                let along = (dot(&m, &d) / (length * length)).clamp(0.0, 1.0);
-                let off: Vec<f64> = m.iter().zip(&d).map(|(m, d)| m - along * d).collect();
-                let same_way = dot(&scaled_unit(&step, s), &scaled_unit(mark_step, s)) > 0.9;
-                norm(&off) <= 1e-3 * length && same_way
-            });
+        let (prev, last) = (unscaled(&points[n - 2]), unscaled(&points[n - 1]));
+        let step = difference(&last, &prev);
+        let closed = self.mark.as_ref().is_some_and(|(at, mark, mark_step)| {
+            // the mark relative to the point before the last, and the last step, scaled
+            let (m, d) = (
+                scaled_difference(&difference(mark, &prev), s),
+                scaled_difference(&step, s),
+            );
+            let length = norm(&d);
+            if n - 1 < at + 8 || length == 0.0 {
+                return false;
+            }
+            // the mark's distance from the last step's segment
+            let along = (dot(&m, &d) / (length * length)).clamp(0.0, 1.0);
+            let off: Vec<f64> = m.iter().zip(&d).map(|(m, d)| m - along * d).collect();
+            let unit: Vec<f64> = d.iter().map(|v| v / length).collect();
+            let same_way = dot(&unit, &scaled_unit(mark_step, s)) > 0.9;
+            norm(&off) <= 1e-3 * length && same_way
+        });
         if n.is_power_of_two() {
-            self.mark = Some((n - 1, last.x.clone(), last.parameter, step));
+            self.mark = Some((n - 1, last, step));
         }
         closed
     }
 }
 
-/// (x_a − x_b, λ_a − λ_b) of two path points.
-fn raw_difference<T>(a: &PathPoint<T>, b: &PathPoint<T>) -> Vec<f64> {
-    a.x.iter()
-        .zip(&b.x)
-        .map(|(p, q)| p - q)
-        .chain(std::iter::once(a.parameter - b.parameter))
+/// (x, λ) of a path point, unscaled.
+fn unscaled<T>(p: &PathPoint<T>) -> Vec<f64> {
+    p.x.iter()
+        .copied()
+        .chain(std::iter::once(p.parameter))
         .collect()
+}
+
+/// a − b.
+fn difference(a: &[f64], b: &[f64]) -> Vec<f64> {
+    a.iter().zip(b).map(|(p, q)| p - q).collect()
 }
 
 /// The unit vector of an unscaled difference in the scaled variables (zero for a zero one).
@@ -1085,7 +1081,7 @@ fn full_step<S: ParameterSystem>(
             (fixed_parameter.as_slice(), Some(last)),
             (fixed_unknown.as_slice(), Some(k)),
         ] {
-            let res = correct_on(
+            let Ok((sol, Some(t))) = correct_on(
                 system,
                 &current.state,
                 &predicted,
@@ -1094,8 +1090,7 @@ fn full_step<S: ParameterSystem>(
                 s,
                 &undamped,
                 None,
-            );
-            let Ok((sol, Some(t))) = res else {
+            ) else {
                 continue;
             };
             let mut y: Vec<f64> = sol.x.iter().map(|x| x / s.x).collect();

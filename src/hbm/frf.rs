@@ -133,6 +133,10 @@ pub fn frequency_response<F: HarmonicForce>(
             break;
         };
         if cause == JumpCause::Unbounded {
+            // the last point's noise was measured by jump_cause
+            if path.points.len() > 1 {
+                path.points.pop();
+            }
             drop_unverifiable(&fp, &mut path, opts.newton.tolerance)?;
         }
         let Some((jump, segment)) = jump_on(&fp, &frequency_opts, &path, cause, on_point)? else {
@@ -237,7 +241,8 @@ fn jump_on<F: HarmonicForce>(
 }
 
 /// Whether the sweep jumps at the end of `path`, and why: a path that left its range on the
-/// start side ([`JumpCause::TurnedBack`]), or one that stopped (failed or ran out of points)
+/// start side ([`JumpCause::TurnedBack`]), one that closed on itself ([`JumpCause::Closed`]),
+/// or one that stopped (failed or ran out of points)
 /// where the residual's round-off noise at its last point is at least a quarter of the Newton
 /// `tolerance` ([`JumpCause::Unbounded`]).
 fn jump_cause<F: HarmonicForce>(
@@ -444,7 +449,6 @@ fn start_point<F: HarmonicForce>(
         Ok(sol) => return Ok((sol, None)),
         Err(f) => f.message,
     };
-
     let fail = |why: String, from: f64| {
         Error::Compute(format!(
             "Newton from the linear solution failed ({direct}), and so did the continuation in the \
