@@ -41,6 +41,7 @@
 //! over the phases of the derivative of the phase's force (the moving limits cancel); the stick
 //! phase after a re-contact depends on the re-contact instant, which enters through the slider.
 
+use std::cell::Cell;
 use std::f64::consts::{FRAC_1_PI, PI, TAU};
 
 use crate::contact::law::ContactParams;
@@ -236,12 +237,14 @@ fn angle(c: f64, s: f64) -> f64 {
 }
 
 /// A sinusoid X1 cos τ − X2 sin τ = A cos(τ + α) with its amplitude A = |X| and phase α.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Wave {
     x1: f64,
     x2: f64,
     amp: f64,
-    alpha: f64,
+    /// α (rad), computed on first use ([`Wave::phase`]; NaN before): a cycle without slip or
+    /// separation never needs it.
+    alpha: Cell<f64>,
     /// cos α and sin α (1 and 0 for A = 0).
     ca: f64,
     sa: f64,
@@ -249,15 +252,6 @@ struct Wave {
 
 impl Wave {
     fn new(x1: f64, x2: f64) -> Self {
-        let mut w = Wave::unphased(x1, x2);
-        if w.amp > 0.0 {
-            w.alpha = angle(w.ca, w.sa);
-        }
-        w
-    }
-
-    /// The sinusoid without its phase α (set to 0; `ca`, `sa` are set).
-    fn unphased(x1: f64, x2: f64) -> Self {
         let amp = (x1 * x1 + x2 * x2).sqrt();
         let (ca, sa) = if amp > 0.0 {
             (x1 / amp, x2 / amp)
@@ -268,10 +262,22 @@ impl Wave {
             x1,
             x2,
             amp,
-            alpha: 0.0,
+            alpha: Cell::new(f64::NAN),
             ca,
             sa,
         }
+    }
+
+    /// The phase α (rad, in [−π, π]; 0 for A = 0).
+    #[inline]
+    fn phase(&self) -> f64 {
+        let a = self.alpha.get();
+        if !a.is_nan() {
+            return a;
+        }
+        let a = angle(self.ca, self.sa);
+        self.alpha.set(a);
+        a
     }
 
     /// The value at τ.
@@ -289,7 +295,7 @@ impl Wave {
     /// The maximum, τ = −α.
     fn maximum(&self) -> At {
         At {
-            t: -self.alpha,
+            t: -self.phase(),
             s: -self.sa,
             c: self.ca,
         }
@@ -298,7 +304,7 @@ impl Wave {
     /// The minimum, τ = π − α.
     fn minimum(&self) -> At {
         At {
-            t: PI - self.alpha,
+            t: PI - self.phase(),
             s: self.sa,
             c: -self.ca,
         }
@@ -320,7 +326,7 @@ impl Wave {
     fn rising(&self, arc: Arc) -> At {
         let (r, b, sb) = (arc.r, arc.b, arc.sb);
         At {
-            t: -self.alpha - b,
+            t: -self.phase() - b,
             s: -(self.sa * r + self.ca * sb),
             c: self.ca * r - self.sa * sb,
         }
@@ -331,7 +337,7 @@ impl Wave {
     fn falling(&self, arc: Arc) -> At {
         let (r, b, sb) = (arc.r, arc.b, arc.sb);
         At {
-            t: b - self.alpha,
+            t: b - self.phase(),
             s: sb * self.ca - r * self.sa,
             c: r * self.ca + sb * self.sa,
         }
@@ -376,7 +382,7 @@ enum Window {
 }
 
 /// The harmonic motion of a point and its law's parameters, with the derived sinusoids.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Motion {
     p: ContactParams,
     u: [f64; 3],
@@ -424,8 +430,8 @@ impl Motion {
         let n0e = p.n0 + kn * v[0];
         let g = Wave::new(kt * u[1] - mu * kn * v[1], kt * u[2] - mu * kn * v[2]);
         let h = Wave::new(kt * u[1] + mu * kn * v[1], kt * u[2] + mu * kn * v[2]);
-        // The phase of k_n v1 only when the point separates.
-        let mut nv = Wave::unphased(kn * v[1], kn * v[2]);
+        // The phase of k_n v1 is computed only when the point separates.
+        let nv = Wave::new(kn * v[1], kn * v[2]);
         let vamp = nv.amp;
         let window = if n0e + vamp <= 1e-14 * (n0e.abs() + vamp) {
             Window::Never
@@ -433,7 +439,6 @@ impl Motion {
             // n = n0e + |V| cos(τ + α_V) < 0 where cos(τ + α_V) < ρ.
             let rho = -n0e / vamp;
             if rho > -1.0 + TANGENCY {
-                nv.alpha = angle(nv.ca, nv.sa);
                 // Re-contact (n rising through 0) at τ + α_V = −arccos ρ; contact length
                 // 2 arccos ρ.
                 let arc = Arc::new(rho);
