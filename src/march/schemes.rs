@@ -174,6 +174,8 @@ pub struct Workspace {
     unused_r: Vec<f64>,
     /// y₀ = A_stick⁻¹ (b + r_ref) of the premultiplied step ([`Premultiplied`]).
     y0: Vec<f64>,
+    /// [q*; v*] (2n) of the premultiplied step.
+    qv: Vec<f64>,
     /// A_stick⁻¹ g_t of one element (scratch of the reference sliders' update).
     column: Vec<f64>,
     /// Whether `b` holds the Newmark right-hand side of the current step.
@@ -207,6 +209,7 @@ impl Workspace {
             scratch: Vec::with_capacity(4 * ne),
             unused_r: v(),
             y0: v(),
+            qv: Vec::with_capacity(2 * n),
             column: v(),
             b_ready: false,
             lu: dense::ScratchLu::new(n),
@@ -265,14 +268,16 @@ impl StepFactor {
 /// r_ref(t) = Σ_e [k_t (w̄_e − p_t,e(t)) g_t,e − (n0 + k_n p_n,e(t)) g_n,e],
 /// a step's y₀ = A_stick⁻¹ (f(τ_{n+1}) + P q* − C v* + r_ref) =
 /// (A_stick⁻¹P) q* − (A_stick⁻¹C) v* + ξ₀ + ξ_c cos ωτ + ξ_s sin ωτ + y_w:
-/// two n × n products and O(n). A state's q₁ then follows from y₀ by the low-rank correction of
+/// one pass over [A_stick⁻¹P, −A_stick⁻¹C] (n × 2n, the entries of two n × n products) and O(n),
+/// instead of P q*, C v* and a product with A_stick⁻¹. A state's q₁ then follows from y₀ by the low-rank correction of
 /// its non-stick elements alone ([`LowRank::solve_shifted`]), since r_c(states) − r_ref lies in
 /// the span of their columns U when w̄_e = w_e for every element in stick.
 struct Premultiplied {
-    /// A_stick⁻¹ P (row-major n × n).
-    hp: Vec<f64>,
-    /// A_stick⁻¹ C (row-major n × n).
-    hc: Vec<f64>,
+    /// [A_stick⁻¹P, −A_stick⁻¹C] (row-major n × 2n: row i of both in one run of 2n entries,
+    /// read in one pass against [q*; v*]), or A_stick⁻¹P alone (n × n) without damping.
+    h: Vec<f64>,
+    /// Entries of a row of `h`: 2n, or n without damping.
+    width: usize,
     /// ξ₀, ξ_c, ξ_s: A_stick⁻¹ of the mean, cosine and sine parts of f_e + f_d + r_ref − Σ k_t w̄ g_t
     /// (m).
     xi: [Vec<f64>; 3],
@@ -308,9 +313,22 @@ impl Premultiplied {
             }
             dense::matvec(stick, &b, x);
         }
+        let hp = dense::product(stick, inertia, n);
+        let damped = sys.damping.iter().any(|&c| c != 0.0);
+        let (h, width) = if damped {
+            let hc = dense::product(stick, &sys.damping, n);
+            let mut h = Vec::with_capacity(2 * n * n);
+            for (p, c) in hp.chunks_exact(n).zip(hc.chunks_exact(n)) {
+                h.extend_from_slice(p);
+                h.extend(c.iter().map(|x| -x));
+            }
+            (h, 2 * n)
+        } else {
+            (hp, n)
+        };
         Premultiplied {
-            hp: dense::matmul(stick, inertia, n),
-            hc: dense::matmul(stick, &sys.damping, n),
+            h,
+            width,
             xi,
             yw: vec![0.0; n],
             wbar: vec![0.0; sys.elements.len()],
@@ -318,23 +336,30 @@ impl Premultiplied {
     }
 
     /// y₀ = (A_stick⁻¹P) q* − (A_stick⁻¹C) v* + ξ₀ + ξ_c c + ξ_s s + y_w into `ws.y0` (predictors
-    /// in `ws.qs`, `ws.vs`; (c, s) the phase of τ_{n+1}), row by row over both matrices.
+    /// in `ws.qs`, `ws.vs`, copied into `ws.qv` = [q*; v*]; (c, s) the phase of τ_{n+1}): one dot
+    /// of 2n entries per row.
     fn base(&self, phase: (f64, f64), ws: &mut Workspace) {
         let n = ws.qs.len();
         let (c, s) = phase;
         let [x0, xc, xs] = &self.xi;
-        for (i, y) in ws.y0.iter_mut().enumerate() {
-            let mut v = dense::dot(&self.hp[i * n..(i + 1) * n], &ws.qs);
-            if ws.damped {
-                v -= dense::dot(&self.hc[i * n..(i + 1) * n], &ws.vs);
-            }
-            *y = v + x0[i] + c * xc[i] + s * xs[i] + self.yw[i];
+        ws.qv.clear();
+        ws.qv.extend_from_slice(&ws.qs);
+        if self.width > n {
+            ws.qv.extend_from_slice(&ws.vs);
+        }
+        for ((i, y), row) in ws
+            .y0
+            .iter_mut()
+            .enumerate()
+            .zip(self.h.chunks_exact(self.width))
+        {
+            *y = dense::dot(row, &ws.qv) + x0[i] + c * xc[i] + s * xs[i] + self.yw[i];
         }
     }
 
     /// Memory held (f64 entries).
     fn len(&self) -> usize {
-        self.hp.len() + self.hc.len() + 4 * self.yw.len() + self.wbar.len()
+        self.h.len() + 4 * self.yw.len() + self.wbar.len()
     }
 }
 
@@ -431,10 +456,10 @@ impl Cache {
     }
 
     /// Lets the piecewise-linear Newmark steps of `sys` use the premultiplied all-stick operators
-    /// (two n × n products per step instead of three; [`Premultiplied`]) when every contact
-    /// state's step matrix is a low-rank change of the all-stick one (fewer columns than DOF,
-    /// [`lowrank::max_rank`]); returns whether they do. For a fixed step: each step size holds
-    /// two more n × n matrices.
+    /// (one pass over A_stick⁻¹P and A_stick⁻¹C per step instead of P q*, C v* and a product by
+    /// A_stick⁻¹ per state iteration) when every contact state's step matrix is a low-rank change
+    /// of the all-stick one (fewer columns than DOF, [`lowrank::max_rank`]); returns whether they
+    /// do. For a fixed step: each step size holds two more n × n matrices.
     pub fn use_premultiplied(&mut self, sys: &MarchSystem, on: bool) -> bool {
         self.premultiply = on && lowrank::max_rank(&sys.elements) < sys.n;
         self.premultiply
@@ -1158,7 +1183,7 @@ fn ensure_newmark_rhs(ctx: &StepContext, dynamic: bool, cache: &mut Cache, ws: &
 /// needs no step limit), and the iterations of both are counted. With the premultiplied all-stick
 /// operators ([`Cache::use_premultiplied`], not for a one-off step) the linear step is solved from
 /// y₀ = A_stick⁻¹ (b + r_ref) (two n × n products) by the low-rank correction of the non-stick
-/// elements ([`Premultiplied`]) instead of b = f + P q* − C v* and a product with A_stick⁻¹:
+/// elements instead of b = f + P q* − C v* and a product with A_stick⁻¹:
 /// the same q₁ to rounding. Writes the step's end into `out`; returns the iterations.
 pub fn piecewise_linear_step(
     ctx: &StepContext,
