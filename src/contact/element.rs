@@ -788,12 +788,46 @@ fn add_outer(
 /// One period of the law from the slider state `w` (updated to the end state); fills the force,
 /// slider and regime samples of the workspace.
 fn march_period(element: &LocalElement, ws: &mut Workspace, w: &mut [f64; 2]) {
+    if element.variant == Variant::OneD && element.tangential == 1 && !element.normal && w[1] == 0.0
+    {
+        march_period_one_direction(&element.params, ws, w);
+    } else {
+        march_period_samples(element, ws, w);
+    }
+}
+
+/// [`march_period`] by the general law, sample by sample.
+fn march_period_samples(element: &LocalElement, ws: &mut Workspace, w: &mut [f64; 2]) {
     let p = &element.params;
     for j in 0..ws.n_t {
         let s = law::sample(element.variant, p, [ws.u[0][j], ws.u[1][j]], ws.v[j], *w);
         ws.store(j, &s);
         *w = s.slider;
     }
+}
+
+/// [`march_period`] of a 1-D element with one tangential direction and no normal kinematics
+/// (a Jenkins element: v ≡ 0, so f_n = max(n0, 0) and the slip limit μ f_n are constant) whose
+/// second slider is at rest: the second direction (u2 ≡ 0, w2 = 0) has the trial force 0 and
+/// sticks with f2 = 0 (or separates, f_n = 0) all period, so only the first is marched. The
+/// samples are those of the general loop, value for value.
+fn march_period_one_direction(p: &ContactParams, ws: &mut Workspace, w: &mut [f64; 2]) {
+    let fnormal = law::normal_force(p, 0.0);
+    let separated = fnormal <= 0.0;
+    let limit = p.mu * fnormal;
+    let (_, _, idle) = law::tangential_1d(p.kt, limit, separated, 0.0, 0.0);
+    let mut slider = w[0];
+    for j in 0..ws.n_t {
+        let (f, next, regime) = law::tangential_1d(p.kt, limit, separated, ws.u[0][j], slider);
+        ws.ft[0][j] = f;
+        ws.w[0][j] = next;
+        ws.regime[j] = [regime, idle];
+        slider = next;
+    }
+    ws.ft[1].fill(0.0);
+    ws.w[1].fill(0.0);
+    ws.fnormal.fill(fnormal);
+    w[0] = slider;
 }
 
 /// [`march_period`] with the law's tangents, also collecting the slider-memory and fixed-w
@@ -1453,5 +1487,49 @@ mod tests {
             }
         }
         assert_eq!(compared, 3 * 3 * 5 * 2);
+    }
+
+    /// The march of a Jenkins element (one direction, no normal kinematics) gives the samples
+    /// of the general law value for value: stuck all period, partial and gross slip, n0 = 0
+    /// (no limit) and n0 < 0 (separated all period), from rest and from a displaced slider,
+    /// over three periods.
+    #[test]
+    fn one_direction_march_equals_the_general_law() {
+        let mut seed = 11;
+        let h = 7;
+        let aft = Aft::new(HarmonicLayout::new(h, 1024).unwrap()).unwrap();
+        let mut fast = Workspace::new(&aft);
+        let mut general = Workspace::new(&aft);
+        let mut marched = 0;
+        for n0 in [1.0, 0.0, -1.0] {
+            let el = LocalElement {
+                params: ContactParams::new(20.0, 0.0, 1.0, n0, "test").unwrap(),
+                variant: Variant::OneD,
+                tangential: 1,
+                normal: false,
+            };
+            for amp in [0.01, 0.12, 1.0] {
+                let x = input(&mut seed, h, 1, [amp, 0.0, 0.0]);
+                for start in [0.0, 0.03] {
+                    let mut w = [[start, 0.0]; 2];
+                    for ws in [&mut fast, &mut general] {
+                        aft.to_time(&x, &mut ws.u[0], &mut ws.aft_scratch);
+                        ws.u[1].fill(0.0);
+                        ws.v.fill(0.0);
+                    }
+                    for _ in 0..3 {
+                        march_period_one_direction(&el.params, &mut fast, &mut w[0]);
+                        march_period_samples(&el, &mut general, &mut w[1]);
+                        assert_eq!(w[0], w[1], "n0={n0} amp={amp} start={start}");
+                        assert_eq!(fast.ft, general.ft);
+                        assert_eq!(fast.w, general.w);
+                        assert_eq!(fast.fnormal, general.fnormal);
+                        assert_eq!(fast.regime, general.regime);
+                        marched += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(marched, 3 * 3 * 2 * 3);
     }
 }
