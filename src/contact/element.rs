@@ -202,6 +202,12 @@ impl Workspace {
         }
     }
 
+    /// Whether the buffers were made for the layout of `aft` (the same N_t and 2H + 1).
+    pub fn fits(&self, aft: &Aft) -> bool {
+        let layout = aft.layout();
+        self.n_t == layout.time_samples && self.m == layout.coefficients()
+    }
+
     /// The local Jacobian buffer of an analytic evaluation, `rows` × `cols` (row-major), zeroed.
     pub(crate) fn analytic_jacobian(&mut self, rows: usize, cols: usize) -> &mut [f64] {
         self.jacobian.clear();
@@ -458,6 +464,7 @@ fn march_from(
         converged: false,
     };
     let mut differentiated = false;
+    let mut first_differentiated = false;
     while marching.periods < MAX_PERIODS {
         w_start = w;
         // With a Jacobian of the 2-D law the first period also carries the derivative terms:
@@ -468,9 +475,13 @@ fn march_from(
             && !(ws.samples_path && element.variant == Variant::OneD);
         if differentiated {
             march_period_differentiated(element, aft, ws, &mut w);
+        } else if marching.periods > 0 && !first_differentiated {
+            // the previous period's samples, of the same motion, are stored
+            march_period_again(element, ws, &mut w);
         } else {
             march_period(element, ws, &mut w);
         }
+        first_differentiated |= differentiated;
         marching.periods += 1;
         if (w[0] - w_start[0]).abs() <= tol && (w[1] - w_start[1]).abs() <= tol {
             marching.converged = true;
@@ -794,6 +805,45 @@ fn march_period(element: &LocalElement, ws: &mut Workspace, w: &mut [f64; 2]) {
     } else {
         march_period_samples(element, ws, w);
     }
+}
+
+/// [`march_period`] of a period that follows a period of the same motion marched by
+/// [`march_period`] (its samples stored): a Jenkins element as in [`march_period`] goes by
+/// [`march_period_one_direction_again`], any other by [`march_period`].
+fn march_period_again(element: &LocalElement, ws: &mut Workspace, w: &mut [f64; 2]) {
+    if element.variant == Variant::OneD && element.tangential == 1 && !element.normal && w[1] == 0.0
+    {
+        march_period_one_direction_again(&element.params, ws, w);
+    } else {
+        march_period_samples(element, ws, w);
+    }
+}
+
+/// [`march_period_one_direction`] of a period after one of the same motion whose samples are
+/// stored: the samples are marched until the first that slips or separates; where it does so as
+/// the stored sample did (same regime and force), the slider after it is the stored one (a slip
+/// sets it to u − f/k_t, a separation to u, from the motion alone), and so is every later
+/// sample: the stored samples from there on are this period's, and it ends where the previous
+/// one ended. Otherwise the march goes on to the end of the period. The samples are those of
+/// [`march_period_one_direction`], value for value.
+fn march_period_one_direction_again(p: &ContactParams, ws: &mut Workspace, w: &mut [f64; 2]) {
+    let fnormal = law::normal_force(p, 0.0);
+    let separated = fnormal <= 0.0;
+    let limit = p.mu * fnormal;
+    let (_, _, idle) = law::tangential_1d(p.kt, limit, separated, 0.0, 0.0);
+    let mut slider = w[0];
+    for j in 0..ws.n_t {
+        let (f, next, regime) = law::tangential_1d(p.kt, limit, separated, ws.u[0][j], slider);
+        if regime != Regime::Stick && regime == ws.regime[j][0] && f == ws.ft[0][j] {
+            w[0] = ws.w[0][ws.n_t - 1];
+            return;
+        }
+        ws.ft[0][j] = f;
+        ws.w[0][j] = next;
+        ws.regime[j] = [regime, idle];
+        slider = next;
+    }
+    w[0] = slider;
 }
 
 /// [`march_period`] by the general law, sample by sample.
@@ -1489,16 +1539,18 @@ mod tests {
         assert_eq!(compared, 3 * 3 * 5 * 2);
     }
 
-    /// The march of a Jenkins element (one direction, no normal kinematics) gives the samples
-    /// of the general law value for value: stuck all period, partial and gross slip, n0 = 0
-    /// (no limit) and n0 < 0 (separated all period), from rest and from a displaced slider,
-    /// over three periods.
+    /// The march of a Jenkins element (one direction, no normal kinematics), whole or after a
+    /// stored period ([`march_period_one_direction_again`]), gives the samples of the general
+    /// law value for value: stuck all period, partial and gross slip, n0 = 0 (no limit) and
+    /// n0 < 0 (separated all period), from rest and from a displaced slider, over three
+    /// periods.
     #[test]
     fn one_direction_march_equals_the_general_law() {
         let mut seed = 11;
         let h = 7;
         let aft = Aft::new(HarmonicLayout::new(h, 1024).unwrap()).unwrap();
         let mut fast = Workspace::new(&aft);
+        let mut again = Workspace::new(&aft);
         let mut general = Workspace::new(&aft);
         let mut marched = 0;
         for n0 in [1.0, 0.0, -1.0] {
@@ -1511,20 +1563,28 @@ mod tests {
             for amp in [0.01, 0.12, 1.0] {
                 let x = input(&mut seed, h, 1, [amp, 0.0, 0.0]);
                 for start in [0.0, 0.03] {
-                    let mut w = [[start, 0.0]; 2];
-                    for ws in [&mut fast, &mut general] {
+                    let mut w = [[start, 0.0]; 3];
+                    for ws in [&mut fast, &mut again, &mut general] {
                         aft.to_time(&x, &mut ws.u[0], &mut ws.aft_scratch);
                         ws.u[1].fill(0.0);
                         ws.v.fill(0.0);
                     }
-                    for _ in 0..3 {
+                    for period in 0..3 {
                         march_period_one_direction(&el.params, &mut fast, &mut w[0]);
-                        march_period_samples(&el, &mut general, &mut w[1]);
-                        assert_eq!(w[0], w[1], "n0={n0} amp={amp} start={start}");
-                        assert_eq!(fast.ft, general.ft);
-                        assert_eq!(fast.w, general.w);
-                        assert_eq!(fast.fnormal, general.fnormal);
-                        assert_eq!(fast.regime, general.regime);
+                        if period == 0 {
+                            march_period(&el, &mut again, &mut w[1]);
+                        } else {
+                            march_period_again(&el, &mut again, &mut w[1]);
+                        }
+                        march_period_samples(&el, &mut general, &mut w[2]);
+                        for (k, ws) in [&fast, &again].into_iter().enumerate() {
+                            let what = format!("n0={n0} amp={amp} start={start} period {period}");
+                            assert_eq!(w[k], w[2], "{what}");
+                            assert_eq!(ws.ft, general.ft, "{what}");
+                            assert_eq!(ws.w, general.w, "{what}");
+                            assert_eq!(ws.fnormal, general.fnormal, "{what}");
+                            assert_eq!(ws.regime, general.regime, "{what}");
+                        }
                         marched += 1;
                     }
                 }
