@@ -75,8 +75,10 @@ pub struct ContinuationOptions {
     /// [`PathEnd::LeftRange`] (a frequency response stops at ω ≤ 0, where the harmonic balance
     /// has no physical meaning). `None`: no bound besides the range rule.
     pub floor: Option<f64>,
-    /// Most jumps of a frequency sweep whose path leaves its range on the start side
-    /// (`hbm::frf::frequency_response`); 0: the response ends there. Not used by [`trace`].
+    /// Most jumps of a frequency sweep whose path cannot be followed to the end of its range
+    /// (`hbm::frf::frequency_response`: it left the range on the start side, closed on itself,
+    /// grew without bound or stalled; or no start point was found); 0: the response ends there.
+    /// Not used by [`trace`].
     pub max_jumps: usize,
 }
 
@@ -93,7 +95,7 @@ impl ContinuationOptions {
             target_iterations: 4,
             newton: NewtonOptions::default(),
             floor: None,
-            max_jumps: 4,
+            max_jumps: 16,
         }
     }
 

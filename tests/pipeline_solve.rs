@@ -296,12 +296,13 @@ fn bad_input_exits_2_naming_the_key() {
 }
 
 /// A continuation that cannot converge (at most 2 Newton iterations per point and a fixed step:
-/// the stuck points converge, the first slipping one cannot): exit 1, a message saying where it
-/// stopped, and the file holds the converged points, all below the failure frequency.
+/// the stuck points converge, the first slipping one cannot) and may not jump
+/// (`max_jumps = 0`; with jumps the sweep goes on beyond that corner): exit 1, a message saying
+/// where it stopped, and the file holds the converged points, all below the failure frequency.
 #[test]
 fn a_failed_continuation_exits_1_with_the_converged_points_written() {
     let dir = tempfile::tempdir().unwrap();
-    let settings = "\n[continuation]\nstart_rad_s = 0.2\nend_rad_s = 2.2\nstep_rad_s = 0.02\nmin_step_rad_s = 0.02\nmax_step_rad_s = 0.02\nmax_iterations = 2\n";
+    let settings = "\n[continuation]\nstart_rad_s = 0.2\nend_rad_s = 2.2\nstep_rad_s = 0.02\nmin_step_rad_s = 0.02\nmax_step_rad_s = 0.02\nmax_iterations = 2\nmax_jumps = 0\n";
     let case = chain_case(dir.path(), "diverging", 0.1, 1.0, 3, 64, settings);
     let out = dir.path().join("diverging.h5");
     let o = nlrom(&[

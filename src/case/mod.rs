@@ -810,8 +810,8 @@ pub struct Continuation {
     pub tolerance: Option<f64>,
     /// Most corrector iterations per point (`max_iterations`); `None`: solver default.
     pub max_iterations: Option<usize>,
-    /// Most jumps of the sweep where its path leaves the range on the start side (`max_jumps`);
-    /// `None`: solver default.
+    /// Most jumps of the sweep where its path cannot be followed to the end of the range
+    /// (`max_jumps`); `None`: solver default (16).
     pub max_jumps: Option<usize>,
 }
 

@@ -210,8 +210,10 @@ impl Workspace {
 
     /// The local Jacobian buffer of an analytic evaluation, `rows` × `cols` (row-major), zeroed.
     pub(crate) fn analytic_jacobian(&mut self, rows: usize, cols: usize) -> &mut [f64] {
-        self.jacobian.clear();
+        // Zeroed by one fill (a memset) once the length is set: clearing and resizing writes the
+        // zeros one at a time.
         self.jacobian.resize(rows * cols, 0.0);
+        self.jacobian.fill(0.0);
         self.jacobian_cols = cols;
         &mut self.jacobian
     }

@@ -41,6 +41,7 @@
 //! over the phases of the derivative of the phase's force (the moving limits cancel); the stick
 //! phase after a re-contact depends on the re-contact instant, which enters through the slider.
 
+use std::cell::Cell;
 use std::f64::consts::{FRAC_1_PI, PI, TAU};
 
 use crate::contact::law::ContactParams;
@@ -211,22 +212,23 @@ impl At {
     }
 }
 
-/// atan2(x2, x1) for amp = |(x1, x2)| > 0, by arcsin or arccos on the side where it is well
+/// The angle α (rad, in [−π, π]) with cos α = `c` and sin α = `s` (a unit vector, the
+/// atan2(s, c) of a sinusoid's phase), by arcsin or arccos on the side where it is well
 /// conditioned (|argument| ≤ 1/√2): the same to a few ulp and several times cheaper than atan2.
 #[inline]
-fn angle(x1: f64, x2: f64, amp: f64) -> f64 {
-    if x1.abs() >= x2.abs() {
-        let a = (x2 / amp).asin();
-        if x1 >= 0.0 {
+fn angle(c: f64, s: f64) -> f64 {
+    if c.abs() >= s.abs() {
+        let a = s.asin();
+        if c >= 0.0 {
             a
-        } else if x2 >= 0.0 {
+        } else if s >= 0.0 {
             PI - a
         } else {
             -PI - a
         }
     } else {
-        let a = (x1 / amp).acos();
-        if x2 >= 0.0 {
+        let a = c.acos();
+        if s >= 0.0 {
             a
         } else {
             -a
@@ -235,12 +237,14 @@ fn angle(x1: f64, x2: f64, amp: f64) -> f64 {
 }
 
 /// A sinusoid X1 cos τ − X2 sin τ = A cos(τ + α) with its amplitude A = |X| and phase α.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Wave {
     x1: f64,
     x2: f64,
     amp: f64,
-    alpha: f64,
+    /// α (rad), computed on first use ([`Wave::phase`]; NaN before): a cycle without slip or
+    /// separation never needs it.
+    alpha: Cell<f64>,
     /// cos α and sin α (1 and 0 for A = 0).
     ca: f64,
     sa: f64,
@@ -248,15 +252,6 @@ struct Wave {
 
 impl Wave {
     fn new(x1: f64, x2: f64) -> Self {
-        let mut w = Wave::unphased(x1, x2);
-        if w.amp > 0.0 {
-            w.alpha = angle(x1, x2, w.amp);
-        }
-        w
-    }
-
-    /// The sinusoid without its phase α (set to 0; `ca`, `sa` are set).
-    fn unphased(x1: f64, x2: f64) -> Self {
         let amp = (x1 * x1 + x2 * x2).sqrt();
         let (ca, sa) = if amp > 0.0 {
             (x1 / amp, x2 / amp)
@@ -267,10 +262,22 @@ impl Wave {
             x1,
             x2,
             amp,
-            alpha: 0.0,
+            alpha: Cell::new(f64::NAN),
             ca,
             sa,
         }
+    }
+
+    /// The phase α (rad, in [−π, π]; 0 for A = 0).
+    #[inline]
+    fn phase(&self) -> f64 {
+        let a = self.alpha.get();
+        if !a.is_nan() {
+            return a;
+        }
+        let a = angle(self.ca, self.sa);
+        self.alpha.set(a);
+        a
     }
 
     /// The value at τ.
@@ -288,7 +295,7 @@ impl Wave {
     /// The maximum, τ = −α.
     fn maximum(&self) -> At {
         At {
-            t: -self.alpha,
+            t: -self.phase(),
             s: -self.sa,
             c: self.ca,
         }
@@ -297,7 +304,7 @@ impl Wave {
     /// The minimum, τ = π − α.
     fn minimum(&self) -> At {
         At {
-            t: PI - self.alpha,
+            t: PI - self.phase(),
             s: self.sa,
             c: -self.ca,
         }
@@ -319,7 +326,7 @@ impl Wave {
     fn rising(&self, arc: Arc) -> At {
         let (r, b, sb) = (arc.r, arc.b, arc.sb);
         At {
-            t: -self.alpha - b,
+            t: -self.phase() - b,
             s: -(self.sa * r + self.ca * sb),
             c: self.ca * r - self.sa * sb,
         }
@@ -330,7 +337,7 @@ impl Wave {
     fn falling(&self, arc: Arc) -> At {
         let (r, b, sb) = (arc.r, arc.b, arc.sb);
         At {
-            t: b - self.alpha,
+            t: b - self.phase(),
             s: sb * self.ca - r * self.sa,
             c: r * self.ca + sb * self.sa,
         }
@@ -375,7 +382,7 @@ enum Window {
 }
 
 /// The harmonic motion of a point and its law's parameters, with the derived sinusoids.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Motion {
     p: ContactParams,
     u: [f64; 3],
@@ -423,8 +430,8 @@ impl Motion {
         let n0e = p.n0 + kn * v[0];
         let g = Wave::new(kt * u[1] - mu * kn * v[1], kt * u[2] - mu * kn * v[2]);
         let h = Wave::new(kt * u[1] + mu * kn * v[1], kt * u[2] + mu * kn * v[2]);
-        // The phase of k_n v1 only when the point separates.
-        let mut nv = Wave::unphased(kn * v[1], kn * v[2]);
+        // The phase of k_n v1 is computed only when the point separates.
+        let nv = Wave::new(kn * v[1], kn * v[2]);
         let vamp = nv.amp;
         let window = if n0e + vamp <= 1e-14 * (n0e.abs() + vamp) {
             Window::Never
@@ -432,7 +439,6 @@ impl Motion {
             // n = n0e + |V| cos(τ + α_V) < 0 where cos(τ + α_V) < ρ.
             let rho = -n0e / vamp;
             if rho > -1.0 + TANGENCY {
-                nv.alpha = angle(nv.x1, nv.x2, vamp);
                 // Re-contact (n rising through 0) at τ + α_V = −arccos ρ; contact length
                 // 2 arccos ρ.
                 let arc = Arc::new(rho);
@@ -523,6 +529,7 @@ impl Motion {
 
     /// The next event after τ = `t` in state `kind`: (how far ahead, the state after it, the
     /// event's instant).
+    #[inline(always)]
     fn next_event(&self, t: f64, kind: PhaseKind) -> (f64, PhaseKind, At) {
         let mut best = (f64::INFINITY, kind, At::ZERO);
         #[inline(always)]
@@ -772,24 +779,59 @@ pub struct PointResult {
     pub normal_jacobian: Option<[[f64; 7]; 3]>,
 }
 
-/// M_kl = p_k ∫_a^b e_k e_l dτ over a phase, with the projection weights p = (1/2π, 1/π, 1/π)
-/// of the harmonic coefficients (F0 = (1/2π)∮f, Re F1 = (1/π)∮f cos τ, Im F1 = −(1/π)∮f sin τ).
-#[inline]
-fn projection(ph: &Phase) -> [[f64; 3]; 3] {
-    let d = ph.end - ph.start;
-    let [sa, ca, sb, cb] = ph.sc;
-    let s2 = 2.0 * (sb * cb - sa * ca);
-    let q = FRAC_1_PI;
-    let ic = (sb - sa) * q;
-    let is = (cb - ca) * q; // ∫ −sin
-    let icc = (0.5 * d + 0.25 * s2) * q;
-    let iss = (0.5 * d - 0.25 * s2) * q;
-    let ics = -0.5 * (sb * sb - sa * sa) * q; // ∫ cos·(−sin)
-    [
-        [0.5 * d * q, 0.5 * ic, 0.5 * is],
-        [ic, icc, ics],
-        [is, ics, iss],
-    ]
+/// The integrals of e(τ) ⊗ e(τ) over a phase [a, b] (or a sum of phases) in the five numbers
+/// they depend on linearly, (b − a, Δ sin, Δ cos, Δ(sin cos), Δ sin²) with Δx = x(b) − x(a):
+/// summed over the phases of one kind they give that kind's projection
+/// ([`PhaseIntegrals::projection`]) at the cost of five additions a phase.
+#[derive(Clone, Copy, Debug, Default)]
+struct PhaseIntegrals([f64; 5]);
+
+impl PhaseIntegrals {
+    /// The phase's five numbers, from the sines and cosines of its ends.
+    #[inline]
+    fn of(ph: &Phase) -> Self {
+        let [sa, ca, sb, cb] = ph.sc;
+        PhaseIntegrals([
+            ph.end - ph.start,
+            sb - sa,
+            cb - ca,
+            sb * cb - sa * ca,
+            (sb - sa) * (sb + sa),
+        ])
+    }
+
+    /// self + k·other.
+    #[inline]
+    fn add(&mut self, other: &PhaseIntegrals, k: f64) {
+        for (a, b) in self.0.iter_mut().zip(&other.0) {
+            *a += k * b;
+        }
+    }
+
+    /// The first column M_k0 of [`PhaseIntegrals::projection`]: p_k ∫ e_k dτ.
+    #[inline]
+    fn first_column(&self) -> [f64; 3] {
+        let [d, ds, dc, _, _] = self.0;
+        [0.5 * d * FRAC_1_PI, ds * FRAC_1_PI, dc * FRAC_1_PI]
+    }
+
+    /// M_kl = p_k ∫ e_k e_l dτ with the projection weights p = (1/2π, 1/π, 1/π) of the harmonic
+    /// coefficients (F0 = (1/2π)∮f, Re F1 = (1/π)∮f cos τ, Im F1 = −(1/π)∮f sin τ), e(τ) =
+    /// (1, cos τ, −sin τ): ∫cos² = d/2 + Δ(sin cos)/2, ∫sin² = d/2 − Δ(sin cos)/2,
+    /// ∫cos·(−sin) = −Δ sin²/2.
+    fn projection(&self) -> [[f64; 3]; 3] {
+        let [d, ds, dc, dsc, dss] = self.0;
+        let q = FRAC_1_PI;
+        let (ic, is) = (ds * q, dc * q); // ∫cos, ∫(−sin)
+        let icc = 0.5 * (d + dsc) * q;
+        let iss = 0.5 * (d - dsc) * q;
+        let ics = -0.5 * dss * q;
+        [
+            [0.5 * d * q, 0.5 * ic, 0.5 * is],
+            [ic, icc, ics],
+            [is, ics, iss],
+        ]
+    }
 }
 
 /// The periodic cycle of a point with the harmonic motion u, v (layout (X0, Re X1, Im X1), m)
@@ -930,43 +972,32 @@ fn same_state(a: &PhaseKind, b: &PhaseKind) -> bool {
     }
 }
 
-/// ∂w/∂(U0, U1, U2, V0, V1, V2, n0) of a stick phase's slider; `at` is the instant the slider
-/// was set (the start of the stick phase).
-fn slider_derivative(mo: &Motion, origin: SliderOrigin, at: At) -> [f64; 7] {
+/// ∂w/∂(U0, U1, U2, V0, V1, V2, n0) of a stick phase's slider in the form every origin shares,
+/// ∂w = e·∂U + r (k_n e·∂V + ∂n0), returned as (e, r) (r in m/N); `at` is the instant the slider
+/// was set (the start of the stick phase). A carried slider has e = 0 and r = 0.
+fn slider_derivative(mo: &Motion, origin: SliderOrigin, at: At) -> ([f64; 3], f64) {
     let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
-    let mut d = [0.0; 7];
     // w = u(τ) − s μ (n0 + k_n v(τ))/k_t at a fixed τ (or at an extremum of g or h, where the
     // τ-derivative vanishes).
-    let mut at_limit = |a: At, s: f64| {
-        let e = a.basis();
-        for l in 0..3 {
-            d[l] = e[l];
-            d[3 + l] = -s * mu * kn * e[l] / kt;
-        }
-        d[6] = -s * mu / kt;
-    };
+    let at_limit = |a: At, s: f64| (a.basis(), -s * mu / kt);
     match origin {
-        SliderOrigin::Carried => {}
+        SliderOrigin::Carried => ([0.0; 3], 0.0),
         SliderOrigin::Clamped(s) => at_limit(At::ZERO, s),
         SliderOrigin::AfterPositiveSlip(_) => at_limit(at, 1.0),
         SliderOrigin::AfterNegativeSlip(_) => at_limit(at, -1.0),
         SliderOrigin::Recontact(_) => {
             // w = u(τ_Sp2), with n0 + k_n v(τ_Sp2) = 0:
             // ∂τ = −(∂n0 + k_n e·∂V)/(k_n v1′(τ)), ∂w = e·∂U + u1′(τ) ∂τ.
-            let e = at.basis();
             let de = at.basis_rate();
-            d[..3].copy_from_slice(&e);
             let dv = kn * (mo.v[1] * de[1] + mo.v[2] * de[2]);
-            if dv.abs() > 0.0 {
-                let du = mo.u[1] * de[1] + mo.u[2] * de[2];
-                for l in 0..3 {
-                    d[3 + l] = -du * kn * e[l] / dv;
-                }
-                d[6] = -du / dv;
-            }
+            let r = if dv.abs() > 0.0 {
+                -(mo.u[1] * de[1] + mo.u[2] * de[2]) / dv
+            } else {
+                0.0
+            };
+            (at.basis(), r)
         }
     }
-    d
 }
 
 /// The harmonic results of one point without its cycle.
@@ -982,9 +1013,10 @@ struct Harmonics {
 /// Builds the cycle of `mo` from `slider` ([`build`]; each phase is also handed to `keep`) and
 /// integrates the forces over it.
 ///
-/// On every phase f = c·e(τ) with c constant, so each coefficient is Σ_phases M(phase)·c
-/// ([`projection`]): with M_stick, M_slip (signed by the slip direction) and M_contact the sums
-/// over the phases of each kind, F = k_t (M_stick U − Σ_stick w M_·0) + μ M_slip N and
+/// On every phase f = c·e(τ) with c constant, so each coefficient is Σ_phases M(phase)·c with
+/// M linear in five integrals of the phase ([`PhaseIntegrals`], summed per kind before M is
+/// formed): with M_stick, M_slip (signed by the slip direction) and M_contact the sums over the
+/// phases of each kind, F = k_t (M_stick U − Σ_stick w M_·0) + μ M_slip N and
 /// N = M_contact N with N = (n0e, k_n V1, k_n V2); the derivatives follow from the same sums and
 /// the stick sliders' derivatives ([`slider_derivative`]).
 fn harmonics(
@@ -995,11 +1027,16 @@ fn harmonics(
 ) -> Result<(Harmonics, CycleRegime)> {
     let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
     let u = mo.u;
-    let mut m_stick = [[0.0; 3]; 3];
-    let mut m_slip = [[0.0; 3]; 3];
-    let mut m_contact = [[0.0; 3]; 3];
-    let mut w_col = [0.0; 3];
-    let mut fj = [[0.0; 7]; 3];
+    // The phase integrals summed per kind, Σ w ∫e over the stick phases, and the stick
+    // sliders' term of the friction Jacobian.
+    let mut stick = PhaseIntegrals::default();
+    let mut positive = PhaseIntegrals::default();
+    let mut negative = PhaseIntegrals::default();
+    let mut w_int = [0.0; 3];
+    // Σ_stick M_·0 ⊗ e and Σ_stick r M_·0 ⊗ e of the sliders' derivatives ∂w = e·∂U +
+    // r (k_n e·∂V + ∂n0) ([`slider_derivative`]; e_0 = 1, so the ∂n0 column is w_v's first).
+    let mut w_u = [[0.0; 3]; 3];
+    let mut w_v = [[0.0; 3]; 3];
     // The state at τ ≡ 0 (mod 2π): the first phase that ends at or after it.
     let mut zero = f64::NAN;
     let mut at_zero = None;
@@ -1010,61 +1047,60 @@ fn harmonics(
         if at_zero.is_none() && ph.end >= zero {
             at_zero = Some(ph.kind);
         }
-        let sign = match ph.kind {
-            PhaseKind::Separation => return keep(ph),
-            PhaseKind::Stick { .. } => 0.0,
-            PhaseKind::PositiveSlip => 1.0,
-            PhaseKind::NegativeSlip => -1.0,
-        };
-        let m = projection(ph);
-        for k in 0..3 {
-            for l in 0..3 {
-                m_contact[k][l] += m[k][l];
-            }
-        }
-        if let PhaseKind::Stick { slider: w, origin } = ph.kind {
-            for k in 0..3 {
-                for l in 0..3 {
-                    m_stick[k][l] += m[k][l];
+        match ph.kind {
+            PhaseKind::Separation => {}
+            PhaseKind::PositiveSlip => positive.add(&PhaseIntegrals::of(ph), 1.0),
+            PhaseKind::NegativeSlip => negative.add(&PhaseIntegrals::of(ph), 1.0),
+            PhaseKind::Stick { slider: w, origin } => {
+                let i = PhaseIntegrals::of(ph);
+                stick.add(&i, 1.0);
+                for (a, b) in w_int.iter_mut().zip(&i.0[..3]) {
+                    *a += w * b;
                 }
-                w_col[k] += w * m[k][0];
-            }
-            if jacobian && origin != SliderOrigin::Carried {
-                let at = At {
-                    t: ph.start,
-                    s: ph.sc[0],
-                    c: ph.sc[1],
-                };
-                let dw = slider_derivative(mo, origin, at);
-                for k in 0..3 {
-                    for x in 0..7 {
-                        fj[k][x] -= kt * m[k][0] * dw[x];
+                if jacobian && origin != SliderOrigin::Carried {
+                    let at = At {
+                        t: ph.start,
+                        s: ph.sc[0],
+                        c: ph.sc[1],
+                    };
+                    let (e, r) = slider_derivative(mo, origin, at);
+                    let m0 = i.first_column();
+                    for k in 0..3 {
+                        for l in 0..3 {
+                            let t = m0[k] * e[l];
+                            w_u[k][l] += t;
+                            w_v[k][l] += r * t;
+                        }
                     }
-                }
-            }
-        } else {
-            for k in 0..3 {
-                for l in 0..3 {
-                    m_slip[k][l] += sign * m[k][l];
                 }
             }
         }
         keep(ph)
     })?;
+    let m_stick = stick.projection();
+    let mut slip = positive;
+    slip.add(&negative, -1.0);
+    let m_slip = slip.projection();
+    let mut contact = stick;
+    contact.add(&positive, 1.0);
+    contact.add(&negative, 1.0);
+    let m_contact = contact.projection();
+    let w_col = PhaseIntegrals([w_int[0], w_int[1], w_int[2], 0.0, 0.0]).first_column();
     let cn = [mo.n0e, mo.nv.x1, mo.nv.x2];
     let mut friction = [0.0; 3];
     let mut normal = [0.0; 3];
+    let mut fj = [[0.0; 7]; 3];
     let mut nj = [[0.0; 7]; 3];
     for k in 0..3 {
         friction[k] = kt * (dot(m_stick[k], u) - w_col[k]) + mu * dot(m_slip[k], cn);
         normal[k] = dot(m_contact[k], cn);
         if jacobian {
             for l in 0..3 {
-                fj[k][l] += kt * m_stick[k][l];
-                fj[k][3 + l] += mu * kn * m_slip[k][l];
+                fj[k][l] = kt * (m_stick[k][l] - w_u[k][l]);
+                fj[k][3 + l] = kn * (mu * m_slip[k][l] - kt * w_v[k][l]);
                 nj[k][3 + l] = kn * m_contact[k][l];
             }
-            fj[k][6] += mu * m_slip[k][0];
+            fj[k][6] = mu * m_slip[k][0] - kt * w_v[k][0];
             nj[k][6] = m_contact[k][0];
         }
     }

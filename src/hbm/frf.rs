@@ -75,6 +75,15 @@ pub enum JumpCause {
     /// round-off in double precision reached the Newton tolerance ([`residual_noise`]): the
     /// branch has no continuation that can be verified.
     Unbounded,
+    /// No corrector converged beyond the path's last point, where the residual is well above
+    /// its round-off ([`PathEnd::Failed`]): a corner of the sampled law (a kink of the
+    /// piecewise-linear path) that no step, kink step, corner step or full Newton step passes.
+    Stalled,
+    /// No start point was found at the start frequency (Newton from the linear solution, the
+    /// continuation in the excitation level and Newton with full steps all failed): the sweep
+    /// starts at the first frequency beyond it where one is found ([`Jump::from`] is the start
+    /// frequency, [`Jump::point`] 0).
+    NoStart,
 }
 
 impl JumpCause {
@@ -86,6 +95,10 @@ impl JumpCause {
             JumpCause::Unbounded => {
                 "the response grew without bound (the residual's round-off reached the tolerance)"
             }
+            JumpCause::Stalled => {
+                "no corrector converged beyond the path's last point (a corner of the sampled law)"
+            }
+            JumpCause::NoStart => "no start point was found at the start frequency",
         }
     }
 }
@@ -101,12 +114,15 @@ impl JumpCause {
 /// leaves the range on the start side ([`PathEnd::LeftRange`]: the branch through the start
 /// folds back, e.g. a superharmonic resonance met at the start), comes back onto itself
 /// ([`PathEnd::Closed`]), or grows without bound until its residual's round-off reaches the
-/// tolerance ([`JumpCause::Unbounded`]). The sweep then jumps, at most
+/// tolerance ([`JumpCause::Unbounded`]), or stops where no corrector converges
+/// ([`JumpCause::Stalled`]). The sweep then jumps, at most
 /// [`ContinuationOptions::max_jumps`] times ([`Jump`]): from the path's furthest point towards
-/// the end, ω_f, to ω_f ± the initial step (or two or four steps where no solution is found
-/// there), where the solution is found by Newton from the furthest point's or, failing that,
+/// the end, ω_f, to ω_f ± the initial step (or 2, 4, 8, … steps, within the range, where no
+/// solution is found there), where the solution is found by Newton from the furthest point's or, failing that,
 /// as a start point; the path goes on from there, and its points follow the earlier ones. A
-/// jump that finds no solution ends the response as the path before it ended.
+/// jump that finds no solution ends the response as the path before it ended. Where no start
+/// point is found at all, the sweep starts at the first of ω_start ± 1, 2, 4, … initial steps
+/// where one is found, and that counts as its first jump ([`JumpCause::NoStart`]).
 pub fn frequency_response<F: HarmonicForce>(
     system: &HbmSystem<'_, F>,
     opts: &ContinuationOptions,
@@ -121,13 +137,32 @@ pub fn frequency_response<F: HarmonicForce>(
     }
     opts.validate()?;
     let fp = FrequencyPath { system, level: 1.0 };
-    let (start, start_level) = start_point(&fp, opts)?;
     let frequency_opts = ContinuationOptions {
         floor: Some(0.0),
         ..opts.clone()
     };
-    let mut path = trace_from(&fp, &frequency_opts, start, on_point)?;
     let mut jumps = Vec::new();
+    let (start, start_level, first) = match start_point(&fp, opts) {
+        Ok((start, level)) => (start, level, opts.start),
+        Err(e) if opts.max_jumps == 0 => return Err(e),
+        Err(e) => match later_start(&fp, opts) {
+            Some((start, to)) => {
+                jumps.push(Jump {
+                    point: 0,
+                    from: opts.start,
+                    to,
+                    cause: JumpCause::NoStart,
+                });
+                (start, None, to)
+            }
+            None => return Err(e),
+        },
+    };
+    let first_opts = ContinuationOptions {
+        start: first,
+        ..frequency_opts.clone()
+    };
+    let mut path = trace_from(&fp, &first_opts, start, on_point)?;
     while jumps.len() < opts.max_jumps {
         let Some(cause) = jump_cause(&fp, &path, opts.newton.tolerance)? else {
             break;
@@ -182,6 +217,31 @@ pub fn frequency_response<F: HarmonicForce>(
     })
 }
 
+/// Where [`start_point`] finds no solution at ω_start: the first of ω_start ± 1, 2, 4, 8, …
+/// initial steps (within the range) where it finds one, with that frequency; `None` when there
+/// is none.
+fn later_start<F: HarmonicForce>(
+    fp: &FrequencyPath<'_, '_, F>,
+    opts: &ContinuationOptions,
+) -> Option<(NewtonSolution<F::State>, f64)> {
+    let direction = (opts.end - opts.start).signum();
+    let mut steps = 0.5;
+    loop {
+        steps *= 2.0;
+        let to = opts.start + direction * steps * opts.initial_step;
+        if direction * (opts.end - to) <= 0.0 {
+            return None;
+        }
+        let shifted = ContinuationOptions {
+            start: to,
+            ..opts.clone()
+        };
+        if let Ok((sol, _)) = start_point(fp, &shifted) {
+            return Some((sol, to));
+        }
+    }
+}
+
 /// One jump of [`frequency_response`] after `path` left the range: the jump and the path traced
 /// from where it lands (its points not yet appended), or `None` when no solution was found
 /// there (or the furthest point is already at the end).
@@ -206,9 +266,11 @@ fn jump_on<F: HarmonicForce>(
     if remaining == 0 {
         return Ok(None);
     }
-    // one initial step on; where no solution is found there, two and four steps
+    // one initial step on; where no solution is found there, 2, 4, 8, … steps within the range
     let mut found = None;
-    for steps in [1.0, 2.0, 4.0] {
+    let mut steps = 0.5;
+    loop {
+        steps *= 2.0;
         let to = from + direction * steps * opts.initial_step;
         if direction * (opts.end - to) <= 0.0 {
             break;
@@ -242,9 +304,9 @@ fn jump_on<F: HarmonicForce>(
 
 /// Whether the sweep jumps at the end of `path`, and why: a path that left its range on the
 /// start side ([`JumpCause::TurnedBack`]), one that closed on itself ([`JumpCause::Closed`]),
-/// or one that stopped (failed or ran out of points)
-/// where the residual's round-off noise at its last point is at least a quarter of the Newton
-/// `tolerance` ([`JumpCause::Unbounded`]).
+/// one that stopped (failed or ran out of points) where the residual's round-off noise at its
+/// last point is at least a quarter of the Newton `tolerance` ([`JumpCause::Unbounded`]), and
+/// one that failed where the noise is below that ([`JumpCause::Stalled`]).
 fn jump_cause<F: HarmonicForce>(
     fp: &FrequencyPath<'_, '_, F>,
     path: &Path<F::State>,
@@ -259,7 +321,13 @@ fn jump_cause<F: HarmonicForce>(
                 return Ok(None);
             };
             let noise = residual_noise(fp, &last.x, last.parameter, &last.state)?;
-            Ok((noise >= 0.25 * tolerance).then_some(JumpCause::Unbounded))
+            if noise >= 0.25 * tolerance {
+                Ok(Some(JumpCause::Unbounded))
+            } else if matches!(path.end, PathEnd::Failed(_)) {
+                Ok(Some(JumpCause::Stalled))
+            } else {
+                Ok(None)
+            }
         }
     }
 }
