@@ -23,6 +23,9 @@
 //! (every scheme) or `NLROM_BENCH_SECTOR=piecewise-linear,quasi-static` (standard Newmark and
 //! the schemes named).
 //!
+//! With `NLROM_BENCH_PASS=1` it first times the products of one step in isolation on the sector's
+//! matrices ([`product_passes`]).
+//!
 //! `cargo bench --bench march` — the printed tables are those of docs/performance.md.
 
 use std::path::Path;
@@ -220,9 +223,13 @@ fn timing(model: &Model) -> (Vec<MarchOutcome>, Vec<f64>, Vec<f64>) {
             *b = b.min(wall);
             *c = c.min(cpu);
             if model.progress {
+                let h = &out.history;
+                let not_stick = h.state.iter().filter(|&&c| c != 1).count();
                 eprintln!(
-                    "  round {round}: {} wall {wall:.2} s, CPU {cpu:.2} s, {} factorisations",
-                    s.scheme, out.factorisations
+                    "  round {round}: {} wall {wall:.2} s, CPU {cpu:.2} s, {} factorisations, {:.1} elements out of stick per instant",
+                    s.scheme,
+                    out.factorisations,
+                    not_stick as f64 / h.len() as f64
                 );
             }
             if round == 0 {
@@ -286,7 +293,64 @@ fn table(model: &Model) {
     }
 }
 
+/// The products of one step in isolation, on the sector's matrices at its Newmark step
+/// (`NLROM_BENCH_PASS=1`): the standard step's pass over P = M/(βΔτ²) + γC/(βΔτ) and C (P q*,
+/// C v*) and the piecewise-linear step's pass over A_stick⁻¹P and A_stick⁻¹C, the same number of
+/// entries, each repeated back to back; CPU time per pass, minimum of three.
+fn product_passes() {
+    use nlrom::march::dense::{dot, inverse, product};
+    use nlrom::march::law::ContactState;
+    let model = sector();
+    let sys = &model.system;
+    let n = sys.n;
+    let period = 2.0 * std::f64::consts::PI / model.settings.omega;
+    let t_stick = sys
+        .shortest_period(&sys.stick_states())
+        .expect("full-stick period");
+    let dt = period / (period / (0.15 * t_stick)).ceil();
+    let (cm, cc) = (4.0 / (dt * dt), 2.0 / dt);
+    let p: Vec<f64> = sys
+        .mass
+        .iter()
+        .zip(&sys.damping)
+        .map(|(m, c)| cm * m + cc * c)
+        .collect();
+    let mut a: Vec<f64> = p.iter().zip(&sys.stiffness).map(|(x, k)| x + k).collect();
+    for e in &sys.elements {
+        e.add_stiffness(ContactState::Stick, &mut a, n);
+    }
+    let stick = inverse(&a, n).expect("all-stick step matrix");
+    let (hp, hc) = (product(&stick, &p, n), product(&stick, &sys.damping, n));
+    let q: Vec<f64> = (0..n).map(|i| 1e-6 * (i as f64).cos()).collect();
+    let v: Vec<f64> = (0..n).map(|i| 1e-3 * (i as f64).sin()).collect();
+    let mut y = vec![0.0; n];
+    let passes = 20_000;
+    for (name, x, z) in [
+        ("P, C", &p, &sys.damping),
+        ("A_stick⁻¹P, A_stick⁻¹C", &hp, &hc),
+    ] {
+        let mut best = f64::INFINITY;
+        for _ in 0..3 {
+            let c0 = cpu_seconds();
+            for _ in 0..passes {
+                for (i, yi) in y.iter_mut().enumerate() {
+                    *yi = dot(&x[i * n..(i + 1) * n], &q) - dot(&z[i * n..(i + 1) * n], &v);
+                }
+            }
+            best = best.min((cpu_seconds() - c0) / passes as f64);
+        }
+        eprintln!(
+            "pass over {name} (n = {n}, Δτ = {dt:.4e} s): {:.2} µs CPU ({:.3e})",
+            best * 1e6,
+            y[1]
+        );
+    }
+}
+
 fn bench(c: &mut Criterion) {
+    if std::env::var_os("NLROM_BENCH_PASS").is_some() {
+        product_passes();
+    }
     let (damper, jenkins) = (damper(), jenkins());
     table(&damper);
     table(&jenkins);

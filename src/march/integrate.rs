@@ -309,6 +309,8 @@ impl<'a> Marcher<'a> {
         let start = Instant::now();
         let (n, ne) = (sys.n, sys.elements.len());
         let mut cache = Cache::default();
+        // fixed-step piecewise-linear Newmark: two n × n products per step (schemes::Premultiplied)
+        cache.use_premultiplied(sys, settings.scheme == MarchScheme::PiecewiseLinear);
         let period = settings.period();
         let dt_max = period / settings.steps_per_period as f64;
         let cur = initial_state(sys, settings, &mut cache)?;
@@ -589,6 +591,8 @@ struct StepTable {
     pt: Vec<f64>,
     /// p_n per element, [steps × E].
     pn: Vec<f64>,
+    /// (cos ωt, sin ωt) at each step's end.
+    phase: Vec<(f64, f64)>,
 }
 
 impl StepTable {
@@ -600,6 +604,7 @@ impl StepTable {
         self.force.extend_from_slice(&exc.force);
         self.pt.extend_from_slice(&exc.pt);
         self.pn.extend_from_slice(&exc.pn);
+        self.phase.push(exc.phase);
     }
 
     fn len(&self) -> usize {
@@ -616,6 +621,7 @@ impl StepTable {
                 force: &self.force[j * n..(j + 1) * n],
                 pt: &self.pt[j * ne..(j + 1) * ne],
                 pn: &self.pn[j * ne..(j + 1) * ne],
+                phase: self.phase[j],
             },
         )
     }

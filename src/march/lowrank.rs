@@ -32,7 +32,18 @@ use super::law::ContactState;
 pub type Sparse = Vec<(usize, f64)>;
 
 /// One column pair (u, v) of the change U Vᵀ, with the element it belongs to.
-pub type Column = (usize, Sparse, Sparse);
+#[derive(Clone, Debug)]
+pub struct Column {
+    /// Index of the element.
+    pub owner: usize,
+    /// Whether u is the element's normal direction g_n (a separated element that applies its
+    /// normal force), rather than its tangential one g_t.
+    pub normal: bool,
+    /// u (sparse).
+    pub u: Sparse,
+    /// v (sparse).
+    pub v: Sparse,
+}
 
 /// Pivots that cancel to below this fraction of their terms ask for a full build.
 const PIVOT_TOLERANCE: f64 = 1e-8;
@@ -53,6 +64,8 @@ pub struct LowRank {
     capacitance_inverse: Vec<f64>,
     v: Vec<Sparse>,
     owner: Vec<usize>,
+    /// Per column: whether it is its element's normal direction ([`Column::normal`]).
+    normal: Vec<bool>,
     states: Vec<ContactState>,
     /// Columns removed or added since the last full build, and the most allowed.
     updates: usize,
@@ -84,12 +97,27 @@ fn element_columns(index: usize, e: &Element, s: ContactState, out: &mut impl Fn
         ContactState::Stick => {}
         ContactState::Slip(sign) => {
             let v = combine(-p.kt, gt, sign.value() * p.mu * p.kn, e.normal.as_ref());
-            out((index, gt.weights.clone(), v));
+            out(Column {
+                owner: index,
+                normal: false,
+                u: gt.weights.clone(),
+                v,
+            });
         }
         ContactState::Separated => {
-            out((index, gt.weights.clone(), combine(-p.kt, gt, 0.0, None)));
+            out(Column {
+                owner: index,
+                normal: false,
+                u: gt.weights.clone(),
+                v: combine(-p.kt, gt, 0.0, None),
+            });
             if let Some(gn) = e.normal.as_ref().filter(|_| e.applies_normal) {
-                out((index, gn.weights.clone(), combine(-p.kn, gn, 0.0, None)));
+                out(Column {
+                    owner: index,
+                    normal: true,
+                    u: gn.weights.clone(),
+                    v: combine(-p.kn, gn, 0.0, None),
+                });
             }
         }
     }
@@ -113,6 +141,16 @@ fn element_rank(e: &Element, s: ContactState) -> usize {
     }
 }
 
+/// The largest number of (u, v) columns any combination of the elements' states can have (every
+/// element separated): when it is below the number of DOF, every state's step matrix is a
+/// low-rank change of the all-stick one.
+pub fn max_rank(elements: &[Element]) -> usize {
+    elements
+        .iter()
+        .map(|e| element_rank(e, ContactState::Separated))
+        .sum()
+}
+
 /// The number of (u, v) columns of the states' change from full stick.
 pub fn rank(elements: &[Element], states: &[ContactState]) -> usize {
     elements
@@ -123,7 +161,7 @@ pub fn rank(elements: &[Element], states: &[ContactState]) -> usize {
 }
 
 /// z = A⁻¹ u for sparse u, given A⁻¹ (n × n, row-major).
-fn solve_sparse(inverse: &[f64], n: usize, u: &[(usize, f64)], z: &mut [f64]) {
+pub fn solve_sparse(inverse: &[f64], n: usize, u: &[(usize, f64)], z: &mut [f64]) {
     for (zj, row) in z.iter_mut().zip(inverse.chunks_exact(n)) {
         *zj = u.iter().map(|&(i, w)| w * row[i]).sum();
     }
@@ -146,13 +184,13 @@ impl LowRank {
         let cols = columns(elements, states);
         let r = cols.len();
         let mut z = vec![0.0; n * r];
-        for ((_, u, _), za) in cols.iter().zip(z.chunks_exact_mut(n)) {
-            solve_sparse(stick_inverse, n, u, za);
+        for (col, za) in cols.iter().zip(z.chunks_exact_mut(n)) {
+            solve_sparse(stick_inverse, n, &col.u, za);
         }
         let mut c = vec![0.0; r * r];
-        for (a, (_, _, v)) in cols.iter().enumerate() {
+        for (a, col) in cols.iter().enumerate() {
             for (b, zb) in z.chunks_exact(n).enumerate() {
-                c[a * r + b] = f64::from(u8::from(a == b)) + sparse_dot(v, zb);
+                c[a * r + b] = f64::from(u8::from(a == b)) + sparse_dot(&col.v, zb);
             }
         }
         let capacitance_inverse = dense::inverse(&c, r)?;
@@ -160,8 +198,9 @@ impl LowRank {
             n,
             z,
             capacitance_inverse,
-            owner: cols.iter().map(|c| c.0).collect(),
-            v: cols.into_iter().map(|(_, _, v)| v).collect(),
+            owner: cols.iter().map(|c| c.owner).collect(),
+            normal: cols.iter().map(|c| c.normal).collect(),
+            v: cols.into_iter().map(|c| c.v).collect(),
             states: states.to_vec(),
             updates: 0,
             max_updates: r.max(64),
@@ -242,8 +281,8 @@ impl LowRank {
                 }
             }
             let mut ok = true;
-            element_columns(i, &elements[i], states[i], &mut |(owner, u, v)| {
-                ok = ok && self.add(stick_inverse, owner, &u, v);
+            element_columns(i, &elements[i], states[i], &mut |c| {
+                ok = ok && self.add(stick_inverse, c);
             });
             if !ok {
                 return false;
@@ -296,11 +335,18 @@ impl LowRank {
         self.z.truncate(last * self.n);
         self.v.swap_remove(j);
         self.owner.swap_remove(j);
+        self.normal.swap_remove(j);
         true
     }
 
-    /// Adds the column (u, v) of element `owner` (module documentation).
-    fn add(&mut self, stick_inverse: &[f64], owner: usize, u: &[(usize, f64)], v: Sparse) -> bool {
+    /// Adds the column `col` (module documentation).
+    fn add(&mut self, stick_inverse: &[f64], col: Column) -> bool {
+        let Column {
+            owner,
+            normal,
+            u,
+            v,
+        } = col;
         self.updates += 1;
         if self.updates > self.max_updates {
             return false;
@@ -308,7 +354,7 @@ impl LowRank {
         let (n, r) = (self.n, self.rank());
         self.z.resize((r + 1) * n, 0.0);
         let (old, new) = self.z.split_at_mut(r * n);
-        solve_sparse(stick_inverse, n, u, new);
+        solve_sparse(stick_inverse, n, &u, new);
         self.p.clear();
         self.p.extend(self.v.iter().map(|va| sparse_dot(va, new)));
         self.q.clear();
@@ -351,6 +397,7 @@ impl LowRank {
         b[r * m + r] = 1.0 / s;
         self.v.push(v);
         self.owner.push(owner);
+        self.normal.push(normal);
         true
     }
 
@@ -369,6 +416,32 @@ impl LowRank {
         scratch: &mut Vec<f64>,
     ) {
         dense::matvec(stick_inverse, b, x);
+        self.add_correction(x, scratch, |_, _| 0.0);
+    }
+
+    /// x = A⁻¹ (b + U δ) for A = A_stick + U Vᵀ, given y₀ = A_stick⁻¹ b and the coefficient
+    /// δ_a of each column a from `delta(owner, normal)` (its element and whether it is the
+    /// element's normal column): x = y₀ + Z B (δ − Vᵀ y₀), since A⁻¹ U = Z B (the Woodbury formula,
+    /// Hager 1989). No product with an n × n matrix: O(n r + r²). `scratch` as in
+    /// [`LowRank::solve_with`].
+    pub fn solve_shifted(
+        &self,
+        y0: &[f64],
+        delta: impl Fn(usize, bool) -> f64,
+        x: &mut [f64],
+        scratch: &mut Vec<f64>,
+    ) {
+        x.copy_from_slice(y0);
+        self.add_correction(x, scratch, delta);
+    }
+
+    /// x ← x + Z B (δ − Vᵀ x) with δ_a = `delta(owner, normal)` of column a.
+    fn add_correction(
+        &self,
+        x: &mut [f64],
+        scratch: &mut Vec<f64>,
+        delta: impl Fn(usize, bool) -> f64,
+    ) {
         let r = self.v.len();
         if r == 0 {
             return;
@@ -376,13 +449,13 @@ impl LowRank {
         scratch.clear();
         scratch.resize(2 * r, 0.0);
         let (w, s) = scratch.split_at_mut(r);
-        for (wi, v) in w.iter_mut().zip(&self.v) {
-            *wi = sparse_dot(v, x);
+        for (a, (wi, v)) in w.iter_mut().zip(&self.v).enumerate() {
+            *wi = delta(self.owner[a], self.normal[a]) - sparse_dot(v, x);
         }
         dense::matvec(&self.capacitance_inverse, w, s);
         for (za, &sa) in self.z.chunks_exact(self.n).zip(s.iter()) {
             for (xj, zj) in x.iter_mut().zip(za) {
-                *xj -= sa * zj;
+                *xj += sa * zj;
             }
         }
     }

@@ -20,6 +20,7 @@ use std::collections::HashMap;
 use super::dense;
 use super::law::{ContactState, LawSample};
 use super::lowrank::{self, LowRank};
+use super::signal::Harmonic;
 use super::system::MarchSystem;
 use crate::error::{Error, Result};
 
@@ -81,6 +82,8 @@ pub struct Excitation {
     pub pt: Vec<f64>,
     /// p_n(t) per element (m, 0 without a normal).
     pub pn: Vec<f64>,
+    /// (cos ωt, sin ωt) of the instant.
+    pub phase: (f64, f64),
 }
 
 impl Excitation {
@@ -90,6 +93,7 @@ impl Excitation {
             force: vec![0.0; sys.n],
             pt: vec![0.0; sys.elements.len()],
             pn: vec![0.0; sys.elements.len()],
+            phase: (1.0, 0.0),
         }
     }
 
@@ -98,6 +102,7 @@ impl Excitation {
     /// of ωt for every signal.
     pub fn fill(&mut self, sys: &MarchSystem, omega: f64, t: f64, dynamic: bool) {
         let (s, c) = (omega * t).sin_cos();
+        self.phase = (c, s);
         for (fi, h) in self.force.iter_mut().zip(&sys.force) {
             *fi = h.at_phase(c, s);
         }
@@ -121,6 +126,7 @@ impl Excitation {
             force: &self.force,
             pt: &self.pt,
             pn: &self.pn,
+            phase: self.phase,
         }
     }
 
@@ -142,6 +148,8 @@ pub struct ExcitationAt<'a> {
     pub pt: &'a [f64],
     /// p_n(t) per element (m, 0 without a normal).
     pub pn: &'a [f64],
+    /// (cos ωt, sin ωt) of the instant (the signals' phase, [`Harmonic::at_phase`]).
+    pub phase: (f64, f64),
 }
 
 /// Every intermediate vector of a step (sized once for the model).
@@ -164,6 +172,14 @@ pub struct Workspace {
     seen: Vec<u8>,
     scratch: Vec<f64>,
     unused_r: Vec<f64>,
+    /// y₀ = A_stick⁻¹ (b + r_ref) of the premultiplied step ([`Premultiplied`]).
+    y0: Vec<f64>,
+    /// [q*; v*] (2n) of the premultiplied step.
+    qv: Vec<f64>,
+    /// A_stick⁻¹ g_t of one element (scratch of the reference sliders' update).
+    column: Vec<f64>,
+    /// Whether `b` holds the Newmark right-hand side of the current step.
+    b_ready: bool,
     lu: dense::ScratchLu,
     damped: bool,
 }
@@ -192,6 +208,10 @@ impl Workspace {
             seen: Vec::with_capacity(16 * ne),
             scratch: Vec::with_capacity(4 * ne),
             unused_r: v(),
+            y0: v(),
+            qv: Vec::with_capacity(2 * n),
+            column: v(),
+            b_ready: false,
             lu: dense::ScratchLu::new(n),
             damped: sys.damping.iter().any(|&c| c != 0.0),
         }
@@ -241,6 +261,108 @@ impl StepFactor {
     }
 }
 
+/// The all-stick operators of one step size that make a piecewise-linear Newmark step free of
+/// products with the step matrix's inverse (the step is linear within a contact state, Gastaldi &
+/// Berruti 2018 §4.3, eq. A15). With A_stick = M/(βΔτ²) + γC/(βΔτ) + K + K_c(stick), P =
+/// M/(βΔτ²) + γC/(βΔτ) and the all-stick r_c with reference sliders w̄,
+/// r_ref(t) = Σ_e [k_t (w̄_e − p_t,e(t)) g_t,e − (n0 + k_n p_n,e(t)) g_n,e],
+/// a step's y₀ = A_stick⁻¹ (f(τ_{n+1}) + P q* − C v* + r_ref) =
+/// (A_stick⁻¹P) q* − (A_stick⁻¹C) v* + ξ₀ + ξ_c cos ωτ + ξ_s sin ωτ + y_w:
+/// one pass over [A_stick⁻¹P, −A_stick⁻¹C] (n × 2n, the entries of two n × n products) and O(n),
+/// instead of P q*, C v* and a product with A_stick⁻¹. A state's q₁ then follows from y₀ by the low-rank correction of
+/// its non-stick elements alone ([`LowRank::solve_shifted`]), since r_c(states) − r_ref lies in
+/// the span of their columns U when w̄_e = w_e for every element in stick.
+struct Premultiplied {
+    /// [A_stick⁻¹P, −A_stick⁻¹C] (row-major n × 2n: row i of both in one run of 2n entries,
+    /// read in one pass against [q*; v*]), or A_stick⁻¹P alone (n × n) without damping.
+    h: Vec<f64>,
+    /// Entries of a row of `h`: 2n, or n without damping.
+    width: usize,
+    /// ξ₀, ξ_c, ξ_s: A_stick⁻¹ of the mean, cosine and sine parts of f_e + f_d + r_ref − Σ k_t w̄ g_t
+    /// (m).
+    xi: [Vec<f64>; 3],
+    /// y_w = A_stick⁻¹ Σ_e k_t w̄_e g_t,e (m).
+    yw: Vec<f64>,
+    /// The reference slider w̄_e of each element (m).
+    wbar: Vec<f64>,
+}
+
+impl Premultiplied {
+    /// The operators of the step size whose all-stick inverse is `stick` and inertia matrix
+    /// M/(βΔτ²) + γC/(βΔτ) is `inertia` (row-major n × n), reference sliders at zero.
+    fn new(sys: &MarchSystem, stick: &[f64], inertia: &[f64]) -> Self {
+        let n = sys.n;
+        let part = |h: &Harmonic, j: usize| [h.mean, h.cos, h.sin][j];
+        let mut xi: [Vec<f64>; 3] = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        for (j, x) in xi.iter_mut().enumerate() {
+            let mut b = vec![0.0; n];
+            for (i, bi) in b.iter_mut().enumerate() {
+                *bi = part(&sys.force[i], j) + sys.damping_force.get(i).map_or(0.0, |h| part(h, j));
+            }
+            for e in &sys.elements {
+                let p = &e.params;
+                for &(i, g) in &e.tangential.weights {
+                    b[i] -= p.kt * part(&e.tangential.prescribed, j) * g;
+                }
+                if let Some(d) = e.normal.as_ref().filter(|_| e.applies_normal) {
+                    let an = p.kn * part(&d.prescribed, j) + if j == 0 { p.n0 } else { 0.0 };
+                    for &(i, g) in &d.weights {
+                        b[i] -= an * g;
+                    }
+                }
+            }
+            dense::matvec(stick, &b, x);
+        }
+        let hp = dense::product(stick, inertia, n);
+        let damped = sys.damping.iter().any(|&c| c != 0.0);
+        let (h, width) = if damped {
+            let hc = dense::product(stick, &sys.damping, n);
+            let mut h = Vec::with_capacity(2 * n * n);
+            for (p, c) in hp.chunks_exact(n).zip(hc.chunks_exact(n)) {
+                h.extend_from_slice(p);
+                h.extend(c.iter().map(|x| -x));
+            }
+            (h, 2 * n)
+        } else {
+            (hp, n)
+        };
+        Premultiplied {
+            h,
+            width,
+            xi,
+            yw: vec![0.0; n],
+            wbar: vec![0.0; sys.elements.len()],
+        }
+    }
+
+    /// y₀ = (A_stick⁻¹P) q* − (A_stick⁻¹C) v* + ξ₀ + ξ_c c + ξ_s s + y_w into `ws.y0` (predictors
+    /// in `ws.qs`, `ws.vs`, copied into `ws.qv` = [q*; v*]; (c, s) the phase of τ_{n+1}): one dot
+    /// of 2n entries per row.
+    fn base(&self, phase: (f64, f64), ws: &mut Workspace) {
+        let n = ws.qs.len();
+        let (c, s) = phase;
+        let [x0, xc, xs] = &self.xi;
+        ws.qv.clear();
+        ws.qv.extend_from_slice(&ws.qs);
+        if self.width > n {
+            ws.qv.extend_from_slice(&ws.vs);
+        }
+        for ((i, y), row) in ws
+            .y0
+            .iter_mut()
+            .enumerate()
+            .zip(self.h.chunks_exact(self.width))
+        {
+            *y = dense::dot(row, &ws.qv) + x0[i] + c * xc[i] + s * xs[i] + self.yw[i];
+        }
+    }
+
+    /// Memory held (f64 entries).
+    fn len(&self) -> usize {
+        self.h.len() + 4 * self.yw.len() + self.wbar.len()
+    }
+}
+
 /// The matrices and factors of one step size Δτ (Δτ bits; 0 for the quasi-static method).
 struct StepSize {
     bits: u64,
@@ -262,6 +384,8 @@ struct StepSize {
     /// the factors kept in `factors` are copies of it when they are small
     /// ([`MAX_CACHED_LOW_RANK`]).
     working: Option<LowRank>,
+    /// The premultiplied all-stick operators (fixed-step piecewise-linear Newmark).
+    premultiplied: Option<Premultiplied>,
 }
 
 impl StepSize {
@@ -272,7 +396,8 @@ impl StepSize {
             .map(|m| m.as_ref().map_or(0, Vec::len))
             .sum::<usize>();
         let working = self.working.as_ref().map_or(0, LowRank::len);
-        (matrices + self.held + working) * std::mem::size_of::<f64>()
+        let premultiplied = self.premultiplied.as_ref().map_or(0, Premultiplied::len);
+        (matrices + self.held + working + premultiplied) * std::mem::size_of::<f64>()
     }
 
     fn new(bits: u64) -> Self {
@@ -286,6 +411,7 @@ impl StepSize {
             held: 0,
             last: None,
             working: None,
+            premultiplied: None,
         }
     }
 
@@ -312,9 +438,43 @@ pub struct Cache {
     current: Option<usize>,
     /// Number of factorisations made.
     pub factorisations: usize,
+    /// Whether piecewise-linear Newmark steps use the [`Premultiplied`] operators (set by
+    /// [`Cache::use_premultiplied`]).
+    premultiply: bool,
+    /// Most bytes all the step sizes may hold; `None`: [`MAX_CACHED_TOTAL_BYTES`].
+    total_limit: Option<usize>,
 }
 
 impl Cache {
+    /// A cache whose step sizes hold at most `bytes` in all (instead of
+    /// [`MAX_CACHED_TOTAL_BYTES`]).
+    pub fn with_total_limit(bytes: usize) -> Self {
+        Cache {
+            total_limit: Some(bytes),
+            ..Cache::default()
+        }
+    }
+
+    /// Lets the piecewise-linear Newmark steps of `sys` use the premultiplied all-stick operators
+    /// (one pass over A_stick⁻¹P and A_stick⁻¹C per step instead of P q*, C v* and a product by
+    /// A_stick⁻¹ per state iteration) when every contact state's step matrix is a low-rank change
+    /// of the all-stick one (fewer columns than DOF, [`lowrank::max_rank`]); returns whether they
+    /// do. For a fixed step: each step size holds two more n × n matrices.
+    pub fn use_premultiplied(&mut self, sys: &MarchSystem, on: bool) -> bool {
+        self.premultiply = on && lowrank::max_rank(&sys.elements) < sys.n;
+        self.premultiply
+    }
+
+    /// Bytes held by the matrices and factors of all the step sizes.
+    pub fn held_bytes(&self) -> usize {
+        self.sizes.iter().map(StepSize::bytes).sum()
+    }
+
+    /// The number of step sizes held.
+    pub fn step_sizes(&self) -> usize {
+        self.sizes.len()
+    }
+
     /// The index of the entry of the step size with key `bits` (made on first use).
     fn slot(&mut self, bits: u64) -> usize {
         if let Some(i) = self.current.filter(|&i| self.sizes[i].bits == bits) {
@@ -323,8 +483,8 @@ impl Cache {
         let i = match self.index.get(&bits) {
             Some(&i) => i,
             None => {
-                let held: usize = self.sizes.iter().map(StepSize::bytes).sum();
-                if held > MAX_CACHED_TOTAL_BYTES {
+                let limit = self.total_limit.unwrap_or(MAX_CACHED_TOTAL_BYTES);
+                if self.held_bytes() > limit {
                     self.sizes.clear();
                     self.index.clear();
                 }
@@ -406,12 +566,7 @@ impl Cache {
             return Ok(());
         }
         let slot = self.slot(if dynamic { ctx.dt.to_bits() } else { 0 });
-        let size = &mut self.sizes[slot];
-        let held = match size.find(codes) {
-            Some(f) => Held::Cached(f),
-            None if size.working.as_ref().is_some_and(|w| w.states() == states) => Held::Working,
-            None => self.build_factor(ctx, dynamic, slot, states, codes, k)?,
-        };
+        let held = self.held_factor(ctx, dynamic, slot, states, codes, k)?;
         let size = &self.sizes[slot];
         let factor = match held {
             Held::Cached(f) => &size.factors[f].1,
@@ -430,6 +585,148 @@ impl Cache {
         Ok(())
     }
 
+    /// Where the factor of the state `codes` of the step size in `slot` is held: cached, the
+    /// working factor, or built now ([`Cache::build_factor`]).
+    fn held_factor(
+        &mut self,
+        ctx: &StepContext,
+        dynamic: bool,
+        slot: usize,
+        states: &[ContactState],
+        codes: &[u8],
+        k: &mut Vec<f64>,
+    ) -> Result<Held> {
+        let size = &mut self.sizes[slot];
+        Ok(match size.find(codes) {
+            Some(f) => Held::Cached(f),
+            None if size.working.as_ref().is_some_and(|w| w.states() == states) => Held::Working,
+            None => self.build_factor(ctx, dynamic, slot, states, codes, k)?,
+        })
+    }
+
+    /// Makes sure the inverse of the all-stick step matrix of the step size in `slot` is held
+    /// (with its inertia part when `dynamic`, which must be held then); returns the
+    /// factorisations made (0 or 1; none when the matrix is singular).
+    fn ensure_stick(
+        &mut self,
+        sys: &MarchSystem,
+        slot: usize,
+        dynamic: bool,
+        k: &mut Vec<f64>,
+    ) -> usize {
+        let size = &mut self.sizes[slot];
+        if size.stick.is_some() {
+            return 0;
+        }
+        let inertia = size.inertia.as_deref().filter(|_| dynamic);
+        step_matrix(sys, inertia, &sys.stick_states(), k);
+        size.stick = dense::inverse(k, sys.n);
+        usize::from(size.stick.is_some())
+    }
+
+    /// Makes sure the [`Premultiplied`] operators of the step `dt` are held, when enabled
+    /// ([`Cache::use_premultiplied`]) and the all-stick step matrix is regular; returns the step
+    /// size's slot.
+    fn ensure_premultiplied(
+        &mut self,
+        sys: &MarchSystem,
+        dt: f64,
+        k: &mut Vec<f64>,
+    ) -> Option<usize> {
+        if !self.premultiply {
+            return None;
+        }
+        let slot = self.ensure_inertia(sys, dt);
+        if self.sizes[slot].premultiplied.is_none() {
+            self.factorisations += self.ensure_stick(sys, slot, true, k);
+            let size = &mut self.sizes[slot];
+            match (size.stick.as_ref(), size.inertia.as_ref()) {
+                (Some(stick), Some(inertia)) => {
+                    size.premultiplied = Some(Premultiplied::new(sys, stick, inertia));
+                }
+                _ => {
+                    self.premultiply = false;
+                    return None;
+                }
+            }
+        }
+        Some(slot)
+    }
+
+    /// q₁ of the contact `states` (codes `codes`) from y₀ (`y0`, [`Premultiplied::base`]) of the
+    /// step size in `slot` into `x`: first the reference sliders of the elements in stick are
+    /// brought to their sliders w at τ_n (`start`; y_w and y₀ updated by O(n) per element that
+    /// changed), then x = y₀ + Z B (δ − Vᵀ y₀) ([`LowRank::solve_shifted`]) with δ the columns'
+    /// share of r_c(states) − r_ref: n0 + k_n p_n for a separated element's normal column; for its
+    /// tangential column k_t (p_t − w̄), minus s μ (n0 + k_n p_n) in slip of sign s (paper Table 1,
+    /// [`super::element::Element::add_linear_piece`]). Returns false, solving nothing, when the
+    /// state's factor is a full inverse (a change of rank n or more).
+    #[allow(clippy::too_many_arguments)]
+    fn premultiplied_solve(
+        &mut self,
+        ctx: &StepContext,
+        slot: usize,
+        start: &[LawSample],
+        states: &[ContactState],
+        codes: &[u8],
+        ws_y0: &mut [f64],
+        x: &mut [f64],
+        k: &mut Vec<f64>,
+        scratch: &mut Vec<f64>,
+        column: &mut [f64],
+    ) -> Result<bool> {
+        let (sys, n, exc) = (ctx.sys, ctx.sys.n, ctx.excitation);
+        {
+            let size = &mut self.sizes[slot];
+            let stick = size.stick.as_ref().expect("stick held");
+            let pm = size.premultiplied.as_mut().expect("premultiplied held");
+            for (i, (e, &s)) in sys.elements.iter().zip(states).enumerate() {
+                let w = start[i].slider;
+                if s != ContactState::Stick || w.to_bits() == pm.wbar[i].to_bits() {
+                    continue;
+                }
+                let d = e.params.kt * (w - pm.wbar[i]);
+                lowrank::solve_sparse(stick, n, &e.tangential.weights, column);
+                for ((yw, y), c) in pm.yw.iter_mut().zip(ws_y0.iter_mut()).zip(column.iter()) {
+                    *yw += d * c;
+                    *y += d * c;
+                }
+                pm.wbar[i] = w;
+            }
+        }
+        let held = self.held_factor(ctx, true, slot, states, codes, k)?;
+        let size = &self.sizes[slot];
+        let wbar = &size
+            .premultiplied
+            .as_ref()
+            .expect("premultiplied held")
+            .wbar;
+        let delta = |i: usize, normal: bool| -> f64 {
+            let (e, p) = (&sys.elements[i], &sys.elements[i].params);
+            let an = match e.normal {
+                Some(_) => p.n0 + p.kn * exc.pn[i],
+                None => p.n0,
+            };
+            if normal {
+                return an;
+            }
+            let stick = p.kt * (exc.pt[i] - wbar[i]);
+            match states[i] {
+                ContactState::Slip(sign) => stick - sign.value() * p.mu * an,
+                _ => stick,
+            }
+        };
+        let factor = match held {
+            Held::Cached(f) => match &size.factors[f].1 {
+                StepFactor::LowRank(l) => l.as_ref(),
+                StepFactor::Full(_) => return Ok(false),
+            },
+            Held::Working => size.working.as_ref().expect("working factor held"),
+        };
+        factor.solve_shifted(ws_y0, delta, x, scratch);
+        Ok(true)
+    }
+
     /// The factor of a state met for the first time ([`Cache::step_solve`]): the working low-rank
     /// factor moved to the state by column updates (or built anew), kept as a copy when small, or
     /// the inverse when the rank is not below n. Returns where it is held.
@@ -446,28 +743,14 @@ impl Cache {
         if dynamic {
             self.ensure_inertia(sys, ctx.dt);
         }
-        let size = &mut self.sizes[slot];
-        let inertia = size.inertia.as_ref().filter(|_| dynamic);
-        let step_matrix = |states: &[ContactState], k: &mut Vec<f64>| {
-            k.clear();
-            k.extend_from_slice(&sys.stiffness);
-            for (e, &s) in sys.elements.iter().zip(states) {
-                e.add_stiffness(s, k, n);
-            }
-            if let Some(p) = inertia {
-                k.iter_mut().zip(p).for_each(|(a, b)| *a += b);
-            }
-        };
         let mut factor = None;
         let mut made = 0;
-        if lowrank::rank(&sys.elements, states) < n {
-            if size.stick.is_none() {
-                step_matrix(&sys.stick_states(), k);
-                if let Some(inv) = dense::inverse(k, n) {
-                    size.stick = Some(inv);
-                    made += 1;
-                }
-            }
+        let low_rank = lowrank::rank(&sys.elements, states) < n;
+        if low_rank {
+            made = self.ensure_stick(sys, slot, dynamic, k);
+        }
+        let size = &mut self.sizes[slot];
+        if low_rank {
             if let Some(inv) = size.stick.as_ref() {
                 let updated = size
                     .working
@@ -488,7 +771,8 @@ impl Cache {
         let factor = match factor {
             Some(f) => f,
             None => {
-                step_matrix(states, k);
+                let inertia = size.inertia.as_deref().filter(|_| dynamic);
+                step_matrix(sys, inertia, states, k);
                 StepFactor::Full(
                     dense::inverse(k, n)
                         .ok_or_else(|| singular(sys, step_name(dynamic), ctx.t1, codes))?,
@@ -507,6 +791,24 @@ impl Cache {
         size.last = Some(i);
         self.factorisations += made + 1;
         Ok(Held::Cached(i))
+    }
+}
+
+/// The step matrix K + K_c(states) + `inertia` (M/(βΔτ²) + γC/(βΔτ), none for the quasi-static
+/// method; row-major) into `k`.
+fn step_matrix(
+    sys: &MarchSystem,
+    inertia: Option<&[f64]>,
+    states: &[ContactState],
+    k: &mut Vec<f64>,
+) {
+    k.clear();
+    k.extend_from_slice(&sys.stiffness);
+    for (e, &s) in sys.elements.iter().zip(states) {
+        e.add_stiffness(s, k, sys.n);
+    }
+    if let Some(p) = inertia {
+        k.iter_mut().zip(p).for_each(|(a, b)| *a += b);
     }
 }
 
@@ -767,15 +1069,27 @@ pub fn standard_step(
     )))
 }
 
+/// How the state iteration solves a state's linear step.
+#[derive(Clone, Copy)]
+enum Solver {
+    /// A(states)⁻¹ (b + r_c(states, w)) with b in `ws.b`.
+    RightHandSide,
+    /// From y₀ in `ws.y0` with the [`Premultiplied`] operators of the step size in the slot
+    /// ([`Cache::premultiplied_solve`]).
+    Premultiplied(usize),
+}
+
 /// The piecewise-linear solve shared by the dynamic and the quasi-static methods: with the states
 /// predicted unchanged from `start`, solve A(states) q₁ = b + r_c(states, w) with
-/// A = K + K_c(states) (+ M/(βΔτ²) + γC/(βΔτ) for Newmark) and b in `ws.b` (the force and, for
-/// Newmark, the predictor terms); verify the states with the law at q₁; re-solve with the law's
-/// states until they agree (Appendix A.4 steps 2–6, Appendix B). q₁ and the samples go to `out`.
-/// Returns `Err(iterations)` if the state iteration cycles or exceeds the iteration limit.
+/// A = K + K_c(states) (+ M/(βΔτ²) + γC/(βΔτ) for Newmark) and b (the force and, for Newmark,
+/// the predictor terms) in `ws.b`, or from the premultiplied y₀ (`solver`); verify the states with
+/// the law at q₁; re-solve with the law's states until they agree (Appendix A.4 steps 2–6,
+/// Appendix B). q₁ and the samples go to `out`. Returns `Err(iterations)` if the state iteration
+/// cycles or exceeds the iteration limit.
 fn state_iteration(
     ctx: &StepContext,
     dynamic: bool,
+    solver: Solver,
     start: &Snapshot,
     cache: &mut Cache,
     ws: &mut Workspace,
@@ -789,22 +1103,40 @@ fn state_iteration(
     state_codes(&start.samples, &mut ws.codes);
     ws.seen.clear();
     for it in 1..=ctx.max_iterations {
-        ws.rhs.copy_from_slice(&ws.b);
-        for (i, e) in sys.elements.iter().enumerate() {
-            let w = start.samples[i].slider;
-            e.add_linear_piece_with(ws.states[i], w, exc.pt[i], exc.pn[i], None, &mut ws.rhs);
+        let solved = match solver {
+            Solver::Premultiplied(slot) => cache.premultiplied_solve(
+                ctx,
+                slot,
+                &start.samples,
+                &ws.states,
+                &ws.codes,
+                &mut ws.y0,
+                &mut out.kin.q,
+                &mut ws.k,
+                &mut ws.scratch,
+                &mut ws.column,
+            )?,
+            Solver::RightHandSide => false,
+        };
+        if !solved {
+            ensure_newmark_rhs(ctx, dynamic, cache, ws);
+            ws.rhs.copy_from_slice(&ws.b);
+            for (i, e) in sys.elements.iter().enumerate() {
+                let w = start.samples[i].slider;
+                e.add_linear_piece_with(ws.states[i], w, exc.pt[i], exc.pn[i], None, &mut ws.rhs);
+            }
+            cache.step_solve(
+                ctx,
+                dynamic,
+                &ws.states,
+                &ws.codes,
+                &ws.rhs,
+                &mut out.kin.q,
+                &mut ws.k,
+                &mut ws.scratch,
+                ctx.one_off.then_some((&mut ws.lu, &mut ws.unused_r)),
+            )?;
         }
-        cache.step_solve(
-            ctx,
-            dynamic,
-            &ws.states,
-            &ws.codes,
-            &ws.rhs,
-            &mut out.kin.q,
-            &mut ws.k,
-            &mut ws.scratch,
-            ctx.one_off.then_some((&mut ws.lu, &mut ws.unused_r)),
-        )?;
         evaluate_law_with(sys, exc, &out.kin.q, &start.samples, &mut out.samples);
         state_codes(&out.samples, &mut ws.law_codes);
         if same_codes(&ws.law_codes, &ws.codes) {
@@ -821,23 +1153,14 @@ fn state_iteration(
     Ok(Err(ctx.max_iterations))
 }
 
-/// Piecewise-linear Newmark step (paper §4.3, Appendix A.4, eqs A12–A16): the contact states at
-/// τ_{n+1} are predicted equal to those at τ_n, the linear Newmark step of eq. A13/A15 is solved, the
-/// states are verified by the law and the step re-solved only at a transition. If the state
-/// iteration cycles (a tie at a stick/slip boundary; frequent with many elements) the step falls
-/// back to damped Newton on the same piecewise-linear equation (unlike the standard corrector it
-/// needs no step limit), and the iterations of both are counted. Writes the step's end into
-/// `out`; returns the iterations.
-pub fn piecewise_linear_step(
-    ctx: &StepContext,
-    start: &Snapshot,
-    cache: &mut Cache,
-    ws: &mut Workspace,
-    out: &mut Snapshot,
-) -> Result<u32> {
-    let sys = ctx.sys;
-    let dt = ctx.dt;
-    newmark_predictors(&start.kin, dt, &mut ws.qs, &mut ws.vs);
+/// Makes sure `ws.b` holds the right-hand side of the step (`ws.b_ready`): for Newmark (`dynamic`)
+/// b = f + P q* − C v* ([`newmark_rhs`]; predictors in `ws.qs`, `ws.vs`), for the quasi-static
+/// method it is set by the step.
+fn ensure_newmark_rhs(ctx: &StepContext, dynamic: bool, cache: &mut Cache, ws: &mut Workspace) {
+    if ws.b_ready || !dynamic {
+        return;
+    }
+    let (sys, dt) = (ctx.sys, ctx.dt);
     if ctx.one_off {
         newmark_rhs_direct(sys, dt, ctx.excitation.force, ws);
     } else {
@@ -849,9 +1172,53 @@ pub fn piecewise_linear_step(
             ws,
         );
     }
-    let iterations = match state_iteration(ctx, true, start, cache, ws, out)? {
+    ws.b_ready = true;
+}
+
+/// Piecewise-linear Newmark step (paper §4.3, Appendix A.4, eqs A12–A16): the contact states at
+/// τ_{n+1} are predicted equal to those at τ_n, the linear Newmark step of eq. A13/A15 is solved, the
+/// states are verified by the law and the step re-solved only at a transition. If the state
+/// iteration cycles (a tie at a stick/slip boundary; frequent with many elements) the step falls
+/// back to damped Newton on the same piecewise-linear equation (unlike the standard corrector it
+/// needs no step limit), and the iterations of both are counted. With the premultiplied all-stick
+/// operators ([`Cache::use_premultiplied`], not for a one-off step) the linear step is solved from
+/// y₀ = A_stick⁻¹ (b + r_ref) (two n × n products) by the low-rank correction of the non-stick
+/// elements instead of b = f + P q* − C v* and a product with A_stick⁻¹:
+/// the same q₁ to rounding. Writes the step's end into `out`; returns the iterations.
+pub fn piecewise_linear_step(
+    ctx: &StepContext,
+    start: &Snapshot,
+    cache: &mut Cache,
+    ws: &mut Workspace,
+    out: &mut Snapshot,
+) -> Result<u32> {
+    let sys = ctx.sys;
+    let dt = ctx.dt;
+    newmark_predictors(&start.kin, dt, &mut ws.qs, &mut ws.vs);
+    ws.b_ready = false;
+    let premultiplied = if ctx.one_off {
+        None
+    } else {
+        cache.ensure_premultiplied(sys, dt, &mut ws.k)
+    };
+    let solver = match premultiplied {
+        Some(slot) => {
+            let pm = cache.sizes[slot].premultiplied.as_ref();
+            pm.expect("premultiplied held")
+                .base(ctx.excitation.phase, ws);
+            Solver::Premultiplied(slot)
+        }
+        None => {
+            ensure_newmark_rhs(ctx, true, cache, ws);
+            Solver::RightHandSide
+        }
+    };
+    let iterations = match state_iteration(ctx, true, solver, start, cache, ws, out)? {
         Ok(it) => it,
-        Err(tried) => tried + damped_newton(ctx, true, start, cache, ws, out)?,
+        Err(tried) => {
+            ensure_newmark_rhs(ctx, true, cache, ws);
+            tried + damped_newton(ctx, true, start, cache, ws, out)?
+        }
     };
     newmark_rates(&mut out.kin, &ws.qs, &ws.vs, dt);
     Ok(iterations)
@@ -868,7 +1235,8 @@ pub fn quasi_static_step(
     out: &mut Snapshot,
 ) -> Result<u32> {
     ws.b.copy_from_slice(ctx.excitation.force);
-    let iterations = match state_iteration(ctx, false, start, cache, ws, out)? {
+    let solver = Solver::RightHandSide;
+    let iterations = match state_iteration(ctx, false, solver, start, cache, ws, out)? {
         Ok(it) => it,
         Err(tried) => tried + damped_newton(ctx, false, start, cache, ws, out)?,
     };
