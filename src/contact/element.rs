@@ -477,11 +477,11 @@ fn march_from(
             && !(ws.samples_path && element.variant == Variant::OneD);
         if differentiated {
             march_period_differentiated(element, aft, ws, &mut w);
-        } else if marching.periods > 0 && !first_differentiated {
-            // the previous period's samples, of the same motion, are stored
-            march_period_again(element, ws, &mut w);
         } else {
-            march_period(element, ws, &mut w);
+            // the previous period's samples are of this motion and, for a Jenkins element
+            // whose second slider starts at rest (and so stays there), of its own march
+            let stored = marching.periods > 0 && !first_differentiated && w_in[1] == 0.0;
+            march_period(element, ws, &mut w, stored);
         }
         first_differentiated |= differentiated;
         marching.periods += 1;
@@ -799,53 +799,15 @@ fn add_outer(
 }
 
 /// One period of the law from the slider state `w` (updated to the end state); fills the force,
-/// slider and regime samples of the workspace.
-fn march_period(element: &LocalElement, ws: &mut Workspace, w: &mut [f64; 2]) {
+/// slider and regime samples of the workspace. `stored`: the samples of the previous period of
+/// the same motion are in the workspace, marched by this function from a second slider at rest.
+fn march_period(element: &LocalElement, ws: &mut Workspace, w: &mut [f64; 2], stored: bool) {
     if element.variant == Variant::OneD && element.tangential == 1 && !element.normal && w[1] == 0.0
     {
-        march_period_one_direction(&element.params, ws, w);
+        march_period_one_direction(&element.params, ws, w, stored);
     } else {
         march_period_samples(element, ws, w);
     }
-}
-
-/// [`march_period`] of a period that follows a period of the same motion marched by
-/// [`march_period`] (its samples stored): a Jenkins element as in [`march_period`] goes by
-/// [`march_period_one_direction_again`], any other by [`march_period`].
-fn march_period_again(element: &LocalElement, ws: &mut Workspace, w: &mut [f64; 2]) {
-    if element.variant == Variant::OneD && element.tangential == 1 && !element.normal && w[1] == 0.0
-    {
-        march_period_one_direction_again(&element.params, ws, w);
-    } else {
-        march_period_samples(element, ws, w);
-    }
-}
-
-/// [`march_period_one_direction`] of a period after one of the same motion whose samples are
-/// stored: the samples are marched until the first that slips or separates; where it does so as
-/// the stored sample did (same regime and force), the slider after it is the stored one (a slip
-/// sets it to u − f/k_t, a separation to u, from the motion alone), and so is every later
-/// sample: the stored samples from there on are this period's, and it ends where the previous
-/// one ended. Otherwise the march goes on to the end of the period. The samples are those of
-/// [`march_period_one_direction`], value for value.
-fn march_period_one_direction_again(p: &ContactParams, ws: &mut Workspace, w: &mut [f64; 2]) {
-    let fnormal = law::normal_force(p, 0.0);
-    let separated = fnormal <= 0.0;
-    let limit = p.mu * fnormal;
-    let (_, _, idle) = law::tangential_1d(p.kt, limit, separated, 0.0, 0.0);
-    let mut slider = w[0];
-    for j in 0..ws.n_t {
-        let (f, next, regime) = law::tangential_1d(p.kt, limit, separated, ws.u[0][j], slider);
-        if regime != Regime::Stick && regime == ws.regime[j][0] && f == ws.ft[0][j] {
-            w[0] = ws.w[0][ws.n_t - 1];
-            return;
-        }
-        ws.ft[0][j] = f;
-        ws.w[0][j] = next;
-        ws.regime[j] = [regime, idle];
-        slider = next;
-    }
-    w[0] = slider;
 }
 
 /// [`march_period`] by the general law, sample by sample.
@@ -861,9 +823,20 @@ fn march_period_samples(element: &LocalElement, ws: &mut Workspace, w: &mut [f64
 /// [`march_period`] of a 1-D element with one tangential direction and no normal kinematics
 /// (a Jenkins element: v ≡ 0, so f_n = max(n0, 0) and the slip limit μ f_n are constant) whose
 /// second slider is at rest: the second direction (u2 ≡ 0, w2 = 0) has the trial force 0 and
-/// sticks with f2 = 0 (or separates, f_n = 0) all period, so only the first is marched. The
-/// samples are those of the general loop, value for value.
-fn march_period_one_direction(p: &ContactParams, ws: &mut Workspace, w: &mut [f64; 2]) {
+/// sticks with f2 = 0 (or separates, f_n = 0) all period, so only the first is marched.
+///
+/// After a `stored` period of the same motion, the samples are marched until the first that
+/// slips or separates; where it does so as the stored sample did (same regime and force), the
+/// slider after it is the stored one (a slip sets it to u − f/k_t, a separation to u, from the
+/// motion alone), and so is every later sample: the stored samples from there on are this
+/// period's, and it ends where the previous one ended. The samples are those of the general
+/// loop, value for value.
+fn march_period_one_direction(
+    p: &ContactParams,
+    ws: &mut Workspace,
+    w: &mut [f64; 2],
+    stored: bool,
+) {
     let fnormal = law::normal_force(p, 0.0);
     let separated = fnormal <= 0.0;
     let limit = p.mu * fnormal;
@@ -871,6 +844,10 @@ fn march_period_one_direction(p: &ContactParams, ws: &mut Workspace, w: &mut [f6
     let mut slider = w[0];
     for j in 0..ws.n_t {
         let (f, next, regime) = law::tangential_1d(p.kt, limit, separated, ws.u[0][j], slider);
+        if stored && regime != Regime::Stick && regime == ws.regime[j][0] && f == ws.ft[0][j] {
+            w[0] = ws.w[0][ws.n_t - 1];
+            return;
+        }
         ws.ft[0][j] = f;
         ws.w[0][j] = next;
         ws.regime[j] = [regime, idle];
@@ -1542,7 +1519,7 @@ mod tests {
     }
 
     /// The march of a Jenkins element (one direction, no normal kinematics), whole or after a
-    /// stored period ([`march_period_one_direction_again`]), gives the samples of the general
+    /// stored period of the same motion, gives the samples of the general
     /// law value for value: stuck all period, partial and gross slip, n0 = 0 (no limit) and
     /// n0 < 0 (separated all period), from rest and from a displaced slider, over three
     /// periods.
@@ -1572,12 +1549,8 @@ mod tests {
                         ws.v.fill(0.0);
                     }
                     for period in 0..3 {
-                        march_period_one_direction(&el.params, &mut fast, &mut w[0]);
-                        if period == 0 {
-                            march_period(&el, &mut again, &mut w[1]);
-                        } else {
-                            march_period_again(&el, &mut again, &mut w[1]);
-                        }
+                        march_period_one_direction(&el.params, &mut fast, &mut w[0], false);
+                        march_period(&el, &mut again, &mut w[1], period > 0);
                         march_period_samples(&el, &mut general, &mut w[2]);
                         for (k, ws) in [&fast, &again].into_iter().enumerate() {
                             let what = format!("n0={n0} amp={amp} start={start} period {period}");
