@@ -162,6 +162,13 @@ fn solve_chain3_equals_the_library_frequency_response() {
     );
     assert_eq!(s["end"], "reached_end");
     assert!(report["wall_seconds"].as_f64().is_some());
+    // the traced curve's CPU time: positive, at most the process's wall time times its threads
+    let cpu = s["cpu_seconds"].as_f64().unwrap();
+    let wall = report["wall_seconds"].as_f64().unwrap();
+    assert!(
+        cpu > 0.0 && cpu <= wall * 64.0,
+        "{cpu} s CPU, {wall} s wall"
+    );
 }
 
 /// μ = 1e9: the elements never slip, and every point's harmonic 1 equals the direct solution

@@ -23,6 +23,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde_json::{json, Value};
 
+use super::batch::records::thread_cpu_seconds;
 use super::progress::Reporter;
 use super::summary::{summarize, CurveSummary};
 use crate::case::{Case, CaseKind};
@@ -84,6 +85,12 @@ pub struct CurveReport {
     pub end: &'static str,
     /// Why the curve failed (no convergence), if it did.
     pub failure: Option<String>,
+    /// CPU time (s) of the thread that traced the curve, from the start point to the last
+    /// point's outputs: the whole CPU time of the continuation where its evaluations run on
+    /// that thread (matrix blocks below 32 rows, at most 4 friction elements); the rayon
+    /// workers' share of larger models is not counted. `None` where it cannot be measured (and
+    /// in the records of `nlrom batch`).
+    pub cpu_seconds: Option<f64>,
 }
 
 impl CurveReport {
@@ -100,6 +107,7 @@ impl CurveReport {
             "summary_response_dof": s.map(|s| s.response_dof),
             "end": self.end,
             "error": self.failure,
+            "cpu_seconds": self.cpu_seconds,
         })
     }
 }
@@ -549,9 +557,11 @@ fn trace_curve<F: HarmonicForce>(
         ..ResponseOptions::default()
     };
     let solves_before = linsolve::stats();
+    let cpu_before = thread_cpu_seconds();
     let traced = frequency_response(system, &opts, &response, &mut |p| {
         bar.point(p.parameter, p.iterations)
     });
+    let cpu_seconds = cpu_before.zip(thread_cpu_seconds()).map(|(a, b)| b - a);
     bar.finish();
     rep.info(&format!(
         "{label}: {}",
@@ -692,6 +702,7 @@ fn trace_curve<F: HarmonicForce>(
         summary: summarize(&hz, &amplitude),
         end,
         failure,
+        cpu_seconds,
     };
     Ok(Curve {
         frf,

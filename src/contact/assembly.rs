@@ -4,11 +4,12 @@
 //! [`super::pairs::PairSet`] and [`super::grounded::DofElements`].
 //!
 //! Elements are processed in blocks (bounded memory for the per-element Jacobians):
-//! 1. the block's elements are evaluated in parallel, in contiguous chunks with one set of
-//!    buffers per chunk, into flat per-element slots ([`Slot`]);
+//! 1. the block's elements are evaluated in parallel, in contiguous chunks of at least
+//!    [`MIN_CHUNK`] elements with one set of buffers per chunk, into flat per-element slots
+//!    ([`Slot`]);
 //! 2. the slots are added into the outputs in parallel over disjoint ranges of the outputs
-//!    (entries of the vectors, columns of the Jacobian); every range visits the elements in
-//!    their order. No two threads write the same entry (no false sharing of a summed output) and
+//!    (entries of the vectors, columns of the Jacobian) when the sums have at least
+//!    [`PARALLEL_SUM_ENTRIES`] entries; every range visits the elements in their order. No two threads write the same entry (no false sharing of a summed output) and
 //!    the sums do not depend on the number of threads.
 
 use std::sync::Mutex;
@@ -22,6 +23,17 @@ use crate::harmonics::{BlockJacobian, JacobianMut};
 
 /// Most f64 entries of per-element Jacobians held at once (16 MB).
 const JACOBIAN_BUDGET: usize = 1 << 21;
+
+/// Fewest elements in one parallel task: an element of N_t = 1024 samples costs 10–30 µs, and
+/// a task handed to a sleeping rayon worker costs about as much in wake-ups, so that two
+/// elements (NLvib's chain of `cases/nlvib/chain07_jenkins.toml`) are evaluated on the calling
+/// thread.
+const MIN_CHUNK: usize = 4;
+
+/// Fewest entries added (node-space entries of all slots for a vector, their squares for the
+/// Jacobian) for the sums to run in parallel over ranges of the outputs: every range visits
+/// every slot, so smaller sums are cheaper on the calling thread.
+const PARALLEL_SUM_ENTRIES: usize = 1 << 15;
 
 /// Width in bytes of the column ranges of the dense Jacobian filled at a time (one range of a
 /// large matrix fits in a core's L2 cache).
@@ -131,7 +143,7 @@ where
     let chunk = if threads == 1 {
         block
     } else {
-        block.div_ceil(4 * threads).max(1)
+        block.div_ceil(4 * threads).max(MIN_CHUNK)
     };
     let mut guard = storage.0.try_lock().ok();
     let mut own = Storage::default();
@@ -201,15 +213,24 @@ where
             index: &st.index,
             len: &st.len,
         };
+        let sum_threads = |entries: usize| {
+            if entries < PARALLEL_SUM_ENTRIES {
+                1
+            } else {
+                threads
+            }
+        };
+        let vector_threads = sum_threads(count * capacity);
         if let Some(f) = force.as_deref_mut() {
-            slots.add_vector(&st.force, capacity, f, threads);
+            slots.add_vector(&st.force, capacity, f, vector_threads);
         }
         if let Some(d) = dn0.as_deref_mut() {
-            slots.add_vector(&st.dn0, dn0_cap, d, threads);
+            slots.add_vector(&st.dn0, dn0_cap, d, vector_threads);
         }
         match jacobian.as_mut() {
             Some(JacobianMut::Dense(j)) => {
-                slots.add_matrix(&st.jacobian, jac_cap, j.rb_mut(), threads)
+                let matrix_threads = sum_threads(count * jac_cap);
+                slots.add_matrix(&st.jacobian, jac_cap, j.rb_mut(), matrix_threads)
             }
             Some(JacobianMut::Blocks(j)) => slots.add_patches(&st.jacobian, jac_cap, j),
             None => {}

@@ -202,6 +202,12 @@ impl Workspace {
         }
     }
 
+    /// Whether the buffers were made for the layout of `aft` (the same N_t and 2H + 1).
+    pub fn fits(&self, aft: &Aft) -> bool {
+        let layout = aft.layout();
+        self.n_t == layout.time_samples && self.m == layout.coefficients()
+    }
+
     /// The local Jacobian buffer of an analytic evaluation, `rows` × `cols` (row-major), zeroed.
     pub(crate) fn analytic_jacobian(&mut self, rows: usize, cols: usize) -> &mut [f64] {
         // Zeroed by one fill (a memset) once the length is set: clearing and resizing writes the
@@ -460,6 +466,7 @@ fn march_from(
         converged: false,
     };
     let mut differentiated = false;
+    let mut first_differentiated = false;
     while marching.periods < MAX_PERIODS {
         w_start = w;
         // With a Jacobian of the 2-D law the first period also carries the derivative terms:
@@ -471,8 +478,12 @@ fn march_from(
         if differentiated {
             march_period_differentiated(element, aft, ws, &mut w);
         } else {
-            march_period(element, ws, &mut w);
+            // the previous period's samples are of this motion and, for a Jenkins element
+            // whose second slider starts at rest (and so stays there), of its own march
+            let stored = marching.periods > 0 && !first_differentiated && w_in[1] == 0.0;
+            march_period(element, ws, &mut w, stored);
         }
+        first_differentiated |= differentiated;
         marching.periods += 1;
         if (w[0] - w_start[0]).abs() <= tol && (w[1] - w_start[1]).abs() <= tol {
             marching.converged = true;
@@ -788,14 +799,64 @@ fn add_outer(
 }
 
 /// One period of the law from the slider state `w` (updated to the end state); fills the force,
-/// slider and regime samples of the workspace.
-fn march_period(element: &LocalElement, ws: &mut Workspace, w: &mut [f64; 2]) {
+/// slider and regime samples of the workspace. `stored`: the samples of the previous period of
+/// the same motion are in the workspace, marched by this function from a second slider at rest.
+fn march_period(element: &LocalElement, ws: &mut Workspace, w: &mut [f64; 2], stored: bool) {
+    if element.variant == Variant::OneD && element.tangential == 1 && !element.normal && w[1] == 0.0
+    {
+        march_period_one_direction(&element.params, ws, w, stored);
+    } else {
+        march_period_samples(element, ws, w);
+    }
+}
+
+/// [`march_period`] by the general law, sample by sample.
+fn march_period_samples(element: &LocalElement, ws: &mut Workspace, w: &mut [f64; 2]) {
     let p = &element.params;
     for j in 0..ws.n_t {
         let s = law::sample(element.variant, p, [ws.u[0][j], ws.u[1][j]], ws.v[j], *w);
         ws.store(j, &s);
         *w = s.slider;
     }
+}
+
+/// [`march_period`] of a 1-D element with one tangential direction and no normal kinematics
+/// (a Jenkins element: v ≡ 0, so f_n = max(n0, 0) and the slip limit μ f_n are constant) whose
+/// second slider is at rest: the second direction (u2 ≡ 0, w2 = 0) has the trial force 0 and
+/// sticks with f2 = 0 (or separates, f_n = 0) all period, so only the first is marched.
+///
+/// After a `stored` period of the same motion, the samples are marched until the first that
+/// slips or separates; where it does so as the stored sample did (same regime and force), the
+/// slider after it is the stored one (a slip sets it to u − f/k_t, a separation to u, from the
+/// motion alone), and so is every later sample: the stored samples from there on are this
+/// period's, and it ends where the previous one ended. The samples are those of the general
+/// loop, value for value.
+fn march_period_one_direction(
+    p: &ContactParams,
+    ws: &mut Workspace,
+    w: &mut [f64; 2],
+    stored: bool,
+) {
+    let fnormal = law::normal_force(p, 0.0);
+    let separated = fnormal <= 0.0;
+    let limit = p.mu * fnormal;
+    let (_, _, idle) = law::tangential_1d(p.kt, limit, separated, 0.0, 0.0);
+    let mut slider = w[0];
+    for j in 0..ws.n_t {
+        let (f, next, regime) = law::tangential_1d(p.kt, limit, separated, ws.u[0][j], slider);
+        if stored && regime != Regime::Stick && regime == ws.regime[j][0] && f == ws.ft[0][j] {
+            w[0] = ws.w[0][ws.n_t - 1];
+            return;
+        }
+        ws.ft[0][j] = f;
+        ws.w[0][j] = next;
+        ws.regime[j] = [regime, idle];
+        slider = next;
+    }
+    ws.ft[1].fill(0.0);
+    ws.w[1].fill(0.0);
+    ws.fnormal.fill(fnormal);
+    w[0] = slider;
 }
 
 /// [`march_period`] with the law's tangents, also collecting the slider-memory and fixed-w
@@ -1455,5 +1516,55 @@ mod tests {
             }
         }
         assert_eq!(compared, 3 * 3 * 5 * 2);
+    }
+
+    /// The march of a Jenkins element (one direction, no normal kinematics), whole or after a
+    /// stored period of the same motion, gives the samples of the general
+    /// law value for value: stuck all period, partial and gross slip, n0 = 0 (no limit) and
+    /// n0 < 0 (separated all period), from rest and from a displaced slider, over three
+    /// periods.
+    #[test]
+    fn one_direction_march_equals_the_general_law() {
+        let mut seed = 11;
+        let h = 7;
+        let aft = Aft::new(HarmonicLayout::new(h, 1024).unwrap()).unwrap();
+        let mut fast = Workspace::new(&aft);
+        let mut again = Workspace::new(&aft);
+        let mut general = Workspace::new(&aft);
+        let mut marched = 0;
+        for n0 in [1.0, 0.0, -1.0] {
+            let el = LocalElement {
+                params: ContactParams::new(20.0, 0.0, 1.0, n0, "test").unwrap(),
+                variant: Variant::OneD,
+                tangential: 1,
+                normal: false,
+            };
+            for amp in [0.01, 0.12, 1.0] {
+                let x = input(&mut seed, h, 1, [amp, 0.0, 0.0]);
+                for start in [0.0, 0.03] {
+                    let mut w = [[start, 0.0]; 3];
+                    for ws in [&mut fast, &mut again, &mut general] {
+                        aft.to_time(&x, &mut ws.u[0], &mut ws.aft_scratch);
+                        ws.u[1].fill(0.0);
+                        ws.v.fill(0.0);
+                    }
+                    for period in 0..3 {
+                        march_period_one_direction(&el.params, &mut fast, &mut w[0], false);
+                        march_period(&el, &mut again, &mut w[1], period > 0);
+                        march_period_samples(&el, &mut general, &mut w[2]);
+                        for (k, ws) in [&fast, &again].into_iter().enumerate() {
+                            let what = format!("n0={n0} amp={amp} start={start} period {period}");
+                            assert_eq!(w[k], w[2], "{what}");
+                            assert_eq!(ws.ft, general.ft, "{what}");
+                            assert_eq!(ws.w, general.w, "{what}");
+                            assert_eq!(ws.fnormal, general.fnormal, "{what}");
+                            assert_eq!(ws.regime, general.regime, "{what}");
+                        }
+                        marched += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(marched, 3 * 3 * 2 * 3);
     }
 }

@@ -10,8 +10,9 @@
 
 use std::sync::{Arc, Mutex, OnceLock};
 
+use faer::linalg::matmul::matmul;
 use faer::linalg::solvers::{PartialPivLu, Solve};
-use faer::{c64, Mat, MatRef};
+use faer::{c64, Accum, Mat, MatRef, Par};
 
 use crate::error::{Error, Result};
 
@@ -113,9 +114,9 @@ impl Partitioned {
     /// of D is formed).
     fn dynamic_times(&self, part: Part, s: f64, v: &[c64]) -> Vec<c64> {
         let v = MatRef::from_column_major_slice(v, v.len(), 1);
-        let k = self.k.part(part) * v;
-        let m = self.m.part(part) * v;
-        let c = self.c.as_ref().map(|c| c.part(part) * v);
+        let k = product(self.k.part(part), v);
+        let m = product(self.m.part(part), v);
+        let c = self.c.as_ref().map(|c| product(c.part(part), v));
         (0..k.nrows())
             .map(|i| {
                 let mut d = k[(i, 0)] - m[(i, 0)] * (s * s);
@@ -130,8 +131,8 @@ impl Partitioned {
     /// ∂D⁽ⁿ⁾/∂ω v = −2 n² ω M v + i n C v on one partition, by matrix–vector products.
     fn dynamic_derivative_times(&self, part: Part, n: f64, omega: f64, v: &[c64]) -> Vec<c64> {
         let v = MatRef::from_column_major_slice(v, v.len(), 1);
-        let m = self.m.part(part) * v;
-        let c = self.c.as_ref().map(|c| c.part(part) * v);
+        let m = product(self.m.part(part), v);
+        let c = self.c.as_ref().map(|c| product(c.part(part), v));
         (0..m.nrows())
             .map(|i| {
                 let mut d = m[(i, 0)] * (-2.0 * n * n * omega);
@@ -249,7 +250,7 @@ impl HarmonicOperator {
                     let ln_q = times(&c.d_ln, q);
                     let mut v = Mat::from_fn(ln_q.len(), 1, |i, _| ln_q[i]);
                     c.lu.solve_in_place(v.as_mut());
-                    let nl_v = &c.d_nl * &v;
+                    let nl_v = product(c.d_nl.as_ref(), v.as_ref());
                     r.iter_mut()
                         .enumerate()
                         .for_each(|(i, r)| *r -= nl_v[(i, 0)]);
@@ -269,7 +270,7 @@ impl HarmonicOperator {
                 Some(c) => {
                     let mut x = c.d_ln.clone();
                     c.lu.solve_in_place(x.as_mut());
-                    let nl_x = &c.d_nl * &x;
+                    let nl_x = product(c.d_nl.as_ref(), x.as_ref());
                     Mat::from_fn(d_nn.nrows(), d_nn.ncols(), |i, j| {
                         d_nn[(i, j)] - nl_x[(i, j)]
                     })
@@ -301,9 +302,26 @@ impl HarmonicOperator {
     }
 }
 
+/// Products of fewer multiply–adds run on the calling thread ([`product`]).
+const PARALLEL_PRODUCT: usize = 1 << 15;
+
+/// The product a b: faer's, on the calling thread below [`PARALLEL_PRODUCT`] multiply–adds.
+/// faer's parallel product splits even a rank-one update of a few entries (an inner dimension
+/// of 1: one linear DOF) over rayon's threads, and the hand-over costs far more than the product.
+fn product(a: MatRef<'_, c64>, b: MatRef<'_, c64>) -> Mat<c64> {
+    let mut out = Mat::zeros(a.nrows(), b.ncols());
+    let par = if a.nrows() * a.ncols() * b.ncols() < PARALLEL_PRODUCT {
+        Par::Seq
+    } else {
+        faer::get_global_parallelism()
+    };
+    matmul(out.as_mut(), Accum::Replace, a, b, c64::new(1.0, 0.0), par);
+    out
+}
+
 /// a v for a complex matrix and vector.
 fn times(a: &Mat<c64>, v: &[c64]) -> Vec<c64> {
-    let av = a * MatRef::from_column_major_slice(v, v.len(), 1);
+    let av = product(a.as_ref(), MatRef::from_column_major_slice(v, v.len(), 1));
     (0..av.nrows()).map(|i| av[(i, 0)]).collect()
 }
 
@@ -473,6 +491,12 @@ impl LinearModel {
         self.n_outputs
     }
 
+    /// The most rows of any matrix block (condensed and linear DOFs): the size of the largest
+    /// per-harmonic condensation.
+    pub fn block_rows(&self) -> usize {
+        self.blocks.iter().map(|b| b.n_rows).max().unwrap_or(0)
+    }
+
     /// Euclidean norm of the (uncondensed) excitation over all harmonics in the real layout (N):
     /// the force level the residual is scaled by.
     pub fn force_norm(&self) -> f64 {
@@ -537,7 +561,7 @@ impl LinearModel {
         let d_nn = part.dynamic(Part::NN, s);
         let dd_nn = part.dynamic_derivative(Part::NN, nf, omega);
         let q = MatRef::from_column_major_slice(q_n, n_n, 1);
-        let dd_nn_q = &dd_nn * q;
+        let dd_nn_q = product(dd_nn.as_ref(), q);
         if n_l == 0 {
             return Ok(CondensedApplied {
                 stiffness: d_nn,
@@ -548,7 +572,7 @@ impl LinearModel {
         }
         let (lu, xw) = solve_ll(part, n, omega, &f_l)?;
         let d_nl = part.dynamic(Part::NL, s);
-        let nl_xw = &d_nl * &xw;
+        let nl_xw = product(d_nl.as_ref(), xw.as_ref());
         let stiffness = Mat::from_fn(n_n, n_n, |i, j| d_nn[(i, j)] - nl_xw[(i, j)]);
         let force_c: Vec<c64> = (0..n_n).map(|i| f_n[i] - nl_xw[(i, n_n)]).collect();
         // [v | w] and t = D_LL⁻¹ [D'_LN q − D'_LL v | −D'_LL w]
@@ -562,8 +586,8 @@ impl LinearModel {
         let dd_ll = part.dynamic_derivative(Part::LL, nf, omega);
         let dd_ln = part.dynamic_derivative(Part::LN, nf, omega);
         let dd_nl = part.dynamic_derivative(Part::NL, nf, omega);
-        let ll_vw = &dd_ll * &vw;
-        let ln_q = &dd_ln * q;
+        let ll_vw = product(dd_ll.as_ref(), vw.as_ref());
+        let ln_q = product(dd_ln.as_ref(), q);
         let mut t = Mat::from_fn(n_l, 2, |i, j| {
             let ln = if j == 0 {
                 ln_q[(i, 0)]
@@ -573,8 +597,8 @@ impl LinearModel {
             ln - ll_vw[(i, j)]
         });
         lu.solve_in_place(t.as_mut());
-        let nl_vw = &dd_nl * &vw;
-        let nl_t = &d_nl * &t;
+        let nl_vw = product(dd_nl.as_ref(), vw.as_ref());
+        let nl_t = product(d_nl.as_ref(), t.as_ref());
         Ok(CondensedApplied {
             stiffness,
             force: force_c,
@@ -600,7 +624,7 @@ impl LinearModel {
         if n == 0 {
             let (stiffness, force) = &**self.static_condensed()?;
             let q = MatRef::from_column_major_slice(q_n, q_n.len(), 1);
-            let kq = stiffness * q;
+            let kq = product(stiffness.as_ref(), q);
             return Ok((0..q_n.len())
                 .map(|i| kq[(i, 0)] - force[i] * level)
                 .collect());
@@ -655,7 +679,7 @@ impl LinearModel {
             let c = self.static_condensed()?.clone();
             let zero = vec![c64::new(0.0, 0.0); self.n_condensed];
             let q = MatRef::from_column_major_slice(q_n, q_n.len(), 1);
-            let kq = &c.0 * q;
+            let kq = product(c.0.as_ref(), q);
             let applied = Applied {
                 stiffness_q: (0..q_n.len()).map(|i| kq[(i, 0)]).collect(),
                 force: c.1.clone(),
@@ -772,7 +796,7 @@ impl LinearModel {
         let dd_ln = part.dynamic_derivative(Part::LN, nf, omega);
         let dd_ll = part.dynamic_derivative(Part::LL, nf, omega);
         // Z = D_LL⁻¹ [D'_LN − D'_LL X | −D'_LL w]
-        let ll_xw = &dd_ll * &xw;
+        let ll_xw = product(dd_ll.as_ref(), xw.as_ref());
         let mut z = Mat::from_fn(n_l, n_n + 1, |i, j| {
             let ln = if j < n_n {
                 dd_ln[(i, j)]
@@ -782,9 +806,9 @@ impl LinearModel {
             ln - ll_xw[(i, j)]
         });
         lu.solve_in_place(z.as_mut());
-        let nl_xw = &d_nl * &xw;
-        let nl_z = &d_nl * &z;
-        let dnl_xw = &dd_nl * &xw;
+        let nl_xw = product(d_nl.as_ref(), xw.as_ref());
+        let nl_z = product(d_nl.as_ref(), z.as_ref());
+        let dnl_xw = product(dd_nl.as_ref(), xw.as_ref());
         let stiffness = Mat::from_fn(n_n, n_n, |i, j| d_nn[(i, j)] - nl_xw[(i, j)]);
         let stiffness_derivative = Mat::from_fn(n_n, n_n, |i, j| {
             dd_nn[(i, j)] - dnl_xw[(i, j)] - nl_z[(i, j)]

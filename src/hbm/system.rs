@@ -14,6 +14,11 @@ use crate::harmonics::jacobian::PendingBlocks;
 use crate::harmonics::{HarmonicForce, HarmonicLayout, Jacobian};
 use crate::nonlinear::{Linearization, ParameterSystem};
 
+/// Rows of the matrix blocks from which the harmonics are condensed in parallel
+/// ([`HbmSystem::per_harmonic`]): a condensation of 32 rows costs tens of µs, about what a
+/// hand-over to a sleeping rayon worker costs.
+const PARALLEL_ROWS: usize = 32;
+
 /// The harmonic balance of a linear model and a nonlinear force on its condensed DOFs.
 pub struct HbmSystem<'a, F: HarmonicForce> {
     layout: HarmonicLayout,
@@ -75,16 +80,15 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
             .collect()
     }
 
-    /// Every harmonic condensed at ω for an evaluation at Q (in parallel over the harmonics;
-    /// [`LinearModel::condense_applied`]).
+    /// Every harmonic condensed at ω for an evaluation at Q (in parallel over the harmonics
+    /// when the model has 32 rows or more; [`LinearModel::condense_applied`]).
     pub fn condense_all_applied(&self, q: &[f64], omega: f64) -> Result<Vec<CondensedApplied>> {
-        (0..=self.layout.harmonics)
-            .into_par_iter()
-            .map(|n| {
-                self.linear
-                    .condense_applied(n, omega, &self.harmonic_of(q, n))
-            })
-            .collect()
+        self.per_harmonic(|n| {
+            self.linear
+                .condense_applied(n, omega, &self.harmonic_of(q, n))
+        })
+        .into_iter()
+        .collect()
     }
 
     /// Sizes of the diagonal blocks of ∂r/∂Q over the harmonics
@@ -100,12 +104,26 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         self.layout.len(self.linear.n_condensed())
     }
 
-    /// Every harmonic condensed at ω (in parallel over the harmonics).
+    /// Every harmonic condensed at ω (in parallel over the harmonics when the model has 32 rows
+    /// or more).
     pub fn condense_all(&self, omega: f64) -> Result<Vec<Condensed>> {
-        (0..=self.layout.harmonics)
-            .into_par_iter()
-            .map(|n| self.linear.condense(n, omega))
+        self.per_harmonic(|n| self.linear.condense(n, omega))
+            .into_iter()
             .collect()
+    }
+
+    /// `f(n)` for every harmonic n = 0..H, in order: in parallel over the harmonics when the
+    /// matrix blocks have at least [`PARALLEL_ROWS`] rows, on the calling thread below. The
+    /// work of a harmonic (a dense condensation, O(rows³)) must outweigh handing it to rayon's
+    /// workers: on the 3-DOF chain of `cases/nlvib/chain07_jenkins.toml` the hand-overs and
+    /// wake-ups cost more CPU time than the harmonic balance itself.
+    fn per_harmonic<T: Send>(&self, f: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
+        let harmonics = 0..=self.layout.harmonics;
+        if self.linear.block_rows() < PARALLEL_ROWS {
+            harmonics.map(f).collect()
+        } else {
+            harmonics.into_par_iter().map(f).collect()
+        }
     }
 
     /// Evaluates at (Q, ω) with excitation factor `level`: `out.residual` = r,
@@ -145,9 +163,8 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         let deferred = matches!(out.jacobian, Some(Jacobian::Blocks(_)));
         // per harmonic: the products of the evaluation, and D̄⁽ⁿ⁾ formed (dense Jacobian) or
         // its operator (block-stored)
-        let linear: Vec<(Applied, Linear)> = (0..=self.layout.harmonics)
-            .into_par_iter()
-            .map(|n| {
+        let linear: Vec<(Applied, Linear)> = self
+            .per_harmonic(|n| {
                 let q_n = self.harmonic_of(q, n);
                 if deferred {
                     let (a, op) = self.linear.condense_deferred(n, omega, &q_n)?;
@@ -157,6 +174,7 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
                     Ok((applied_of(&c, &q_n), Linear::Matrix(c.stiffness)))
                 }
             })
+            .into_iter()
             .collect::<Result<_>>()?;
         out.residual.iter_mut().for_each(|v| *v = 0.0);
         if let Some(d) = out.d_omega.as_deref_mut() {
@@ -197,8 +215,8 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
 
     /// The residual r alone at (Q, ω) with excitation factor `level` (no Jacobian, no
     /// derivatives): the linear part by [`LinearModel::condensed_residual`] (no condensed
-    /// matrix), in parallel over the harmonics, plus the nonlinear force. Returns the
-    /// end-of-period force state.
+    /// matrix), in parallel over the harmonics of a large model, plus the nonlinear force.
+    /// Returns the end-of-period force state.
     pub fn evaluate_residual(
         &self,
         q: &[f64],
@@ -209,12 +227,12 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
     ) -> Result<F::State> {
         let nd = self.linear.n_condensed();
         let layout = self.layout;
-        let linear: Vec<Vec<c64>> = (0..=layout.harmonics)
-            .into_par_iter()
-            .map(|n| {
+        let linear: Vec<Vec<c64>> = self
+            .per_harmonic(|n| {
                 self.linear
                     .condensed_residual(n, omega, &self.harmonic_of(q, n), level)
             })
+            .into_iter()
             .collect::<Result<_>>()?;
         residual.iter_mut().for_each(|v| *v = 0.0);
         let mut end_state = state.clone();

@@ -275,17 +275,29 @@ impl<'a> View<'a> {
         }
     }
 
-    /// ‖A‖₁ (max column sum).
+    /// ‖A‖₁ (max column sum); in parallel over the columns from [`PARALLEL_NORM_ENTRIES`]
+    /// entries.
     fn norm_1(self) -> f64 {
         match self {
-            View::Dense(m) => (0..m.ncols())
-                .into_par_iter()
-                .map(|j| m.col(j).iter().map(|v| v.abs()).sum::<f64>())
-                .reduce(|| 0.0, f64::max),
+            View::Dense(m) => {
+                let column_sum = |j: usize| m.col(j).iter().map(|v| v.abs()).sum::<f64>();
+                if m.nrows() * m.ncols() < PARALLEL_NORM_ENTRIES {
+                    (0..m.ncols()).map(column_sum).fold(0.0, f64::max)
+                } else {
+                    (0..m.ncols())
+                        .into_par_iter()
+                        .map(column_sum)
+                        .reduce(|| 0.0, f64::max)
+                }
+            }
             View::Blocks(b) => b.norm_1(),
         }
     }
 }
+
+/// Entries of a dense matrix from which its 1-norm is summed in parallel: a smaller sum costs
+/// less than handing its columns to rayon's workers.
+const PARALLEL_NORM_ENTRIES: usize = 1 << 16;
 
 /// ‖b − A x‖∞ / (‖A‖ ‖x‖∞ + ‖b‖∞) and b − A x.
 fn backward_error(a: View<'_>, norm_a: f64, x: &[f64], b: &[f64]) -> (f64, Vec<f64>) {

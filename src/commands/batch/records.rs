@@ -244,6 +244,7 @@ impl CaseRecord {
                     summary,
                     end: end_label(&c.end),
                     failure: c.failure.clone(),
+                    cpu_seconds: None,
                 }
             })
             .collect();
@@ -322,6 +323,25 @@ pub fn process_cpu_seconds() -> Option<f64> {
     }
 }
 
+/// The CPU time (user + system) of the calling thread so far (s; `CLOCK_THREAD_CPUTIME_ID`);
+/// `None` where it cannot be measured.
+pub fn thread_cpu_seconds() -> Option<f64> {
+    #[cfg(target_os = "linux")]
+    {
+        let mut t = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: clock_gettime writes a complete `timespec` into the pointer it is given.
+        let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
+        (rc == 0).then_some(t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9)
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        None
+    }
+}
+
 /// The time (s) the calling thread has spent runnable but waiting for a CPU (the run-queue
 /// delay, second field of `/proc/thread-self/schedstat`, ns): on a loaded machine, the part of
 /// its wall time that other processes took. `None` where it cannot be read (not Linux, or a
@@ -367,6 +387,7 @@ mod tests {
                 }),
                 end: "reached_end",
                 failure: None,
+                cpu_seconds: None,
             }],
             error: None,
             wall_seconds: 0.123456789,
