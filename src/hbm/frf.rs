@@ -224,22 +224,24 @@ fn later_start<F: HarmonicForce>(
     fp: &FrequencyPath<'_, '_, F>,
     opts: &ContinuationOptions,
 ) -> Option<(NewtonSolution<F::State>, f64)> {
-    let direction = (opts.end - opts.start).signum();
-    let mut steps = 0.5;
-    loop {
-        steps *= 2.0;
-        let to = opts.start + direction * steps * opts.initial_step;
-        if direction * (opts.end - to) <= 0.0 {
-            return None;
-        }
+    jump_targets(opts.start, opts).find_map(|to| {
         let shifted = ContinuationOptions {
             start: to,
             ..opts.clone()
         };
-        if let Ok((sol, _)) = start_point(fp, &shifted) {
-            return Some((sol, to));
-        }
-    }
+        start_point(fp, &shifted).ok().map(|(sol, _)| (sol, to))
+    })
+}
+
+/// The frequencies (rad/s) a sweep tries beyond ω = `from` when it jumps ([`jump_on`]) or
+/// looks for a later start ([`later_start`]): `from` ± 1, 2, 4, 8, … initial steps towards the
+/// end of the range, while they lie within it.
+fn jump_targets(from: f64, opts: &ContinuationOptions) -> impl Iterator<Item = f64> {
+    let direction = (opts.end - opts.start).signum();
+    let (end, step) = (opts.end, opts.initial_step);
+    std::iter::successors(Some(1.0_f64), |steps| Some(2.0 * steps))
+        .map(move |steps| from + direction * steps * step)
+        .take_while(move |to| direction * (end - to) > 0.0)
 }
 
 /// One jump of [`frequency_response`] after `path` left the range: the jump and the path traced
@@ -267,14 +269,7 @@ fn jump_on<F: HarmonicForce>(
         return Ok(None);
     }
     // one initial step on; where no solution is found there, 2, 4, 8, … steps within the range
-    let mut found = None;
-    let mut steps = 0.5;
-    loop {
-        steps *= 2.0;
-        let to = from + direction * steps * opts.initial_step;
-        if direction * (opts.end - to) <= 0.0 {
-            break;
-        }
+    let found = jump_targets(from, opts).find_map(|to| {
         let segment_opts = ContinuationOptions {
             start: to,
             max_points: remaining,
@@ -284,11 +279,8 @@ fn jump_on<F: HarmonicForce>(
             Ok(sol) => Some(sol),
             Err(_) => start_point(fp, &segment_opts).ok().map(|(sol, _)| sol),
         };
-        if let Some(sol) = landed {
-            found = Some((to, segment_opts, sol));
-            break;
-        }
-    }
+        landed.map(|sol| (to, segment_opts, sol))
+    });
     let Some((to, segment_opts, landed)) = found else {
         return Ok(None);
     };
