@@ -554,10 +554,15 @@ fn to_scale(tangent: &[f64], scales: &mut Scales, x_scale: f64) -> Vec<f64> {
     t.iter().map(|v| v / len).collect()
 }
 
-/// (u, μ) = (x / x_s, λ / λ_s).
+/// (u, μ) = (x / x_s, λ / λ_s) of a path point.
 fn scaled<T>(p: &PathPoint<T>, s: &Scales) -> Vec<f64> {
-    let mut y: Vec<f64> = p.x.iter().map(|x| x / s.x).collect();
-    y.push(p.parameter / s.lambda);
+    scaled_xy(&p.x, p.parameter, s)
+}
+
+/// (u, μ) = (x / x_s, λ / λ_s) for the unknowns `x` and the parameter λ.
+fn scaled_xy(x: &[f64], parameter: f64, s: &Scales) -> Vec<f64> {
+    let mut y: Vec<f64> = x.iter().map(|x| x / s.x).collect();
+    y.push(parameter / s.lambda);
     y
 }
 
@@ -710,8 +715,7 @@ fn correct<S: ParameterSystem>(
     initial: Option<Factored>,
 ) -> std::result::Result<(NewtonSolution<S::State>, Option<Tangent>), String> {
     let done = correct_on(system, state, predicted, tangent, tangent, s, opts, initial)?;
-    let mut y: Vec<f64> = done.0.x.iter().map(|x| x / s.x).collect();
-    y.push(done.0.parameter / s.lambda);
+    let y = scaled_xy(&done.0.x, done.0.parameter, s);
     let off: Vec<f64> = y.iter().zip(predicted).map(|(a, b)| a - b).collect();
     let last = y.len() - 1;
     let went_back = (y[last] - (predicted[last] - step * tangent[last])) * tangent[last] < 0.0;
@@ -931,8 +935,7 @@ fn kink_step<S: ParameterSystem>(
             ) else {
                 continue;
             };
-            let mut y: Vec<f64> = sol.x.iter().map(|x| x / s.x).collect();
-            y.push(sol.parameter / s.lambda);
+            let y = scaled_xy(&sol.x, sol.parameter, s);
             let off: Vec<f64> = y.iter().zip(&predicted).map(|(a, b)| a - b).collect();
             let moved: Vec<f64> = y.iter().zip(&y_c).map(|(a, b)| a - b).collect();
             let t = t.oriented(orientation);
@@ -1013,8 +1016,7 @@ fn corner_step<S: ParameterSystem>(
             ) else {
                 continue;
             };
-            let mut y: Vec<f64> = sol.x.iter().map(|x| x / s.x).collect();
-            y.push(sol.parameter / s.lambda);
+            let y = scaled_xy(&sol.x, sol.parameter, s);
             let moved: Vec<f64> = y.iter().zip(&y_c).map(|(a, b)| a - b).collect();
             let length = norm(&moved);
             let t = t.oriented(orientation);
@@ -1095,8 +1097,7 @@ fn full_step<S: ParameterSystem>(
             ) else {
                 continue;
             };
-            let mut y: Vec<f64> = sol.x.iter().map(|x| x / s.x).collect();
-            y.push(sol.parameter / s.lambda);
+            let y = scaled_xy(&sol.x, sol.parameter, s);
             let moved: Vec<f64> = y.iter().zip(&y_c).map(|(a, b)| a - b).collect();
             let length = norm(&moved);
             if length > 4.0 * h {
