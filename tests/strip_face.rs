@@ -14,19 +14,18 @@
 //! * keyed errors for a face strip given wrongly.
 
 use std::collections::BTreeMap;
-use std::f64::consts::TAU;
 use std::path::{Path, PathBuf};
 
 use nlrom::case::{Case, FrictionElement};
-use nlrom::commands::progress::Reporter;
-use nlrom::commands::solve::{solve_case, SolveOptions};
 use nlrom::mesh::msh::read_msh;
 use nlrom::mesh::Mesh;
 use nlrom::model::{self, StructuralModel};
-use nlrom::output::ResultsFile;
 use nlrom::problem::face_strip::face_points;
 use nlrom::problem::matrix_case::strip_points;
-use nlrom::problem::rom_store::RomPolicy;
+
+#[path = "support/face_bar.rs"]
+mod face_bar;
+use face_bar::{agreement, case_text, solve};
 
 /// The bar damper: length, side, elements along x.
 const L: f64 = 1.25;
@@ -141,28 +140,7 @@ fn face_points_integrate_the_consistent_surface_matrix() {
 
 /// The bar case with the strip `strip` (TOML lines) and `extra` tables.
 fn bar_case(dir: &Path, strip: &str, extra: &str) -> Case {
-    let text = format!(
-        r#"
-[model]
-mesh = "{mesh}"
-material = {{ young = 200e9, poisson = 0.3, density = 7800.0 }}
-clamp = ["clamp"]
-damping = {{ modal = 0.005 }}
-
-[excitation]
-group = "tip"
-force = [2.0, 0.0, 0.0]
-
-[response]
-groups = ["tip"]
-
-[[strip]]
-name = "pads"
-{strip}
-{extra}
-"#,
-        mesh = root().join("meshes/damper_bar.msh").display()
-    );
+    let text = case_text(&root().join("meshes/damper_bar.msh"), strip, extra);
     Case::from_str(&text, &dir.join("bar.toml")).unwrap()
 }
 
@@ -345,16 +323,6 @@ fn face_strip_adds_up_to_the_line_strip_of_the_same_length_width_and_load() {
 /// where slip has run in from the tip.
 const MAP_HZ: [f64; 2] = [1330.0, 1341.0];
 
-fn solve(case: &Case) -> ResultsFile {
-    solve_case(
-        case,
-        &SolveOptions::new(RomPolicy::ReadIfMatching),
-        &Reporter::silent(),
-    )
-    .unwrap()
-    .results
-}
-
 /// The bar's forced response near its first axial resonance at H = 1 with the exact cycle, with
 /// the face strip and with the hand-built line strip (no normal motion, as the paper's bar; the
 /// normal weights are compared above): at the chosen frequencies the tip's harmonics agree to 1e-6 of their amplitude, and each face
@@ -372,58 +340,12 @@ fn mesh_case_with_a_face_strip_responds_as_the_line_strip() {
     let face = solve(&bar_case(dir.path(), &face_strip(2, 0.0, ""), &extra));
     let line = solve(&bar_case(dir.path(), &line_strip(&m, 2, 0.0, ""), &extra));
     assert_eq!(face.maps.len(), MAP_HZ.len());
-    assert_eq!(line.maps.len(), face.maps.len());
-    let apart = |x: f64, y: f64| {
-        let d = (x - y).rem_euclid(TAU);
-        d.min(TAU - d)
-    };
-    let mut mixed = false;
-    for (a, b) in face.maps.iter().zip(&line.maps) {
-        assert_eq!(a.omega, b.omega);
-        let ha = &face.frfs[0].points[a.point].harmonics;
-        let hb = &line.frfs[0].points[b.point].harmonics;
-        assert_eq!(ha.len(), hb.len());
-        let amp = ha.iter().map(|h| h.norm()).fold(0.0, f64::max);
-        let off = ha
-            .iter()
-            .zip(hb)
-            .map(|(x, y)| (x - y).norm())
-            .fold(0.0, f64::max);
-        let n = a.phase.len();
-        assert_eq!(a.position.len(), 4 * b.position.len());
-        let (mut differ, mut angle) = (0usize, 0.0f64);
-        for e in 0..b.position.len() {
-            let tb = &b.transition_angles
-                [b.transition_offsets[e] as usize..b.transition_offsets[e + 1] as usize];
-            for f in 4 * e..4 * e + 4 {
-                let ta = &a.transition_angles
-                    [a.transition_offsets[f] as usize..a.transition_offsets[f + 1] as usize];
-                assert_eq!(ta.len(), tb.len(), "transitions of face point {f}");
-                for (x, y) in ta.iter().zip(tb) {
-                    angle = angle.max(apart(*x, *y));
-                }
-                for j in 0..n {
-                    let near = ta.iter().chain(tb).any(|&t| apart(t, a.phase[j]) < 1e-6);
-                    if !near && a.state[f * n + j] != b.state[e * n + j] {
-                        differ += 1;
-                    }
-                }
-            }
-        }
-        let count = |code: i64| b.state.iter().filter(|&&s| s == code).count();
-        eprintln!(
-            "{} Hz: tip amplitude {amp:.4e} m, face − line {:.2e} of it; maps: {differ} samples differ, angles within {angle:.2e} rad; line samples stick {} slip {}",
-            a.omega / TAU,
-            off / amp,
-            count(0),
-            count(-1) + count(1)
-        );
-        assert!(off <= 1e-6 * amp, "{off:e} of {amp:e}");
-        assert_eq!(differ, 0);
-        assert!(angle < 1e-6, "{angle:e}");
-        mixed |= count(0) > 0 && count(-1) + count(1) > 0;
-    }
-    assert!(mixed, "no map with both stick and slip");
+    // four face points (two pads, two Gauss points across) per line point
+    let agree = agreement(&face, &line, 4, 1e-6);
+    assert!(agree.harmonics <= 1e-6, "{:e}", agree.harmonics);
+    assert_eq!(agree.differ, 0);
+    assert!(agree.angle < 1e-6, "{:e}", agree.angle);
+    assert!(agree.mixed, "no map with both stick and slip");
 }
 
 /// The error text of a case that fails to load or to build its strip points.

@@ -124,8 +124,9 @@ pub enum CaseKind {
     /// marching only.
     Damper,
     /// A model on matrix rows: matrices without a mesh, or any model (also one assembled from a
-    /// mesh) with `[[element]]` friction elements on DOF combinations. Solved on the dense free
-    /// rows, without reduction.
+    /// mesh) with `[[element]]` friction elements on DOF combinations or `[[strip]]` entries.
+    /// Solved on the dense free rows; a mesh model with `[reduction]` on its Craig–Bampton model,
+    /// whose masters keep the rows the elements and strips read.
     Matrix,
     /// A mesh model with `[reduction]` (optionally `[cyclic]`) and `[[contact]]` interfaces
     /// between node groups: solved on the reduced sector.
@@ -134,7 +135,8 @@ pub enum CaseKind {
 
 impl Case {
     /// The kind of the case: `[damper]` → [`CaseKind::Damper`]; no mesh, or any `[[element]]`
-    /// or `[[strip]]` → [`CaseKind::Matrix`] (elements act on matrix rows, which only the unreduced model has);
+    /// or `[[strip]]` → [`CaseKind::Matrix`] (elements act on matrix rows: the unreduced model's,
+    /// or with `[reduction]` the master rows of its Craig–Bampton model);
     /// else [`CaseKind::Sector`].
     pub fn kind(&self) -> CaseKind {
         if self.damper.is_some() {

@@ -45,6 +45,7 @@ use crate::output::{
     PointLoops, ResponseDof, ResultsFile,
 };
 use crate::problem::matrix_case::{matrix_elements, matrix_setup, strip_points};
+use crate::problem::matrix_rom::reduced_matrix_model;
 use crate::problem::rom_store::{create_parent, sector_rom, RomOrigin, RomPolicy};
 use crate::problem::sector::SectorProblem;
 use crate::problem::settings::case_continuation;
@@ -247,6 +248,7 @@ fn solve_matrix(
         )));
     }
     let model = model::build(case, &mut |l| rep.detail(l))?;
+    let model = reduced_matrix_model(case, model, &mut |l| rep.detail(l))?;
     let curves = points
         .par_iter()
         .map(|pc| matrix_curve(pc, &model, stability, rep))

@@ -6,6 +6,7 @@
 
 use super::damper::damper_system;
 use super::matrix_case::matrix_march;
+use super::matrix_rom::reduced_matrix_model;
 use super::sector_march::sector_march;
 use crate::case::{Case, CaseKind, MarchScheme};
 use crate::error::{Error, Result};
@@ -78,6 +79,7 @@ pub fn case_march(
         });
     }
     let structural = model::build(case, log)?;
+    let structural = reduced_matrix_model(case, structural, log)?;
     let (system, response) = matrix_march(case, &structural)?;
     let response_dofs = response
         .iter()

@@ -62,7 +62,7 @@ pub fn matrix_setup(case: &Case, model: &StructuralModel) -> Result<MatrixSetup>
     let n = model.free.n_free();
     if n > MAX_DENSE_DOFS {
         return Err(Error::input(format!(
-            "{name}: the model has {n} free DOF; the harmonic balance of a matrix-defined case is dense and handles up to {MAX_DENSE_DOFS} — reduce the model first (a [reduction] case)"
+            "{name}: the model has {n} free DOF; the harmonic balance of a matrix-defined case is dense and handles up to {MAX_DENSE_DOFS}; on a mesh model, give `[reduction] interface_modes = N` to solve it on its Craig–Bampton model"
         )));
     }
     let free_of = free_row_map(model);
