@@ -7,13 +7,13 @@ use faer::Mat;
 /// Vectors from this length on take the VEX-encoded kernel of [`dot`] where the CPU has AVX.
 const VEX_FROM: usize = 64;
 
-/// xᵀ y, summed in eight interleaved partial sums ([`dot_baseline`]). From [`VEX_FROM`] entries
-/// on, on an x86-64 CPU with AVX, the same operations in the same order run in VEX-encoded
-/// instructions (the same result to the bit): SSE-encoded instructions slow down while the upper
-/// halves of the vector registers are in use (left so by a kernel of another library; see
-/// [`release_vector_registers`]), the VEX-encoded ones do not. Measured on the sector's pass over
-/// [A_stick⁻¹P, −A_stick⁻¹C] (289 × 578): 101 µs SSE-encoded with the upper halves in use, 37 µs
-/// without, 36 µs VEX-encoded in either case.
+/// xᵀ y, summed in eight interleaved partial sums ([`dot_baseline`]). From `VEX_FROM` (64)
+/// entries on, on an x86-64 CPU with AVX, the same operations in the same order run in
+/// VEX-encoded instructions (the same result to the bit): SSE-encoded instructions slow down while
+/// the upper halves of the vector registers are in use (left so by a kernel of another library,
+/// here faer's AVX-512 kernels, after which this module clears them), the VEX-encoded ones do
+/// not. Measured on the sector's pass over [A_stick⁻¹P, −A_stick⁻¹C] (289 × 578): 101 µs
+/// SSE-encoded with the upper halves in use, 37 µs without, 36 µs VEX-encoded in either case.
 pub fn dot(x: &[f64], y: &[f64]) -> f64 {
     #[cfg(target_arch = "x86_64")]
     if x.len() >= VEX_FROM && std::arch::is_x86_feature_detected!("avx") {
