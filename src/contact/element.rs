@@ -764,14 +764,24 @@ impl StickRuns<'_> {
         self.beta.fill(0.0);
         let mut live = false;
         let mut j0 = last;
-        let mut j = last;
-        for _ in 0..n_t {
-            j = if j + 1 == n_t { 0 } else { j + 1 };
+        // the samples after `last`, cyclically, ending at `last` (not stuck): positions 1..=n_t
+        let at = |p: usize| (last + p) % n_t;
+        let mut p = 1;
+        while p <= n_t {
+            let j = at(p);
             if stick(j) {
-                for (bk, bv) in self.beta.iter_mut().zip(aft.analysis_column(j)) {
-                    *bk += bv;
+                // the stick run from position p: β += its analysis columns, in the order of the
+                // samples (split where the run wraps round the period)
+                let mut end = p;
+                while end <= n_t && stick(at(end)) {
+                    end += 1;
                 }
+                let (first, length) = (j, end - p);
+                let direct = length.min(n_t - first);
+                aft.add_analysis_columns(first..first + direct, self.beta);
+                aft.add_analysis_columns(0..length - direct, self.beta);
                 live = true;
+                p = end;
                 continue;
             }
             if live {
@@ -780,6 +790,7 @@ impl StickRuns<'_> {
                 live = false;
             }
             j0 = j;
+            p += 1;
         }
     }
 

@@ -1356,6 +1356,48 @@ mod tests {
         }
     }
 
+    /// The condensation into kept buffers ([`LinearModel::condense_small`]) gives what
+    /// [`LinearModel::condense_applied`] gives, bit for bit (D̄, F̄, ∂D̄/∂ω q and ∂F̄/∂ω), for
+    /// every harmonic 0..2 of a damped 7-DOF model with 3 nonlinear DOFs forced on linear and
+    /// nonlinear rows, at two frequencies, with the same buffers throughout.
+    #[test]
+    fn small_condensation_equals_the_formed_one_bit_for_bit() {
+        let model = damped_seven_dof([5, 400, 650, 30]);
+        let mut out = CondensedApplied {
+            stiffness: Mat::zeros(0, 0),
+            force: Vec::new(),
+            stiffness_derivative_q: Vec::new(),
+            force_derivative: Vec::new(),
+        };
+        let mut buffers = SmallBuffers::default();
+        for omega in [0.77, 1.21] {
+            for h in 0..=2 {
+                let q: Vec<c64> = (0..3)
+                    .map(|i| {
+                        let im = if h == 0 { 0.0 } else { noise(60 + i) };
+                        c64::new(noise(80 + i), im)
+                    })
+                    .collect();
+                let full = model.condense_applied(h, omega, &q).unwrap();
+                model
+                    .condense_small(h, omega, &q, &mut out, &mut buffers)
+                    .unwrap();
+                for i in 0..3 {
+                    for j in 0..3 {
+                        assert_eq!(
+                            out.stiffness[(i, j)],
+                            full.stiffness[(i, j)],
+                            "D̄ {h} {i} {j}"
+                        );
+                    }
+                }
+                assert_eq!(out.force, full.force, "F̄, harmonic {h}");
+                assert_eq!(out.stiffness_derivative_q, full.stiffness_derivative_q);
+                assert_eq!(out.force_derivative, full.force_derivative);
+            }
+        }
+    }
+
     /// The deferred condensation ([`LinearModel::condense_deferred`]: products on the LU of
     /// D_LL) gives what the formed one gives ([`LinearModel::condense_applied`]) on a damped
     /// 7-DOF model with 3 nonlinear DOFs forced on linear and nonlinear rows, for every

@@ -180,7 +180,7 @@ fn count(path: SolvePath, n: usize) {
 
 /// The linear solver of Newton steps and tangents: the block partition of the matrices it will
 /// see (see the module documentation) and the choice of path; it keeps one block-stored matrix
-/// and up to [`SPARE_DENSE`] dense ones handed back by [`LinearSolver::recycle`] for the next
+/// and up to two dense ones handed back by [`LinearSolver::recycle`] for the next
 /// [`LinearSolver::linearization`] or [`LinearSolver::dense_matrix`] (no allocation of the
 /// matrices per evaluation).
 #[derive(Debug, Default)]
@@ -188,7 +188,7 @@ pub struct LinearSolver {
     blocks: Vec<usize>,
     choice: SolverChoice,
     spare: Mutex<Option<BlockJacobian>>,
-    /// Dense matrices handed back ([`LinearSolver::recycle`]), at most [`SPARE_DENSE`], for
+    /// Dense matrices handed back ([`LinearSolver::recycle`]), at most `SPARE_DENSE`, for
     /// the next [`LinearSolver::linearization`] or [`LinearSolver::dense_matrix`].
     spare_dense: Mutex<Vec<Mat<f64>>>,
 }
