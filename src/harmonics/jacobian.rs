@@ -454,6 +454,18 @@ impl Jacobian {
         }
     }
 
+    /// Multiplies every entry by `c` (a block-stored border is unchanged).
+    pub fn scale(&mut self, c: f64) {
+        match self {
+            Jacobian::Dense(a) => {
+                for j in 0..a.ncols() {
+                    a.col_mut(j).iter_mut().for_each(|v| *v *= c);
+                }
+            }
+            Jacobian::Blocks(b) => b.scale(c),
+        }
+    }
+
     /// y = A x.
     pub fn mul_vec(&self, x: &[f64]) -> Vec<f64> {
         match self {
