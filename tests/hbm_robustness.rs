@@ -381,6 +381,22 @@ fn scaled_elements(case: &corpus::Case, s: f64) -> nlrom::contact::grounded::Dof
         .expect("valid elements")
 }
 
+/// Newton at the fixed ω (rad/s) from `x0` on the system whose elements are scaled by `s`
+/// ([`scaled_elements`]; s = 0: the linear response without them).
+fn solve_scaled(case: &corpus::Case, s: f64, omega: f64, x0: &[f64]) -> Vec<f64> {
+    use nlrom::nonlinear::{solve_fixed, ParameterSystem};
+    let scaled = scaled_elements(case, s);
+    let system =
+        nlrom::hbm::HbmSystem::new(case.layout, &case.model, &scaled).expect("valid system");
+    let fp = nlrom::hbm::FrequencyPath {
+        system: &system,
+        level: 1.0,
+    };
+    solve_fixed(&fp, x0, omega, &fp.initial_state(), &case.options.newton)
+        .unwrap_or_else(|f| panic!("s = {s}: {}", f.message))
+        .x
+}
+
 /// The homotopy r(Q, s) = D̄ Q − F̄_e + s F_nl(Q) of the start procedure
 /// ([`nlrom::hbm::ForceScalePath`]) equals the residual and Jacobian of the system whose
 /// elements are scaled by s ([`scaled_elements`]) to 1e-12, and its ∂r/∂s equals the central
@@ -399,20 +415,7 @@ fn the_force_scale_homotopy_is_the_scaled_force() {
     };
     let dim = path.dim();
     // a state with slip and separation: the linear response without the element
-    let none = scaled_elements(&case, 0.0);
-    let linear = nlrom::hbm::HbmSystem::new(case.layout, &case.model, &none).expect("valid system");
-    let free = nlrom::nonlinear::solve_fixed(
-        &nlrom::hbm::FrequencyPath {
-            system: &linear,
-            level: 1.0,
-        },
-        &vec![0.0; dim],
-        omega,
-        &path.initial_state(),
-        &case.options.newton,
-    )
-    .expect("the linear response");
-    let q = free.x;
+    let q = solve_scaled(&case, 0.0, omega, &vec![0.0; dim]);
     let s = 0.37;
     let mut lin = Linearization::zeros(dim);
     path.evaluate(&q, s, &path.initial_state(), &mut lin)
@@ -483,7 +486,6 @@ fn the_force_scale_homotopy_is_the_scaled_force() {
 #[test]
 fn a_strongly_excited_sweep_lands_by_the_continuation_in_the_force() {
     use nlrom::hbm::frf::{land_at, JumpCause};
-    use nlrom::nonlinear::{solve_fixed, ParameterSystem};
     let (case, mut frf) = aft_case_to_its_end(259, "pair H=7 Nt=16");
     let late = frf
         .jumps
@@ -512,37 +514,11 @@ fn a_strongly_excited_sweep_lands_by_the_continuation_in_the_force() {
         .copied()
         .unwrap_or_else(|| panic!("{}: the curve does not cross {omega}", case.label));
     let traced = &frf.points[at].q;
-    let mut x = {
-        let none = scaled_elements(&case, 0.0);
-        let linear =
-            nlrom::hbm::HbmSystem::new(case.layout, &case.model, &none).expect("valid system");
-        let fp = nlrom::hbm::FrequencyPath {
-            system: &linear,
-            level: 1.0,
-        };
-        solve_fixed(
-            &fp,
-            &vec![0.0; fp.dim()],
-            omega,
-            &fp.initial_state(),
-            &case.options.newton,
-        )
-        .expect("the linear response")
-        .x
-    };
+    let mut x = solve_scaled(&case, 0.0, omega, &vec![0.0; traced.len()]);
     let steps = 40;
     for k in 0..=steps {
         let s = 1e-3_f64.powf(1.0 - k as f64 / steps as f64);
-        let scaled = scaled_elements(&case, s);
-        let sys =
-            nlrom::hbm::HbmSystem::new(case.layout, &case.model, &scaled).expect("valid system");
-        let fp = nlrom::hbm::FrequencyPath {
-            system: &sys,
-            level: 1.0,
-        };
-        x = solve_fixed(&fp, &x, omega, &fp.initial_state(), &case.options.newton)
-            .unwrap_or_else(|f| panic!("s = {s}: {}", f.message))
-            .x;
+        x = solve_scaled(&case, s, omega, &x);
     }
     let norm = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
     let diff: Vec<f64> = x.iter().zip(traced).map(|(a, b)| a - b).collect();
