@@ -11,10 +11,10 @@
 use std::sync::{Arc, Mutex, OnceLock};
 
 use faer::linalg::matmul::matmul;
-use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::{c64, Accum, Mat, MatRef, Par};
 
 use crate::error::{Error, Result};
+use crate::nonlinear::lu::PackedLu;
 
 /// The matrices of one harmonic index (or of a model without cyclic symmetry) and its
 /// partition into nonlinear (condensed) and linear DOFs.
@@ -222,7 +222,7 @@ enum OperatorKind {
 struct Coupling {
     d_nl: Mat<c64>,
     d_ln: Mat<c64>,
-    lu: PartialPivLu<c64>,
+    lu: PackedLu<c64>,
 }
 
 impl std::fmt::Debug for HarmonicOperator {
@@ -637,7 +637,7 @@ impl LinearModel {
         if part.linear.is_empty() {
             return Ok(r);
         }
-        let lu = factor(&part.dynamic(Part::LL, s), n, omega)?;
+        let lu = factor(part.dynamic(Part::LL, s), n, omega)?;
         let ln_q = part.dynamic_times(Part::LN, s, q_n);
         let mut t = Mat::from_fn(ln_q.len(), 1, |i, _| ln_q[i] - f_l[i] * level);
         lu.solve_in_place(t.as_mut());
@@ -719,7 +719,7 @@ impl LinearModel {
             return Ok((applied, op));
         }
         let n_l = part.linear.len();
-        let lu = factor(&part.dynamic(Part::LL, s), n, omega)?;
+        let lu = factor(part.dynamic(Part::LL, s), n, omega)?;
         let (d_nl, d_ln) = (part.dynamic(Part::NL, s), part.dynamic(Part::LN, s));
         // [v | w] = D_LL⁻¹ [D_LN q | F_L]
         let ln_q = times(&d_ln, q_n);
@@ -860,10 +860,10 @@ fn solve_ll(
     n: usize,
     omega: f64,
     f_l: &[c64],
-) -> Result<(PartialPivLu<c64>, Mat<c64>)> {
+) -> Result<(PackedLu<c64>, Mat<c64>)> {
     let s = n as f64 * omega;
     let n_n = part.nonlinear.len();
-    let lu = factor(&part.dynamic(Part::LL, s), n, omega)?;
+    let lu = factor(part.dynamic(Part::LL, s), n, omega)?;
     let d_ln = part.dynamic(Part::LN, s);
     let mut xw = Mat::<c64>::zeros(part.linear.len(), n_n + 1);
     xw.as_mut().subcols_mut(0, n_n).copy_from(&d_ln);
@@ -875,10 +875,9 @@ fn solve_ll(
 }
 
 /// LU of D_LL⁽ⁿ⁾ with a check on the pivots (relative 1e-13) for singularity.
-fn factor(d: &Mat<c64>, n: usize, omega: f64) -> Result<PartialPivLu<c64>> {
-    let lu = d.partial_piv_lu();
-    let u = lu.U();
-    let diag: Vec<f64> = (0..u.nrows()).map(|i| u[(i, i)].norm()).collect();
+fn factor(d: Mat<c64>, n: usize, omega: f64) -> Result<PackedLu<c64>> {
+    let lu = PackedLu::in_place(d);
+    let diag: Vec<f64> = (0..lu.nrows()).map(|i| lu.pivot(i).norm()).collect();
     let max = diag.iter().cloned().fold(0.0, f64::max);
     let min = diag.iter().cloned().fold(f64::INFINITY, f64::min);
     let regular = min > 1e-13 * max;
@@ -963,6 +962,7 @@ fn check_static_block_real(block: &MatrixBlock, force: &[c64]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use faer::linalg::solvers::Solve;
 
     /// Deterministic numbers in [−0.5, 0.5).
     fn noise(seed: usize) -> f64 {
