@@ -351,6 +351,13 @@ impl LinearSolver {
         }
     }
 
+    /// Drops the block-stored matrix kept for reuse (e.g. before work that allocates its own).
+    pub fn release_storage(&self) {
+        if let Ok(mut spare) = self.spare.lock() {
+            *spare = None;
+        }
+    }
+
     /// Whether the Jacobians of `dim` unknowns are stored by blocks: a partition of `dim` is
     /// known and the choice is [`SolverChoice::Structured`], or [`SolverChoice::Auto`] at
     /// [`AUTO_MIN_UNKNOWNS`] unknowns or more.

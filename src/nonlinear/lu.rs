@@ -114,7 +114,9 @@ mod tests {
     #[test]
     fn packed_matches_faer_to_the_bit() {
         for n in [1usize, 7, 64, 150] {
-            let a = Mat::from_fn(n, n, |i, j| noise(i * 1000 + j) + if i == j { 0.5 } else { 0.0 });
+            let a = Mat::from_fn(n, n, |i, j| {
+                noise(i * 1000 + j) + if i == j { 0.5 } else { 0.0 }
+            });
             let b = Mat::from_fn(n, 3, |i, j| noise(7 * i + 100_000 + j));
             let packed = PackedLu::new(a.as_ref());
             let faer_lu = a.partial_piv_lu();
@@ -142,7 +144,9 @@ mod tests {
     #[test]
     fn packed_solves() {
         let n = 40;
-        let a = Mat::from_fn(n, n, |i, j| noise(31 * i + j) + if i == j { 3.0 } else { 0.0 });
+        let a = Mat::from_fn(n, n, |i, j| {
+            noise(31 * i + j) + if i == j { 3.0 } else { 0.0 }
+        });
         let b = Mat::from_fn(n, 1, |i, _| noise(i + 999));
         let mut x = b.clone();
         PackedLu::new(a.as_ref()).solve_in_place(x.as_mut());

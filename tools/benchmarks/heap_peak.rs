@@ -213,7 +213,11 @@ fn site(stack: &Backtrace, depth: usize) -> String {
             _ => name,
         })
         .collect();
-    names.into_iter().take(depth).collect::<Vec<_>>().join(" < ")
+    names
+        .into_iter()
+        .take(depth)
+        .collect::<Vec<_>>()
+        .join(" < ")
 }
 
 /// Prints the high-water mark since [`reset`] (MB above `base` bytes) and, when recorded, the
@@ -235,9 +239,7 @@ pub fn report(base: usize, depth: usize) {
     if let Ok(t) = TABLE.lock() {
         let mut by_site: BTreeMap<String, (usize, usize)> = BTreeMap::new();
         for r in &t.at_peak {
-            let e = by_site
-                .entry(site(&t.stacks[r.stack], depth))
-                .or_default();
+            let e = by_site.entry(site(&t.stacks[r.stack], depth)).or_default();
             e.0 += r.size;
             e.1 += 1;
         }
