@@ -253,7 +253,7 @@ pub fn report(base: usize, depth: usize) {
             mb(t.peak_bytes.saturating_sub(large))
         );
         let mut rows: Vec<(String, (usize, usize))> = by_site.into_iter().collect();
-        rows.sort_by(|a, b| b.1 .0.cmp(&a.1 .0));
+        rows.sort_by_key(|r| std::cmp::Reverse(r.1 .0));
         for (name, (bytes, count)) in rows {
             eprintln!("  {:8.1} MB in {count:4}: {name}", mb(bytes));
         }
