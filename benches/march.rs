@@ -23,6 +23,9 @@
 //! (every scheme) or `NLROM_BENCH_SECTOR=piecewise-linear,quasi-static` (standard Newmark and
 //! the schemes named).
 //!
+//! With `NLROM_BENCH_SECTOR_QS=1` it adds the sector where the quasi-static method applies (15 Hz,
+//! standard Newmark and the quasi-static method, [`sector_quasi_static`]; about 70 s of CPU).
+//!
 //! With `NLROM_BENCH_PASS=1` it first times the products of one step in isolation on the sector's
 //! matrices ([`product_passes`]).
 //!
@@ -38,7 +41,7 @@ use nlrom::march::element::{Direction, Element};
 use nlrom::march::law::FrictionParams;
 use nlrom::march::signal::Harmonic;
 use nlrom::march::{march, InitialCondition, MarchOutcome, MarchSettings, MarchSystem};
-use nlrom::problem::march_case::case_march;
+use nlrom::problem::march_case::{case_march, CaseMarch};
 
 /// The schemes of Gastaldi & Berruti 2018 (friction elements), standard Newmark first.
 fn schemes() -> Vec<MarchScheme> {
@@ -174,11 +177,22 @@ fn sector() -> Model {
         cm.system.n,
         cm.system.elements.len()
     );
+    sector_model(name, cm, 2, sector_schemes())
+}
+
+/// A sector march of `periods` periods with the paper's settings (Newmark at the full-stick step,
+/// the quasi-static method at 300 steps per period), one round, `schemes` compared.
+fn sector_model(
+    name: &'static str,
+    cm: CaseMarch,
+    periods: usize,
+    schemes: Vec<MarchScheme>,
+) -> Model {
     Model {
         name,
         system: cm.system,
         settings: MarchSettings {
-            periods: 2,
+            periods,
             steps_per_period: 300,
             time_step: None,
             stop_at_steady: false,
@@ -186,8 +200,28 @@ fn sector() -> Model {
         },
         rounds: 1,
         progress: true,
-        schemes: sector_schemes(),
+        schemes,
     }
+}
+
+/// The reduced sector of `cases/sector8_march.toml` where the quasi-static method applies
+/// (`NLROM_BENCH_SECTOR_QS=1`): 15 Hz, a tenth of the first k = 0 mode, with 10× the force (the
+/// shroud slipping), as in `tests/march_sector.rs`; one period from the static equilibrium at
+/// t = 0 (the quasi-static response there, at rest: no start-up transient), standard Newmark at
+/// 0.15 𝕋_stick (about 475 000 steps and 3.6 GB of recorded history) and the quasi-static method
+/// at 300 steps per period.
+fn sector_quasi_static() -> Model {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/sector8_march.toml");
+    let text = std::fs::read_to_string(&path).expect("bundled case");
+    let text = text
+        .replace("force_scale = 100.0", "force_scale = 1000.0")
+        .replace("frequency_hz = 170.0", "frequency_hz = 15.0");
+    let case = Case::from_str(&text, &path).expect("sector case at 15 Hz");
+    let mut cm = case_march(&case, None, &mut |_| {}).expect("sector march");
+    cm.system.initial = InitialCondition::Static;
+    let name = "sector8 ROM, k = 0, 15 Hz, 10× the force, from static equilibrium";
+    let schemes = vec![MarchScheme::Newmark, MarchScheme::QuasiStatic];
+    sector_model(name, cm, 1, schemes)
 }
 
 /// The settings of `model` with `scheme`.
@@ -357,6 +391,9 @@ fn bench(c: &mut Criterion) {
     table(&jenkins_quasi_static());
     if std::env::var_os("NLROM_BENCH_SECTOR").is_some() {
         table(&sector());
+    }
+    if std::env::var_os("NLROM_BENCH_SECTOR_QS").is_some() {
+        table(&sector_quasi_static());
     }
     for (group, model) in [
         ("damper_200hz_one_period", &damper),
