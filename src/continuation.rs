@@ -43,8 +43,6 @@
 //!   turns back by more than half the range, or reaches [`ContinuationOptions::floor`] (ω = 0
 //!   for a frequency response), has left the range.
 
-use faer::Mat;
-
 use crate::error::{Error, Result};
 use crate::nonlinear::{
     linsolve, newton_core, norm, solve_fixed, Factored, Iterate, Jacobian, LinearSolver,
@@ -572,21 +570,35 @@ fn scaled_xy(x: &[f64], parameter: f64, s: &Scales) -> Vec<f64> {
 
 /// The scaled Jacobian [∂r/∂u  ∂r/∂μ] / r_s (`jacobian` = ∂r/∂x, `d_parameter` = ∂r/∂λ) as
 /// the first `dim` rows of a (dim+1)² matrix whose last row is `border`, stored as `jacobian`
-/// is (block-stored: scaled in place, with the border).
-fn bordered(jacobian: Jacobian, d_parameter: &[f64], s: &Scales, border: &[f64]) -> Jacobian {
+/// is (block-stored: scaled in place, with the border; dense: in a matrix of `solver`'s, to
+/// which `jacobian` is handed back, [`LinearSolver::recycle`]).
+fn bordered(
+    jacobian: Jacobian,
+    d_parameter: &[f64],
+    s: &Scales,
+    border: &[f64],
+    solver: &LinearSolver,
+) -> Jacobian {
     let n = d_parameter.len();
     let cx = s.x / s.residual;
     let cl = s.lambda / s.residual;
     match jacobian {
-        Jacobian::Dense(j) => Jacobian::Dense(Mat::from_fn(n + 1, n + 1, |i, k| {
-            if i == n {
-                border[k]
-            } else if k == n {
-                d_parameter[i] * cl
-            } else {
-                j[(i, k)] * cx
+        Jacobian::Dense(j) => {
+            let mut a = solver.dense_matrix(n + 1, n + 1);
+            for k in 0..n {
+                for i in 0..n {
+                    a[(i, k)] = j[(i, k)] * cx;
+                }
             }
-        })),
+            for i in 0..n {
+                a[(i, n)] = d_parameter[i] * cl;
+            }
+            for (k, b) in border.iter().enumerate() {
+                a[(n, k)] = *b;
+            }
+            solver.recycle(Jacobian::Dense(j));
+            Jacobian::Dense(a)
+        }
         Jacobian::Blocks(mut b) => {
             b.scale(cx);
             let column = d_parameter
@@ -634,7 +646,7 @@ fn initial_tangent(
     border[n] = direction;
     let jacobian = std::mem::take(&mut lin.jacobian);
     tangent_of(
-        &mut bordered(jacobian, &lin.d_parameter, s, &border),
+        &mut bordered(jacobian, &lin.d_parameter, s, &border, solver),
         solver,
     )
 }
@@ -786,7 +798,7 @@ fn correct_on<S: ParameterSystem>(
         ));
         let matrix = with_matrix.then(|| {
             let jacobian = std::mem::take(&mut lin.jacobian);
-            bordered(jacobian, &lin.d_parameter, s, border)
+            bordered(jacobian, &lin.d_parameter, s, border, solver)
         });
         Ok(Iterate {
             z: z.to_vec(),
@@ -901,7 +913,7 @@ fn kink_step<S: ParameterSystem>(
         let along = scaled_jacobian_times(&lin, s, tangent);
         let jacobian = std::mem::take(&mut lin.jacobian);
         let Some(beyond) = tangent_of(
-            &mut bordered(jacobian, &lin.d_parameter, s, tangent),
+            &mut bordered(jacobian, &lin.d_parameter, s, tangent, solver),
             solver,
         ) else {
             continue;

@@ -26,7 +26,8 @@ pub struct Aft {
     /// [1, cos τ_j, −sin τ_j, cos 2τ_j, …]; q(τ_j) = Σ_l synthesis[j][l] Q_l.
     synthesis: Vec<f64>,
     /// The analysis table (Q_k = Σ_j A[k][j] q(τ_j) for a band-limited q) transposed: row j
-    /// (length m) holds ∂Q_k/∂q(τ_j) for k = 0..2H.
+    /// (length m) holds ∂Q_k/∂q(τ_j) for k = 0..2H; followed by a few zeros, so that
+    /// [`Aft::add_analysis_columns`] may read a whole register block from the last row.
     analysis_columns: Vec<f64>,
     /// cos(2πq/N_t), sin(2πq/N_t) for q = 0..N_t−1.
     unit_circle: (Vec<f64>, Vec<f64>),
@@ -73,7 +74,7 @@ impl Aft {
                 analysis[2 * h * n + j] = -2.0 * s / n as f64;
             }
         }
-        let mut analysis_columns = vec![0.0; n * m];
+        let mut analysis_columns = vec![0.0; n * m + COLUMN_PAD];
         for k in 0..m {
             for j in 0..n {
                 analysis_columns[j * m + k] = analysis[k * n + j];
@@ -189,6 +190,27 @@ impl Aft {
         &self.analysis_columns[j * m..(j + 1) * m]
     }
 
+    /// `beta` (length m) += Σ_{j ∈ range} ∂Q/∂q(τ_j), the analysis columns of the samples
+    /// `range` ([`Aft::analysis_column`]), each coefficient summed in the order of j exactly as
+    /// one addition per sample would: for m ≤ 15 the sums are kept in a block of registers
+    /// rather than in `beta` between the samples.
+    pub fn add_analysis_columns(&self, range: std::ops::Range<usize>, beta: &mut [f64]) {
+        let m = self.layout.coefficients();
+        match m.div_ceil(4) * 4 {
+            4 => add_columns_in_block::<4>(&self.analysis_columns, m, range, beta),
+            8 => add_columns_in_block::<8>(&self.analysis_columns, m, range, beta),
+            12 => add_columns_in_block::<12>(&self.analysis_columns, m, range, beta),
+            16 => add_columns_in_block::<16>(&self.analysis_columns, m, range, beta),
+            _ => {
+                for j in range {
+                    for (bk, bv) in beta.iter_mut().zip(self.analysis_column(j)) {
+                        *bk += bv;
+                    }
+                }
+            }
+        }
+    }
+
     /// Discrete Fourier sums of the samples `a` (length N_t) of orders p = 0..=2H:
     /// c_p = Σ_j a_j cos(pτ_j)/N_t into `sums[2p]` and s_p = Σ_j a_j sin(pτ_j)/N_t into
     /// `sums[2p + 1]` (length 2(2H+1)), by one real FFT X_p = Σ_j a_j e^{−ipτ_j}
@@ -258,6 +280,32 @@ impl Aft {
     pub fn unit_circle(&self) -> (&[f64], &[f64]) {
         (&self.unit_circle.0, &self.unit_circle.1)
     }
+}
+
+/// Zeros after the analysis table ([`Aft::add_analysis_columns`]): the widest register block
+/// (16) less the narrowest row it serves (13).
+const COLUMN_PAD: usize = 3;
+
+/// [`Aft::add_analysis_columns`] with the `m` coefficients (m ≤ W ≤ m + [`COLUMN_PAD`]) held in
+/// W registers: row j of `columns` (stride m) is read as W values, of which the last W − m
+/// belong to the next row (or the padding) and are summed into lanes that are dropped.
+fn add_columns_in_block<const W: usize>(
+    columns: &[f64],
+    m: usize,
+    range: std::ops::Range<usize>,
+    beta: &mut [f64],
+) {
+    let mut sums = [0.0; W];
+    sums[..m].copy_from_slice(&beta[..m]);
+    for j in range {
+        let row: &[f64; W] = columns[j * m..j * m + W]
+            .try_into()
+            .expect("the table is padded for a whole block");
+        for (s, v) in sums.iter_mut().zip(row) {
+            *s += v;
+        }
+    }
+    beta[..m].copy_from_slice(&sums[..m]);
 }
 
 /// Copies the coefficients of `dof` from the harmonic-major vector `q` of `n_dof` DOFs into

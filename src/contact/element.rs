@@ -378,7 +378,8 @@ impl Workspace {
 /// `slider` holds the slider state at the start of the period on entry and the converged
 /// end-of-period state on return. Writes the local force coefficients `[F1; F2; Fn]` to `force`
 /// (signals·m, overwritten) and, if `jacobian`, the local Jacobian to the workspace
-/// ([`Workspace::jacobian`]).
+/// ([`Workspace::jacobian`]). The time signals are synthesised once; the forces and the
+/// Jacobian are formed once, from the march that is kept.
 pub fn evaluate(
     element: &LocalElement,
     aft: &Aft,
@@ -388,15 +389,19 @@ pub fn evaluate(
     jacobian: bool,
     ws: &mut Workspace,
 ) -> Result<Marching> {
+    element.check()?;
+    ws.analytic = None;
+    signals_to_time(element, aft, x, ws);
     let warm = *slider;
-    let marching = march_from(element, aft, x, slider, force, jacobian, ws)?;
+    let mut marched = march_periods(element, aft, slider, jacobian, ws);
     if warm != REST && !forgets_start(element, ws) {
         // The warm start gives the periodic state reached from rest only where every direction
         // forgets its start state in the last period; elsewhere march from rest.
         *slider = REST;
-        return march_from(element, aft, x, slider, force, jacobian, ws);
+        marched = march_periods(element, aft, slider, jacobian, ws);
     }
-    Ok(marching)
+    finish_period(element, aft, force, jacobian, &marched, ws);
+    Ok(marched.marching)
 }
 
 /// The slider state at rest (the origin of the relative motion), from which the periodic state
@@ -422,23 +427,11 @@ fn forgets_start(element: &LocalElement, ws: &Workspace) -> bool {
     })
 }
 
-/// [`evaluate`] from the caller's start state `slider` (no restart from [`REST`]).
-fn march_from(
-    element: &LocalElement,
-    aft: &Aft,
-    x: &[f64],
-    slider: &mut [f64; 2],
-    force: &mut [f64],
-    jacobian: bool,
-    ws: &mut Workspace,
-) -> Result<Marching> {
-    element.check()?;
-    ws.analytic = None;
+/// The time signals u1, u2, v of the local coefficients `x` into the workspace (absent
+/// signals zero).
+fn signals_to_time(element: &LocalElement, aft: &Aft, x: &[f64], ws: &mut Workspace) {
     let m = ws.m;
-    let nsig = element.signals();
-    debug_assert_eq!(x.len(), nsig * m);
-    debug_assert_eq!(force.len(), nsig * m);
-    // Time signals.
+    debug_assert_eq!(x.len(), element.signals() * m);
     for d in 0..2 {
         if d < element.tangential {
             aft.to_time(&x[d * m..(d + 1) * m], &mut ws.u[d], &mut ws.aft_scratch);
@@ -452,7 +445,26 @@ fn march_from(
     } else {
         ws.v.fill(0.0);
     }
-    // March periods until the end-of-period slider state repeats.
+}
+
+/// What [`march_periods`] did: how the marching ended, the start states of the march and of
+/// its last period, and whether its first period carried the derivative terms.
+struct Marched {
+    marching: Marching,
+    w_in: [f64; 2],
+    w_start: [f64; 2],
+    differentiated: bool,
+}
+
+/// Marches periods of the time signals in the workspace from the caller's start state
+/// `slider` (updated to the end state) until the end-of-period slider state repeats.
+fn march_periods(
+    element: &LocalElement,
+    aft: &Aft,
+    slider: &mut [f64; 2],
+    jacobian: bool,
+    ws: &mut Workspace,
+) -> Marched {
     let scale = ws.u[0]
         .iter()
         .chain(ws.u[1].iter())
@@ -492,7 +504,25 @@ fn march_from(
     }
     ws.marching = marching;
     *slider = w;
-    // Forces to harmonics.
+    Marched {
+        marching,
+        w_in,
+        w_start,
+        differentiated,
+    }
+}
+
+/// The forces of the last marched period to harmonics, and the Jacobian if asked for.
+fn finish_period(
+    element: &LocalElement,
+    aft: &Aft,
+    force: &mut [f64],
+    jacobian: bool,
+    marched: &Marched,
+    ws: &mut Workspace,
+) {
+    let m = ws.m;
+    debug_assert_eq!(force.len(), element.signals() * m);
     for d in 0..element.tangential {
         aft.to_harmonics(
             &ws.ft[d],
@@ -507,9 +537,9 @@ fn march_from(
     if jacobian && ws.samples_path && samples_suffice(element, ws) {
         jacobian_1d(element, aft, ws);
     } else if jacobian {
-        if !differentiated {
+        if !marched.differentiated {
             // The last period again (the same samples), now with the derivative terms.
-            let mut w_again = w_start;
+            let mut w_again = marched.w_start;
             march_period_differentiated(element, aft, ws, &mut w_again);
         }
         let shape = Shape::new(element, ws.m);
@@ -517,15 +547,14 @@ fn march_from(
             t.clear();
             t.resize(shape.cols, 0.0);
         });
-        if marching.periods > 1 && stuck_directions(&shape, &ws.derivative) {
-            let mut w_in = w_in;
-            for _ in 1..marching.periods {
+        if marched.marching.periods > 1 && stuck_directions(&shape, &ws.derivative) {
+            let mut w_in = marched.w_in;
+            for _ in 1..marched.marching.periods {
                 march_transient_chain(element, aft, ws, &shape, &mut w_in);
             }
         }
         finish_jacobian(element, aft, ws);
     }
-    Ok(marching)
 }
 
 /// [`evaluate`] with the chosen evaluation: `Aft` is [`evaluate`]; `Analytic` is the exact
@@ -735,14 +764,24 @@ impl StickRuns<'_> {
         self.beta.fill(0.0);
         let mut live = false;
         let mut j0 = last;
-        let mut j = last;
-        for _ in 0..n_t {
-            j = if j + 1 == n_t { 0 } else { j + 1 };
+        // the samples after `last`, cyclically, ending at `last` (not stuck): positions 1..=n_t
+        let at = |p: usize| (last + p) % n_t;
+        let mut p = 1;
+        while p <= n_t {
+            let j = at(p);
             if stick(j) {
-                for (bk, bv) in self.beta.iter_mut().zip(aft.analysis_column(j)) {
-                    *bk += bv;
+                // the stick run from position p: β += its analysis columns, in the order of the
+                // samples (split where the run wraps round the period)
+                let mut end = p;
+                while end <= n_t && stick(at(end)) {
+                    end += 1;
                 }
+                let (first, length) = (j, end - p);
+                let direct = length.min(n_t - first);
+                aft.add_analysis_columns(first..first + direct, self.beta);
+                aft.add_analysis_columns(0..length - direct, self.beta);
                 live = true;
+                p = end;
                 continue;
             }
             if live {
@@ -751,6 +790,7 @@ impl StickRuns<'_> {
                 live = false;
             }
             j0 = j;
+            p += 1;
         }
     }
 
@@ -840,10 +880,12 @@ fn march_period_one_direction(
     let fnormal = law::normal_force(p, 0.0);
     let separated = fnormal <= 0.0;
     let limit = p.mu * fnormal;
+    let reach = limit / p.kt;
     let (_, _, idle) = law::tangential_1d(p.kt, limit, separated, 0.0, 0.0);
     let mut slider = w[0];
     for j in 0..ws.n_t {
-        let (f, next, regime) = law::tangential_1d(p.kt, limit, separated, ws.u[0][j], slider);
+        let (f, next, regime) =
+            law::tangential_1d_reach(p.kt, limit, reach, separated, ws.u[0][j], slider);
         if stored && regime != Regime::Stick && regime == ws.regime[j][0] && f == ws.ft[0][j] {
             w[0] = ws.w[0][ws.n_t - 1];
             return;

@@ -126,6 +126,23 @@ pub const STICK_MARGIN: f64 = 8.0 * f64::EPSILON;
 /// `limit` = μ f_n (N), `separated` = (f_n = 0).
 #[inline]
 pub fn tangential_1d(kt: f64, limit: f64, separated: bool, u: f64, w: f64) -> (f64, f64, Regime) {
+    tangential_1d_reach(kt, limit, limit / kt, separated, u, w)
+}
+
+/// [`tangential_1d`] with the slip offset of the slider `reach` = `limit` / k_t (m) given,
+/// formed once for a whole period of constant limit: the slip sets w = u − σ·reach, σ = sgn
+/// f_tr, which is u − f_t/k_t bit for bit (IEEE division is correctly rounded and odd in its
+/// numerator, (−a)/b = −(a/b)), without a division on the chain from one sample's slider to
+/// the next.
+#[inline]
+pub fn tangential_1d_reach(
+    kt: f64,
+    limit: f64,
+    reach: f64,
+    separated: bool,
+    u: f64,
+    w: f64,
+) -> (f64, f64, Regime) {
     if separated {
         return (0.0, u, Regime::Separation);
     }
@@ -133,8 +150,11 @@ pub fn tangential_1d(kt: f64, limit: f64, separated: bool, u: f64, w: f64) -> (f
     if trial.abs() <= limit * (1.0 + STICK_MARGIN) {
         (trial, w, Regime::Stick)
     } else {
-        let f = limit.copysign(trial);
-        (f, u - f / kt, Regime::Slip)
+        (
+            limit.copysign(trial),
+            u - reach.copysign(trial),
+            Regime::Slip,
+        )
     }
 }
 

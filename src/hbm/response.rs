@@ -4,6 +4,7 @@
 
 use faer::c64;
 
+use super::linear::recover;
 use super::system::HbmSystem;
 use crate::error::Result;
 use crate::harmonics::HarmonicForce;
@@ -68,25 +69,23 @@ pub fn output_response<F: HarmonicForce>(
     let h = system.layout().harmonics;
     let nd = system.linear().n_condensed();
     let n_out = system.linear().n_outputs();
-    let condensed = system.condense_all(omega)?;
     let mut harmonics = vec![vec![c64::new(0.0, 0.0); h + 1]; n_out];
-    for (n, c) in condensed.iter().enumerate() {
+    for n in 0..=h {
+        let (recovery, offset) = system.linear().recovery(n, omega)?;
         let q_n: Vec<c64> = (0..nd).map(|d| complex_harmonic(system, q, n, d)).collect();
-        let mut out = c.recover(&q_n);
-        // the offset is the response to the excitation: scale it by the level
-        for (o, v) in out.iter_mut().enumerate() {
-            *v += c.recovery_offset[o] * (level - 1.0);
-        }
-        for (o, v) in out.into_iter().enumerate() {
-            harmonics[o][n] = if n == 0 { c64::new(v.re, 0.0) } else { v };
+        let out = recover(&recovery, &offset, &q_n);
+        for (o, (slot, v)) in harmonics.iter_mut().zip(out).enumerate() {
+            // the offset is the response to the excitation: scale it by the level
+            let v = v + offset[o] * (level - 1.0);
+            slot[n] = if n == 0 { c64::new(v.re, 0.0) } else { v };
         }
     }
     let amplitude = harmonics
         .iter()
         .map(|hs| hs.get(1).map_or(0.0, |q| q.norm()))
         .collect();
-    let samples = opts.peak_samples.max(8 * (h + 1));
-    let peak = harmonics.iter().map(|hs| peak_of(hs, samples)).collect();
+    let circle = unit_circle(opts.peak_samples.max(8 * (h + 1)));
+    let peak = harmonics.iter().map(|hs| peak_on(hs, &circle)).collect();
     Ok(OutputResponse {
         harmonics,
         amplitude,
@@ -97,11 +96,25 @@ pub fn output_response<F: HarmonicForce>(
 /// max_τ |Re Σ Q⁽ⁿ⁾ e^{inτ}| over `samples` equally spaced τ; e^{inτ} by powers of e^{iτ}
 /// (one sine and cosine per sample; the powers' rounding grows as n ε, ε = 2.2e-16).
 pub fn peak_of(harmonics: &[c64], samples: usize) -> f64 {
+    peak_on(harmonics, &unit_circle(samples))
+}
+
+/// e^{iτ_k} = (cos τ_k, sin τ_k) at τ_k = 2πk/`samples`, k = 0..samples.
+fn unit_circle(samples: usize) -> Vec<c64> {
     (0..samples)
         .map(|k| {
             let tau = 2.0 * std::f64::consts::PI * k as f64 / samples as f64;
             let (sin, cos) = tau.sin_cos();
-            let step = c64::new(cos, sin);
+            c64::new(cos, sin)
+        })
+        .collect()
+}
+
+/// [`peak_of`] on the samples e^{iτ_k} of [`unit_circle`].
+fn peak_on(harmonics: &[c64], circle: &[c64]) -> f64 {
+    circle
+        .iter()
+        .map(|&step| {
             let mut phase = c64::new(1.0, 0.0);
             let mut value = 0.0;
             for q in harmonics {

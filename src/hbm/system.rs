@@ -3,12 +3,14 @@
 //! sign convention of [`HarmonicForce`]) and its derivative with respect to the continuation
 //! parameter (ω, the excitation level λ, or the force's own parameter such as the preload n0).
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use faer::{c64, Mat, MatMut};
 use rayon::prelude::*;
 
-use super::linear::{Applied, Condensed, CondensedApplied, HarmonicOperator, LinearModel};
+use super::linear::{
+    Applied, Condensed, CondensedApplied, HarmonicOperator, LinearModel, SmallBuffers,
+};
 use crate::error::{Error, Result};
 use crate::harmonics::jacobian::PendingBlocks;
 use crate::harmonics::{HarmonicForce, HarmonicLayout, Jacobian};
@@ -24,6 +26,19 @@ pub struct HbmSystem<'a, F: HarmonicForce> {
     layout: HarmonicLayout,
     linear: &'a LinearModel,
     force: &'a F,
+    /// The buffers of the last evaluation of a small model ([`HbmSystem::evaluate_small`]),
+    /// kept for the next.
+    small: Mutex<Option<Box<SmallTerms>>>,
+}
+
+/// The linear terms of every harmonic of one evaluation of a small model and the buffers they
+/// are formed with ([`LinearModel::condense_small`]).
+struct SmallTerms {
+    /// Per harmonic n: D̄⁽ⁿ⁾, F̄⁽ⁿ⁾, ∂D̄⁽ⁿ⁾/∂ω q_n, ∂F̄⁽ⁿ⁾/∂ω, and D̄⁽ⁿ⁾ q_n.
+    harmonics: Vec<(CondensedApplied, Vec<c64>)>,
+    /// The harmonic q_n of the evaluation.
+    q_n: Vec<c64>,
+    buffers: SmallBuffers,
 }
 
 impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
@@ -47,6 +62,7 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
             layout,
             linear,
             force,
+            small: Mutex::new(None),
         })
     }
 
@@ -67,17 +83,23 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
 
     /// The complex coefficients of harmonic n of the real harmonic vector Q (n = 0: real).
     fn harmonic_of(&self, q: &[f64], n: usize) -> Vec<c64> {
+        let mut out = Vec::new();
+        self.harmonic_into(q, n, &mut out);
+        out
+    }
+
+    /// [`HbmSystem::harmonic_of`] into `out` (its length set to n_N).
+    fn harmonic_into(&self, q: &[f64], n: usize, out: &mut Vec<c64>) {
         let nd = self.linear.n_condensed();
-        (0..nd)
-            .map(|i| {
-                if n == 0 {
-                    c64::new(q[self.layout.static_index(i)], 0.0)
-                } else {
-                    let c = self.layout.cos_index(n, i, nd);
-                    c64::new(q[c], q[c + 1])
-                }
-            })
-            .collect()
+        out.clear();
+        out.extend((0..nd).map(|i| {
+            if n == 0 {
+                c64::new(q[self.layout.static_index(i)], 0.0)
+            } else {
+                let c = self.layout.cos_index(n, i, nd);
+                c64::new(q[c], q[c + 1])
+            }
+        }));
     }
 
     /// Every harmonic condensed at ω for an evaluation at Q (in parallel over the harmonics
@@ -161,6 +183,9 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         mut out: Parts<'_>,
     ) -> Result<F::State> {
         let deferred = matches!(out.jacobian, Some(Jacobian::Blocks(_)));
+        if !deferred && self.linear.block_rows() < PARALLEL_ROWS {
+            return self.evaluate_small(q, omega, level, state, out);
+        }
         // per harmonic: the products of the evaluation, and D̄⁽ⁿ⁾ formed (dense Jacobian) or
         // its operator (block-stored)
         let linear: Vec<(Applied, Linear)> = self
@@ -176,6 +201,39 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
             })
             .into_iter()
             .collect::<Result<_>>()?;
+        let end_state = self.evaluate_force(q, omega, state, &mut out)?;
+        let mut operators = Vec::new();
+        for (n, (a, l)) in linear.into_iter().enumerate() {
+            let terms = Terms {
+                stiffness_q: &a.stiffness_q,
+                force: &a.force,
+                stiffness_derivative_q: &a.stiffness_derivative_q,
+                force_derivative: &a.force_derivative,
+            };
+            self.add_harmonic(n, terms, level, &mut out);
+            match l {
+                Linear::Matrix(d) => self.add_stiffness(n, &d, &mut out),
+                Linear::Operator(op) => operators.push(*op),
+            }
+        }
+        if let Some(Jacobian::Blocks(b)) = out.jacobian {
+            b.coalesce();
+            if deferred {
+                b.set_pending(Arc::new(CondensedBlocks { operators }));
+            }
+        }
+        Ok(end_state)
+    }
+
+    /// Zeroes the parts and adds the nonlinear force's (F_nl, its Jacobian, ∂F_nl/∂ω);
+    /// returns the end-of-period force state.
+    fn evaluate_force(
+        &self,
+        q: &[f64],
+        omega: f64,
+        state: &F::State,
+        out: &mut Parts<'_>,
+    ) -> Result<F::State> {
         out.residual.iter_mut().for_each(|v| *v = 0.0);
         if let Some(d) = out.d_omega.as_deref_mut() {
             d.iter_mut().for_each(|v| *v = 0.0);
@@ -196,19 +254,64 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         if let Some(d) = out.d_level.as_deref_mut() {
             d.iter_mut().for_each(|v| *v = 0.0);
         }
-        let mut operators = Vec::new();
-        for (n, (a, l)) in linear.into_iter().enumerate() {
-            self.add_harmonic(n, &a, level, &mut out);
-            match l {
-                Linear::Matrix(d) => self.add_stiffness(n, &d, &mut out),
-                Linear::Operator(op) => operators.push(*op),
-            }
+        Ok(end_state)
+    }
+
+    /// [`HbmSystem::evaluate_parts`] with a dense (or no) Jacobian for a model of fewer than
+    /// [`PARALLEL_ROWS`] rows: the harmonics condensed by [`LinearModel::condense_small`] into
+    /// the buffers of the previous evaluation (made on the first), so that an evaluation makes
+    /// no matrix or vector of the linear part. The terms are added in the same order as
+    /// [`HbmSystem::evaluate_parts`] adds its own.
+    fn evaluate_small(
+        &self,
+        q: &[f64],
+        omega: f64,
+        level: f64,
+        state: &F::State,
+        mut out: Parts<'_>,
+    ) -> Result<F::State> {
+        let kept = self.small.lock().ok().and_then(|mut s| s.take());
+        let mut terms = kept.unwrap_or_else(|| {
+            Box::new(SmallTerms {
+                harmonics: Vec::new(),
+                q_n: Vec::new(),
+                buffers: SmallBuffers::default(),
+            })
+        });
+        let SmallTerms {
+            harmonics,
+            q_n,
+            buffers,
+        } = &mut *terms;
+        let nd = self.linear.n_condensed();
+        harmonics.resize_with(self.layout.harmonics + 1, || {
+            let c = CondensedApplied {
+                stiffness: Mat::zeros(nd, nd),
+                force: Vec::new(),
+                stiffness_derivative_q: Vec::new(),
+                force_derivative: Vec::new(),
+            };
+            (c, Vec::new())
+        });
+        for (n, (c, dq)) in harmonics.iter_mut().enumerate() {
+            self.harmonic_into(q, n, q_n);
+            self.linear.condense_small(n, omega, q_n, c, buffers)?;
+            dq.resize(nd, c64::new(0.0, 0.0));
+            stiffness_times(&c.stiffness, q_n, dq);
         }
-        if let Some(Jacobian::Blocks(b)) = out.jacobian {
-            b.coalesce();
-            if deferred {
-                b.set_pending(Arc::new(CondensedBlocks { operators }));
-            }
+        let end_state = self.evaluate_force(q, omega, state, &mut out)?;
+        for (n, (c, dq)) in harmonics.iter().enumerate() {
+            let t = Terms {
+                stiffness_q: dq,
+                force: &c.force,
+                stiffness_derivative_q: &c.stiffness_derivative_q,
+                force_derivative: &c.force_derivative,
+            };
+            self.add_harmonic(n, t, level, &mut out);
+            self.add_stiffness(n, &c.stiffness, &mut out);
+        }
+        if let Ok(mut s) = self.small.lock() {
+            *s = Some(terms);
         }
         Ok(end_state)
     }
@@ -254,7 +357,7 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
 
     /// Adds harmonic n's linear terms: D̄ Q − level·F̄ to the residual, D̄' Q − level·F̄' to
     /// ∂r/∂ω (real 2×2 blocks of eq. 24), −F̄ to ∂r/∂level.
-    fn add_harmonic(&self, n: usize, c: &Applied, level: f64, out: &mut Parts<'_>) {
+    fn add_harmonic(&self, n: usize, c: Terms<'_>, level: f64, out: &mut Parts<'_>) {
         let nd = self.linear.n_condensed();
         for i in 0..nd {
             let f = c.force[i] * level;
@@ -328,14 +431,32 @@ fn add_block(real: bool, d: &Mat<c64>, mut a: MatMut<'_, f64>) {
 
 /// The products of a harmonic condensed with its matrix: D̄ q_n by a matrix–vector product.
 fn applied_of(c: &CondensedApplied, q_n: &[c64]) -> Applied {
-    let q = faer::MatRef::from_column_major_slice(q_n, q_n.len(), 1);
-    let dq = &c.stiffness * q;
+    let mut stiffness_q = vec![c64::new(0.0, 0.0); q_n.len()];
+    stiffness_times(&c.stiffness, q_n, &mut stiffness_q);
     Applied {
-        stiffness_q: (0..q_n.len()).map(|i| dq[(i, 0)]).collect(),
+        stiffness_q,
         force: c.force.clone(),
         stiffness_derivative_q: c.stiffness_derivative_q.clone(),
         force_derivative: c.force_derivative.clone(),
     }
+}
+
+/// D̄ q_n into `out` (faer's product, as `&D̄ * q`).
+fn stiffness_times(d: &Mat<c64>, q_n: &[c64], out: &mut [c64]) {
+    let q = faer::MatRef::from_column_major_slice(q_n, q_n.len(), 1);
+    let out = faer::MatMut::from_column_major_slice_mut(out, q_n.len(), 1);
+    let one = c64::new(1.0, 0.0);
+    let par = faer::get_global_parallelism();
+    faer::linalg::matmul::matmul(out, faer::Accum::Replace, d.as_ref(), q, one, par);
+}
+
+/// The linear terms of harmonic n of one evaluation (length n_N each): D̄⁽ⁿ⁾ q_n, F̄⁽ⁿ⁾,
+/// ∂D̄⁽ⁿ⁾/∂ω q_n, ∂F̄⁽ⁿ⁾/∂ω.
+struct Terms<'t> {
+    stiffness_q: &'t [c64],
+    force: &'t [c64],
+    stiffness_derivative_q: &'t [c64],
+    force_derivative: &'t [c64],
 }
 
 /// The linear part of one harmonic for the Jacobian: formed, or as an operator.

@@ -180,14 +180,22 @@ fn count(path: SolvePath, n: usize) {
 
 /// The linear solver of Newton steps and tangents: the block partition of the matrices it will
 /// see (see the module documentation) and the choice of path; it keeps one block-stored matrix
-/// handed back by [`LinearSolver::recycle`] for the next [`LinearSolver::linearization`] (no
-/// allocation of the block storage per evaluation).
+/// and up to two dense ones handed back by [`LinearSolver::recycle`] for the next
+/// [`LinearSolver::linearization`] or [`LinearSolver::dense_matrix`] (no allocation of the
+/// matrices per evaluation).
 #[derive(Debug, Default)]
 pub struct LinearSolver {
     blocks: Vec<usize>,
     choice: SolverChoice,
     spare: Mutex<Option<BlockJacobian>>,
+    /// Dense matrices handed back ([`LinearSolver::recycle`]), at most `SPARE_DENSE`, for
+    /// the next [`LinearSolver::linearization`] or [`LinearSolver::dense_matrix`].
+    spare_dense: Mutex<Vec<Mat<f64>>>,
 }
+
+/// Most dense matrices a [`LinearSolver`] keeps for reuse: a Newton step of a continuation
+/// corrector holds two (the Jacobian and its bordered matrix).
+const SPARE_DENSE: usize = 2;
 
 impl Clone for LinearSolver {
     /// The same partition and choice (without the spare storage).
@@ -323,6 +331,7 @@ impl LinearSolver {
             blocks,
             choice,
             spare: Mutex::new(None),
+            spare_dense: Mutex::new(Vec::new()),
         }
     }
 
@@ -341,13 +350,40 @@ impl LinearSolver {
     /// Hands a matrix that is no longer needed back for the next
     /// [`LinearSolver::linearization`] (kept when it is block-stored over this solver's blocks).
     pub fn recycle(&self, matrix: Jacobian) {
-        if let Jacobian::Blocks(mut b) = matrix {
-            b.drop_pending();
-            if b.block_sizes() == self.blocks {
-                if let Ok(mut spare) = self.spare.lock() {
-                    *spare = Some(b);
+        match matrix {
+            Jacobian::Blocks(mut b) => {
+                b.drop_pending();
+                if b.block_sizes() == self.blocks {
+                    if let Ok(mut spare) = self.spare.lock() {
+                        *spare = Some(b);
+                    }
                 }
             }
+            Jacobian::Dense(m) => {
+                if let Ok(mut spare) = self.spare_dense.lock() {
+                    if spare.len() < SPARE_DENSE {
+                        spare.push(m);
+                    }
+                }
+            }
+        }
+    }
+
+    /// A zeroed `rows` × `cols` dense matrix: a recycled one of that size
+    /// ([`LinearSolver::recycle`]) or a new one.
+    pub fn dense_matrix(&self, rows: usize, cols: usize) -> Mat<f64> {
+        let kept = self.spare_dense.lock().ok().and_then(|mut spare| {
+            let i = spare
+                .iter()
+                .position(|m| m.nrows() == rows && m.ncols() == cols)?;
+            Some(spare.swap_remove(i))
+        });
+        match kept {
+            Some(mut m) => {
+                m.fill(0.0);
+                m
+            }
+            None => Mat::zeros(rows, cols),
         }
     }
 
@@ -389,7 +425,11 @@ impl LinearSolver {
                 d_parameter: vec![0.0; dim],
             }
         } else {
-            Linearization::zeros(dim)
+            Linearization {
+                residual: vec![0.0; dim],
+                jacobian: Jacobian::Dense(self.dense_matrix(dim, dim)),
+                d_parameter: vec![0.0; dim],
+            }
         }
     }
 
