@@ -272,6 +272,7 @@ pub fn trace_from<S: ParameterSystem>(
             (step, allowance),
             &scales,
             opts,
+            &solver,
             // moved, so that the new point's factors replace them without both held; a
             // retried step factorises again
             carried.take(),
@@ -316,7 +317,7 @@ pub fn trace_from<S: ParameterSystem>(
                     (&tangent, orientation),
                     &scales,
                     min_step,
-                    opts,
+                    (opts, &solver),
                 )
                 .or_else(|| {
                     corner_step(
@@ -325,7 +326,7 @@ pub fn trace_from<S: ParameterSystem>(
                         (&tangent, orientation),
                         &scales,
                         min_step,
-                        opts,
+                        (opts, &solver),
                     )
                 })
                 .or_else(|| {
@@ -335,7 +336,7 @@ pub fn trace_from<S: ParameterSystem>(
                         (&tangent, orientation),
                         &scales,
                         min_step,
-                        opts,
+                        (opts, &solver),
                     )
                 });
                 let Some(found) = corner else {
@@ -358,6 +359,9 @@ pub fn trace_from<S: ParameterSystem>(
         let arc = current.arc_length + length;
         let mut next = point_from(sol, arc, new_tangent.t[new_tangent.t.len() - 1]);
         if direction * (next.parameter - opts.end) >= 0.0 {
+            // the end point is solved afresh: the factors and the stored matrix are not needed
+            drop(carried.take());
+            solver.release_storage();
             next = end_point(system, &current, next, opts).unwrap_or_else(|p| p);
             on_point(&next);
             path.points.push(next);
@@ -724,9 +728,12 @@ fn correct<S: ParameterSystem>(
     (step, allowance): (f64, f64),
     s: &Scales,
     opts: &ContinuationOptions,
+    solver: &LinearSolver,
     initial: Option<Factored>,
 ) -> std::result::Result<(NewtonSolution<S::State>, Option<Tangent>), String> {
-    let done = correct_on(system, state, predicted, tangent, tangent, s, opts, initial)?;
+    let done = correct_on(
+        system, state, predicted, tangent, tangent, s, opts, solver, initial,
+    )?;
     let y = scaled_xy(&done.0.x, done.0.parameter, s);
     let off: Vec<f64> = y.iter().zip(predicted).map(|(a, b)| a - b).collect();
     let last = y.len() - 1;
@@ -760,10 +767,10 @@ fn correct_on<S: ParameterSystem>(
     tangent: &[f64],
     s: &Scales,
     opts: &ContinuationOptions,
+    solver: &LinearSolver,
     initial: Option<Factored>,
 ) -> std::result::Result<(NewtonSolution<S::State>, Option<Tangent>), String> {
     let n = system.dim();
-    let solver = LinearSolver::new(system.jacobian_blocks(), opts.newton.linear_solver);
     let mut eval = |z: &[f64], with_matrix: bool| -> Result<Iterate<(Linearization, S::State)>> {
         let x: Vec<f64> = z[..n].iter().map(|u| u * s.x).collect();
         let lambda = z[n] * s.lambda;
@@ -791,7 +798,7 @@ fn correct_on<S: ParameterSystem>(
         ));
         let matrix = with_matrix.then(|| {
             let jacobian = std::mem::take(&mut lin.jacobian);
-            bordered(jacobian, &lin.d_parameter, s, border, &solver)
+            bordered(jacobian, &lin.d_parameter, s, border, solver)
         });
         Ok(Iterate {
             z: z.to_vec(),
@@ -812,15 +819,8 @@ fn correct_on<S: ParameterSystem>(
         iterate: it,
         iterations,
         factors,
-    } = newton_core(
-        predicted.to_vec(),
-        &mut eval,
-        1.0,
-        &newton,
-        &solver,
-        initial,
-    )
-    .map_err(|f| f.message)?;
+    } = newton_core(predicted.to_vec(), &mut eval, 1.0, &newton, solver, initial)
+        .map_err(|f| f.message)?;
     let residual = norm(&it.g[..n]);
     // the tangent system [G; tangentᵀ] at the solution: the corrector's matrix there with its
     // last row replaced; solved on the factors of the last step's matrix when they are close
@@ -858,7 +858,7 @@ fn correct_on<S: ParameterSystem>(
             None => {
                 // the new factors replace the old ones, which are dropped first
                 drop(factors);
-                tangent_of(&mut m, &solver)
+                tangent_of(&mut m, solver)
             }
         }
     });
@@ -898,11 +898,10 @@ fn kink_step<S: ParameterSystem>(
     (tangent, orientation): (&[f64], f64),
     s: &Scales,
     min_step: f64,
-    opts: &ContinuationOptions,
+    (opts, solver): (&ContinuationOptions, &LinearSolver),
 ) -> Option<(NewtonSolution<S::State>, Tangent, f64)> {
     let n = system.dim();
     let y_c = scaled(current, s);
-    let solver = LinearSolver::new(system.jacobian_blocks(), opts.newton.linear_solver);
     for factor in [1.0, 2.0, 4.0] {
         let s_p = factor * min_step;
         let y_p: Vec<f64> = y_c.iter().zip(tangent).map(|(y, t)| y + s_p * t).collect();
@@ -914,12 +913,14 @@ fn kink_step<S: ParameterSystem>(
         let along = scaled_jacobian_times(&lin, s, tangent);
         let jacobian = std::mem::take(&mut lin.jacobian);
         let Some(beyond) = tangent_of(
-            &mut bordered(jacobian, &lin.d_parameter, s, tangent, &solver),
-            &solver,
+            &mut bordered(jacobian, &lin.d_parameter, s, tangent, solver),
+            solver,
         ) else {
             continue;
         };
-        let beyond = beyond.oriented(orientation);
+        let mut beyond = beyond.oriented(orientation);
+        // the correctors below factorise afresh
+        drop(beyond.factors.take());
         if dot(&beyond.t, tangent) > 0.99 {
             continue;
         }
@@ -943,6 +944,7 @@ fn kink_step<S: ParameterSystem>(
                 &beyond.t,
                 s,
                 opts,
+                solver,
                 None,
             ) else {
                 continue;
@@ -999,7 +1001,7 @@ fn corner_step<S: ParameterSystem>(
     (tangent, orientation): (&[f64], f64),
     s: &Scales,
     min_step: f64,
-    opts: &ContinuationOptions,
+    (opts, solver): (&ContinuationOptions, &LinearSolver),
 ) -> Option<(NewtonSolution<S::State>, Tangent, f64)> {
     let y_c = scaled(current, s);
     let secant = before.and_then(|b| {
@@ -1024,6 +1026,7 @@ fn corner_step<S: ParameterSystem>(
                 &direction,
                 s,
                 opts,
+                solver,
                 None,
             ) else {
                 continue;
@@ -1069,7 +1072,7 @@ fn full_step<S: ParameterSystem>(
     (tangent, orientation): (&[f64], f64),
     s: &Scales,
     min_step: f64,
-    opts: &ContinuationOptions,
+    (opts, solver): (&ContinuationOptions, &LinearSolver),
 ) -> Option<(NewtonSolution<S::State>, Tangent, f64)> {
     let undamped = ContinuationOptions {
         newton: NewtonOptions {
@@ -1105,6 +1108,7 @@ fn full_step<S: ParameterSystem>(
                 tangent,
                 s,
                 &undamped,
+                solver,
                 None,
             ) else {
                 continue;

@@ -11,12 +11,12 @@
 //! ([`crate::continuation`]) uses the same core on the bordered system; the harmonic balance
 //! ([`crate::hbm`]) implements [`ParameterSystem`].
 
-use faer::linalg::solvers::Solve;
-use faer::{Col, Mat};
+use faer::Mat;
 
 use crate::error::Result;
 
 pub mod linsolve;
+pub mod lu;
 
 pub use crate::harmonics::{BlockJacobian, Jacobian};
 pub use linsolve::{Factored, LinearSolver, SolverChoice};
@@ -321,11 +321,11 @@ pub fn solve_dense_signed(a: &Mat<f64>, b: &[f64]) -> Option<(Vec<f64>, f64)> {
 
 /// [`solve_dense_signed`] on a view.
 pub fn solve_dense_signed_ref(a: faer::MatRef<'_, f64>, b: &[f64]) -> Option<(Vec<f64>, f64)> {
-    let lu = a.partial_piv_lu();
+    let lu = lu::PackedLu::new(a);
     let sign = linsolve::lu_sign(&lu)?;
-    let mut x = Col::from_fn(b.len(), |i| b[i]);
+    let mut x = Mat::from_fn(b.len(), 1, |i, _| b[i]);
     lu.solve_in_place(x.as_mut());
-    let x: Vec<f64> = (0..b.len()).map(|i| x[i]).collect();
+    let x: Vec<f64> = (0..b.len()).map(|i| x[(i, 0)]).collect();
     x.iter().all(|v| v.is_finite()).then_some((x, sign))
 }
 
@@ -411,9 +411,13 @@ pub fn solve_fixed<S: ParameterSystem>(
         })
     };
     let floor = norm(x0).max(f64::MIN_POSITIVE);
-    let outcome = newton_core(x0.to_vec(), &mut eval, floor, opts, &solver, None)?;
-    let iterations = outcome.iterations;
-    let mut it = outcome.iterate;
+    let NewtonOutcome {
+        iterate: mut it,
+        iterations,
+        factors,
+    } = newton_core(x0.to_vec(), &mut eval, floor, opts, &solver, None)?;
+    // the solution carries no factors: they are released before its Jacobian is completed
+    drop(factors);
     if it.matrix.is_none() {
         // converged on a halved step: the Jacobian at the solution
         it = eval(&it.z, true).map_err(|e| NewtonFailure {

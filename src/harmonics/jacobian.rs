@@ -202,22 +202,26 @@ impl BlockJacobian {
         }
     }
 
-    /// Sorts the off-block entries by (column, row), sums repeated positions (in the order they
-    /// were added) and drops exact zeros.
+    /// Sorts the off-block entries by (column, row), sums repeated positions and drops exact
+    /// zeros, in place: no second list and no sort buffer (an unstable sort, so repeated
+    /// positions are summed in an order fixed by the list but not the order they were added).
     pub fn coalesce(&mut self) {
         if self.coalesced {
             return;
         }
-        self.off.sort_by_key(|&(i, j, _)| (j, i));
-        let mut out: Vec<(usize, usize, f64)> = Vec::with_capacity(self.off.len());
-        for &(i, j, v) in &self.off {
-            match out.last_mut() {
-                Some(last) if last.0 == i && last.1 == j => last.2 += v,
-                _ => out.push((i, j, v)),
+        self.off.sort_unstable_by_key(|&(i, j, _)| (j, i));
+        let mut kept = 0;
+        for k in 0..self.off.len() {
+            let (i, j, v) = self.off[k];
+            if kept > 0 && self.off[kept - 1].0 == i && self.off[kept - 1].1 == j {
+                self.off[kept - 1].2 += v;
+            } else {
+                self.off[kept] = (i, j, v);
+                kept += 1;
             }
         }
-        out.retain(|e| e.2 != 0.0);
-        self.off = out;
+        self.off.truncate(kept);
+        self.off.retain(|e| e.2 != 0.0);
         self.coalesced = true;
     }
 
@@ -451,6 +455,18 @@ impl Jacobian {
         match self {
             Jacobian::Dense(a) => a.fill(0.0),
             Jacobian::Blocks(b) => b.clear(),
+        }
+    }
+
+    /// Multiplies every entry by `c` (a block-stored border is unchanged).
+    pub fn scale(&mut self, c: f64) {
+        match self {
+            Jacobian::Dense(a) => {
+                for j in 0..a.ncols() {
+                    a.col_mut(j).iter_mut().for_each(|v| *v *= c);
+                }
+            }
+            Jacobian::Blocks(b) => b.scale(c),
         }
     }
 

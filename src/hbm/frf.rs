@@ -3,7 +3,7 @@
 
 use super::response::{output_response, OutputResponse, ResponseOptions};
 use super::stability::is_stable;
-use super::system::{FrequencyPath, HbmSystem, LevelPath};
+use super::system::{ForceScalePath, FrequencyPath, HbmSystem, LevelPath};
 use crate::continuation::{trace, trace_from, ContinuationOptions, Path, PathEnd, PathPoint};
 use crate::error::{Error, Result};
 use crate::harmonics::HarmonicForce;
@@ -108,7 +108,8 @@ impl JumpCause {
 /// from the linear solution or, when that does not converge, reached by continuation in the
 /// excitation level at the start frequency (from λ₀ = ½, ¼, … 2⁻¹⁰ × the force up to 1; the
 /// λ₀ used is [`Frf::start_level`]); when that fails too, by Newton from the linear solution
-/// with every step taken in full.
+/// with every step taken in full, and last by continuation in a factor on the nonlinear force
+/// from the linear response without it ([`ForceScalePath`]).
 ///
 /// A path that cannot be followed to the end of the range does not cover it: it turns back and
 /// leaves the range on the start side ([`PathEnd::LeftRange`]: the branch through the start
@@ -496,6 +497,8 @@ const SMALLEST_START_LEVEL: f64 = 1.0 / 1024.0;
 /// below λ₀ (by more than half its range: a path from ⅛ may go back to λ < 0); a path that stops
 /// on the way is not retried (a smaller λ₀ would meet the same point). Newton at λ = 1 from
 /// the end of that path then gives the start point with the frequency path's linearization.
+/// Where that fails too: Newton from the linear solution with every step taken in full, and
+/// last the continuation in the force scale ([`force_scale_start`]).
 ///
 /// Returns the start point and, when the level continuation gave it, λ₀.
 ///
@@ -509,11 +512,12 @@ fn start_point<F: HarmonicForce>(
         Ok(sol) => return Ok((sol, None)),
         Err(f) => f.message,
     };
-    let fail = |why: String, from: f64| {
+    let fail = |why: String, from: f64, homotopy: String| {
         Error::Compute(format!(
             "Newton from the linear solution failed ({direct}), and so did the continuation in the \
-             excitation level from {from:.3e} × the force up to 1 at that frequency ({why}) — try \
-             another start frequency, a smaller excitation or more damping"
+             excitation level from {from:.3e} × the force up to 1 at that frequency ({why}) and \
+             the continuation from the linear system without the nonlinear force ({homotopy}) — \
+             try another start frequency, a smaller excitation or more damping"
         ))
     };
     let level = level_continuation(fp.system, opts);
@@ -536,9 +540,58 @@ fn start_point<F: HarmonicForce>(
         max_iterations: 2 * opts.newton.max_iterations,
         ..opts.newton
     };
-    solve_fixed(fp, &x0, opts.start, &fp.initial_state(), &undamped)
+    if let Ok(sol) = solve_fixed(fp, &x0, opts.start, &fp.initial_state(), &undamped) {
+        return Ok((sol, None));
+    }
+    force_scale_start(fp, opts)
         .map(|sol| (sol, None))
-        .map_err(|_| fail(why, from))
+        .map_err(|homotopy| fail(why, from, homotopy))
+}
+
+/// The last start-point method of [`start_point`]: the continuation in the factor s on the
+/// nonlinear force at the fixed ω_start ([`ForceScalePath`]: r = D̄ Q − F̄_e + s F_nl(Q)) from the
+/// linear response without the nonlinear force (s = 0) to s = 1, then Newton on the frequency
+/// path from its end. Under strong excitation (gross slip, separation) that response is near the
+/// solution, and the path in s meets no fold where the one in the excitation level does (the
+/// branch at the full force is then not connected to the small-force one at that frequency).
+/// Err: why it failed.
+fn force_scale_start<F: HarmonicForce>(
+    fp: &FrequencyPath<'_, '_, F>,
+    opts: &ContinuationOptions,
+) -> std::result::Result<NewtonSolution<F::State>, String> {
+    let path = ForceScalePath {
+        system: fp.system,
+        omega: opts.start,
+    };
+    let mut sopts = ContinuationOptions::new(0.0, 1.0, 1.0 / 20.0);
+    sopts.max_step = Some(1.0 / 5.0);
+    sopts.min_step = Some(1.0 / 2e4);
+    sopts.max_points = 2000;
+    sopts.newton = opts.newton;
+    let traced = trace(&path, &sopts, &mut |_| {}).map_err(|e| e.to_string())?;
+    let reached = traced.points.last().map_or(0.0, |p| p.parameter);
+    let ended = match traced.end {
+        PathEnd::ReachedEnd => None,
+        PathEnd::LeftRange => Some("turned back below s = 0".to_string()),
+        PathEnd::Closed => Some("came back onto itself".to_string()),
+        PathEnd::MaxPoints => Some(format!("took more than {} points", sopts.max_points)),
+        PathEnd::Failed(m) => Some(m),
+    };
+    if let Some(why) = ended {
+        return Err(format!(
+            "the path in s {why} (last point at s = {reached:.4})"
+        ));
+    }
+    let last = traced
+        .points
+        .last()
+        .ok_or_else(|| "the path in s has no points".to_string())?;
+    solve_fixed(fp, &last.x, opts.start, &last.state, &opts.newton).map_err(|f| {
+        format!(
+            "Newton at the full force from the end of that path: {}",
+            f.message
+        )
+    })
 }
 
 /// How the continuation in the excitation level of [`start_point`] ended.

@@ -15,10 +15,10 @@ use faer::dyn_stack::{MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::factor::{lu_in_place, lu_in_place_scratch};
 use faer::linalg::lu::partial_pivoting::solve::{solve_in_place, solve_in_place_scratch};
 use faer::linalg::matmul::matmul;
-use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::{c64, Accum, Mat, MatMut, MatRef, Par};
 
 use crate::error::{Error, Result};
+use crate::nonlinear::lu::PackedLu;
 
 /// The matrices of one harmonic index (or of a model without cyclic symmetry) and its
 /// partition into nonlinear (condensed) and linear DOFs.
@@ -282,7 +282,7 @@ enum OperatorKind {
 struct Coupling {
     d_nl: Mat<c64>,
     d_ln: Mat<c64>,
-    lu: PartialPivLu<c64>,
+    lu: PackedLu<c64>,
 }
 
 impl std::fmt::Debug for HarmonicOperator {
@@ -837,7 +837,7 @@ impl LinearModel {
         if part.linear.is_empty() {
             return Ok(r);
         }
-        let lu = factor(&part.dynamic(Part::LL, s), n, omega)?;
+        let lu = factor(part.dynamic(Part::LL, s), n, omega)?;
         let ln_q = part.dynamic_times(Part::LN, s, q_n);
         let mut t = Mat::from_fn(ln_q.len(), 1, |i, _| ln_q[i] - f_l[i] * level);
         lu.solve_in_place(t.as_mut());
@@ -919,7 +919,7 @@ impl LinearModel {
             return Ok((applied, op));
         }
         let n_l = part.linear.len();
-        let lu = factor(&part.dynamic(Part::LL, s), n, omega)?;
+        let lu = factor(part.dynamic(Part::LL, s), n, omega)?;
         let (d_nl, d_ln) = (part.dynamic(Part::NL, s), part.dynamic(Part::LN, s));
         // [v | w] = D_LL⁻¹ [D_LN q | F_L]
         let ln_q = times(&d_ln, q_n);
@@ -1172,10 +1172,10 @@ fn solve_ll(
     n: usize,
     omega: f64,
     f_l: &[c64],
-) -> Result<(PartialPivLu<c64>, Mat<c64>)> {
+) -> Result<(PackedLu<c64>, Mat<c64>)> {
     let s = n as f64 * omega;
     let n_n = part.nonlinear.len();
-    let lu = factor(&part.dynamic(Part::LL, s), n, omega)?;
+    let lu = factor(part.dynamic(Part::LL, s), n, omega)?;
     let d_ln = part.dynamic(Part::LN, s);
     let mut xw = Mat::<c64>::zeros(part.linear.len(), n_n + 1);
     xw.as_mut().subcols_mut(0, n_n).copy_from(&d_ln);
@@ -1187,10 +1187,9 @@ fn solve_ll(
 }
 
 /// LU of D_LL⁽ⁿ⁾ with a check on the pivots (relative 1e-13) for singularity.
-fn factor(d: &Mat<c64>, n: usize, omega: f64) -> Result<PartialPivLu<c64>> {
-    let lu = d.partial_piv_lu();
-    let u = lu.U();
-    if !regular_pivots((0..u.nrows()).map(|i| u[(i, i)].norm())) {
+fn factor(d: Mat<c64>, n: usize, omega: f64) -> Result<PackedLu<c64>> {
+    let lu = PackedLu::in_place(d);
+    if !regular_pivots((0..lu.nrows()).map(|i| lu.pivot(i).norm())) {
         return Err(singular_ll(n, omega));
     }
     Ok(lu)
@@ -1285,6 +1284,7 @@ fn check_static_block_real(block: &MatrixBlock, force: &[c64]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use faer::linalg::solvers::Solve;
 
     /// Deterministic numbers in [−0.5, 0.5).
     fn noise(seed: usize) -> f64 {

@@ -30,4 +30,4 @@ pub mod system;
 
 pub use linear::{Condensed, LinearModel, MatrixBlock, Uncondensed};
 pub use response::{OutputResponse, ResponseOptions};
-pub use system::{FrequencyPath, HbmSystem, LevelPath, PreloadPath};
+pub use system::{ForceScalePath, FrequencyPath, HbmSystem, LevelPath, PreloadPath};

@@ -169,8 +169,32 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
             jacobian: Some(&mut out.jacobian),
             d_omega: Some(&mut out.d_parameter),
             d_level: level_derivative,
+            force_scale: 1.0,
+            d_force: None,
         };
         self.evaluate_parts(q, omega, level, state, parts)
+    }
+
+    /// Evaluates the homotopy r(Q, s) = D̄(ω) Q − F̄_e + s F_nl(Q) at (Q, s) for the fixed ω (rad/s)
+    /// ([`ForceScalePath`]): `out.residual` = r, `out.jacobian` = D̄(ω) + s ∂F_nl/∂Q,
+    /// `out.d_parameter` = ∂r/∂s = F_nl(Q). Returns the end-of-period force state.
+    pub fn evaluate_force_scaled(
+        &self,
+        q: &[f64],
+        omega: f64,
+        force_scale: f64,
+        state: &F::State,
+        out: &mut Linearization,
+    ) -> Result<F::State> {
+        let parts = Parts {
+            residual: &mut out.residual,
+            jacobian: Some(&mut out.jacobian),
+            d_omega: None,
+            d_level: None,
+            force_scale,
+            d_force: Some(&mut out.d_parameter),
+        };
+        self.evaluate_parts(q, omega, 1.0, state, parts)
     }
 
     /// Fills the parts that are given (see [`HbmSystem::evaluate`]).
@@ -251,6 +275,12 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
             out.jacobian.as_deref_mut().map(|j| j.target()),
             out.d_omega.as_deref_mut(),
         )?;
+        if let Some(d) = out.d_force.as_deref_mut() {
+            d.copy_from_slice(out.residual);
+        }
+        if out.force_scale != 1.0 {
+            scale_force(out.force_scale, out);
+        }
         if let Some(d) = out.d_level.as_deref_mut() {
             d.iter_mut().for_each(|v| *v = 0.0);
         }
@@ -328,6 +358,20 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         state: &F::State,
         residual: &mut [f64],
     ) -> Result<F::State> {
+        self.residual_force_scaled(q, omega, level, 1.0, state, residual)
+    }
+
+    /// As [`HbmSystem::evaluate_residual`] with the nonlinear force multiplied by `force_scale`
+    /// (the homotopy of [`ForceScalePath`]).
+    fn residual_force_scaled(
+        &self,
+        q: &[f64],
+        omega: f64,
+        level: f64,
+        force_scale: f64,
+        state: &F::State,
+        residual: &mut [f64],
+    ) -> Result<F::State> {
         let nd = self.linear.n_condensed();
         let layout = self.layout;
         let linear: Vec<Vec<c64>> = self
@@ -341,6 +385,9 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
         let mut end_state = state.clone();
         self.force
             .evaluate_into(&layout, q, omega, &mut end_state, residual, None, None)?;
+        if force_scale != 1.0 {
+            residual.iter_mut().for_each(|v| *v *= force_scale);
+        }
         for (n, r) in linear.iter().enumerate() {
             for (i, v) in r.iter().enumerate() {
                 if n == 0 {
@@ -505,6 +552,22 @@ struct Parts<'o> {
     jacobian: Option<&'o mut Jacobian>,
     d_omega: Option<&'o mut [f64]>,
     d_level: Option<&'o mut [f64]>,
+    /// Factor s on the nonlinear force (1 outside the homotopy of [`ForceScalePath`]).
+    force_scale: f64,
+    /// ∂r/∂s = F_nl(Q), if wanted.
+    d_force: Option<&'o mut [f64]>,
+}
+
+/// Multiplies the nonlinear force's terms already in `out` (residual, Jacobian, ∂r/∂ω) by `s`:
+/// called right after the force is evaluated into the cleared parts, before the linear terms.
+fn scale_force(s: f64, out: &mut Parts<'_>) {
+    out.residual.iter_mut().for_each(|v| *v *= s);
+    if let Some(j) = out.jacobian.as_deref_mut() {
+        j.scale(s);
+    }
+    if let Some(d) = out.d_omega.as_deref_mut() {
+        d.iter_mut().for_each(|v| *v *= s);
+    }
 }
 
 /// Frequency response: the unknowns are Q, the parameter is ω (rad/s), the excitation level is
@@ -608,6 +671,61 @@ impl<F: HarmonicForce> ParameterSystem for LevelPath<'_, '_, F> {
     ) -> Result<F::State> {
         self.system
             .evaluate_residual(x, self.omega, level, state, residual)
+    }
+}
+
+/// The homotopy from the underlying linear system to the full one at a fixed ω (rad/s):
+/// r(Q, s) = D̄(ω) Q − F̄_e + s F_nl(Q), the parameter s from 0 (the linear response without the
+/// nonlinear elements) to 1 (the frequency response's equation at ω). A start-point method of
+/// [`crate::hbm::frf::frequency_response`] for strong excitation, where the response is far from
+/// the stuck, linearised solution and close to the one without the elements (gross slip,
+/// separation), and the continuation in the excitation level meets folds.
+pub struct ForceScalePath<'s, 'a, F: HarmonicForce> {
+    /// The harmonic balance system.
+    pub system: &'s HbmSystem<'a, F>,
+    /// The fixed excitation frequency ω (rad/s).
+    pub omega: f64,
+}
+
+impl<F: HarmonicForce> ParameterSystem for ForceScalePath<'_, '_, F> {
+    type State = F::State;
+
+    fn jacobian_blocks(&self) -> Vec<usize> {
+        self.system.jacobian_blocks()
+    }
+
+    fn dim(&self) -> usize {
+        self.system.dim()
+    }
+
+    fn residual_scale(&self) -> f64 {
+        residual_scale(self.system.linear.force_norm())
+    }
+
+    fn initial_state(&self) -> F::State {
+        self.system.force.initial_state()
+    }
+
+    fn evaluate(
+        &self,
+        x: &[f64],
+        scale: f64,
+        state: &F::State,
+        out: &mut Linearization,
+    ) -> Result<F::State> {
+        self.system
+            .evaluate_force_scaled(x, self.omega, scale, state, out)
+    }
+
+    fn evaluate_residual(
+        &self,
+        x: &[f64],
+        scale: f64,
+        state: &F::State,
+        residual: &mut [f64],
+    ) -> Result<F::State> {
+        self.system
+            .residual_force_scaled(x, self.omega, 1.0, scale, state, residual)
     }
 }
 

@@ -63,10 +63,10 @@
 use std::cell::Cell;
 use std::sync::Mutex;
 
-use faer::linalg::solvers::{PartialPivLu, ShapeCore, Solve};
 use faer::{Accum, Mat, MatRef};
 use rayon::prelude::*;
 
+use super::lu::PackedLu;
 use super::{permutation_sign, solve_dense_signed_ref, Linearization};
 use crate::harmonics::{BlockJacobian, Jacobian};
 
@@ -214,7 +214,7 @@ pub struct Factored {
 }
 
 enum FactorKind {
-    Dense { lu: PartialPivLu<f64>, sign: f64 },
+    Dense { lu: PackedLu<f64>, sign: f64 },
     Structured(Box<Woodbury>),
 }
 
@@ -239,9 +239,9 @@ impl Factored {
     pub fn solve(&self, b: &[f64]) -> Option<Vec<f64>> {
         let x = match self.kind.as_ref() {
             FactorKind::Dense { lu, .. } => {
-                let mut x = faer::Col::from_fn(b.len(), |i| b[i]);
+                let mut x = Mat::from_fn(b.len(), 1, |i, _| b[i]);
                 lu.solve_in_place(x.as_mut());
-                x.iter().copied().collect::<Vec<f64>>()
+                x.col(0).iter().copied().collect::<Vec<f64>>()
             }
             FactorKind::Structured(w) => w.apply(b),
         };
@@ -387,6 +387,13 @@ impl LinearSolver {
         }
     }
 
+    /// Drops the block-stored matrix kept for reuse (e.g. before work that allocates its own).
+    pub fn release_storage(&self) {
+        if let Ok(mut spare) = self.spare.lock() {
+            *spare = None;
+        }
+    }
+
     /// Whether the Jacobians of `dim` unknowns are stored by blocks: a partition of `dim` is
     /// known and the choice is [`SolverChoice::Structured`], or [`SolverChoice::Auto`] at
     /// [`AUTO_MIN_UNKNOWNS`] unknowns or more.
@@ -520,8 +527,8 @@ impl LinearSolver {
         record(|s| s.factorizations += 1);
         count(SolvePath::Dense, n);
         let lu = match a {
-            Jacobian::Dense(m) => m.partial_piv_lu(),
-            Jacobian::Blocks(m) => m.to_dense().partial_piv_lu(),
+            Jacobian::Dense(m) => PackedLu::new(m.as_ref()),
+            Jacobian::Blocks(m) => PackedLu::in_place(m.to_dense()),
         };
         let sign = lu_sign(&lu)?;
         let f = Factored {
@@ -717,7 +724,7 @@ fn gmres_cycle(
         u.iter_mut().zip(v).for_each(|(u, v)| *u += yj * v);
     }
     let square = Mat::from_fn(k, k, |i, j| hessenberg[j].get(i).copied().unwrap_or(0.0));
-    let sign = lu_sign(&square.partial_piv_lu());
+    let sign = lu_sign(&PackedLu::in_place(square));
     Some((near.solve(&u)?, k, sign))
 }
 
@@ -892,7 +899,7 @@ struct Woodbury {
     /// First row of each diagonal block, then the border's.
     starts: Vec<usize>,
     /// LU of each diagonal block (the border's block is the identity).
-    blocks: Vec<PartialPivLu<f64>>,
+    blocks: Vec<PackedLu<f64>>,
     /// V_pᵀ of each piece, in the order of U's columns.
     couplings: Vec<Coupling>,
     /// First column of each piece in U.
@@ -900,7 +907,7 @@ struct Woodbury {
     /// X = P⁻¹ U by row ranges (Σ_b s_b r_b numbers, not n r).
     segments: Vec<Segment>,
     /// LU of the capacitance matrix I + Vᵀ X.
-    capacitance: PartialPivLu<f64>,
+    capacitance: PackedLu<f64>,
     /// sign det A.
     sign: f64,
 }
@@ -912,19 +919,18 @@ fn lu_flops(m: usize) -> f64 {
 
 /// sign det of a regular LU (sign det P · Π sign u_ii), `None` if the smallest |u_ii| ≤ 1e-15
 /// max |u_ii|.
-pub(crate) fn lu_sign(lu: &PartialPivLu<f64>) -> Option<f64> {
-    let u = lu.U();
-    let m = u.nrows();
+pub(crate) fn lu_sign(lu: &PackedLu<f64>) -> Option<f64> {
+    let m = lu.nrows();
     let (min, max) = (0..m)
-        .map(|i| u[(i, i)].abs())
+        .map(|i| lu.pivot(i).abs())
         .fold((f64::INFINITY, 0.0_f64), |(lo, hi), d| {
             (lo.min(d), hi.max(d))
         });
     if m > 0 && min <= 1e-15 * max {
         return None;
     }
-    let negative = (0..m).filter(|&i| u[(i, i)] < 0.0).count();
-    let sign = permutation_sign(lu.P().arrays().0);
+    let negative = (0..m).filter(|&i| lu.pivot(i) < 0.0).count();
+    let sign = permutation_sign(lu.row_order());
     Some(if negative.is_multiple_of(2) {
         sign
     } else {
@@ -1090,7 +1096,7 @@ fn solve_segments(
     pieces: &[Piece],
     offsets: &[usize],
     starts: &[usize],
-    lus: &[PartialPivLu<f64>],
+    lus: &[PackedLu<f64>],
 ) -> Vec<Segment> {
     let mut ranges: Vec<(Option<usize>, usize, usize)> = Vec::new();
     for (k, p) in pieces.iter().enumerate() {
@@ -1228,10 +1234,10 @@ impl Woodbury {
             return Decision::Dense;
         }
         // block factors (in parallel over the blocks)
-        let lus: Vec<Option<PartialPivLu<f64>>> = blocks
+        let lus: Vec<Option<PackedLu<f64>>> = blocks
             .par_iter()
             .map(|b| {
-                let lu = b.partial_piv_lu();
+                let lu = PackedLu::new(*b);
                 lu_sign(&lu).is_some().then_some(lu)
             })
             .collect();
@@ -1260,7 +1266,7 @@ impl Woodbury {
                 .copy_from(part.as_ref());
         }
         drop(rows);
-        let capacitance = c.partial_piv_lu();
+        let capacitance = PackedLu::in_place(c);
         match lu_sign(&capacitance) {
             Some(s) => sign *= s,
             None => return Decision::Failed,

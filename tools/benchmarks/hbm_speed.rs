@@ -14,7 +14,8 @@
 //! peak resident memory and the system time's share of the CPU time, then the split of one
 //! Newton iteration at the last point. KEY=VALUE overrides the case:
 //! `solver=dense|auto|structured[,...]` (`harmonic_balance.linear_solver`), `n0=N` (every contact's
-//! preload), `start=F` (`continuation.start`, in the case's unit).
+//! preload), `start=F` (`continuation.start`, in the case's unit); `split=no` leaves out the split
+//! of one Newton iteration.
 //!
 //! `synthetic`: CONTACT_DOFS / 6 node-to-node pairs (frames along x, y, z; k_t = k_n = 1 N/m,
 //! μ = 0.5, n0 = 1 N, 1-D friction) on a chain of CONTACT_DOFS unit masses and unit springs
@@ -42,9 +43,20 @@
 //! each, `/proc/self/clear_refs`), and the points are compared with the previous solver's. With
 //! `HBM_SPEED_POINTS` set, every point's iterations, factorisations, GMRES solves and CPU time are
 //! printed as it converges.
+//!
+//! After each continuation the live heap bytes (a counting global allocator, `heap_peak.rs`)
+//! before it and their high-water mark during it are printed; with `HBM_SPEED_HEAP` set, also
+//! the allocations of 256 kB or more live at that mark, by call site.
 
 #[path = "../../tests/support/hbm.rs"]
 mod hbm_support;
+
+#[path = "heap_peak.rs"]
+mod heap_peak;
+
+/// Counts the live heap bytes and their high-water mark (printed after each continuation).
+#[global_allocator]
+static HEAP: heap_peak::Counting = heap_peak::Counting;
 
 use std::f64::consts::PI;
 use std::path::Path;
@@ -155,6 +167,7 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
     let mut case = Case::load(path)?;
     case.harmonic_balance.harmonics = h;
     let mut solvers = vec![case.harmonic_balance.linear_solver];
+    let mut with_split = true;
     for o in overrides {
         let (key, value) = o.split_once('=').expect("KEY=VALUE");
         match key {
@@ -179,7 +192,8 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
                 let c = case.continuation.as_mut().expect("a [continuation] table");
                 c.start = value.parse().expect("start=NUMBER");
             }
-            other => panic!("unknown override {other}: solver, n0, start"),
+            "split" => with_split = value != "no",
+            other => panic!("unknown override {other}: solver, n0, start, split"),
         }
     }
     let t = Instant::now();
@@ -217,6 +231,9 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
         let mut opts = case_continuation(&case)?;
         opts.max_points = points;
         let rss_before = reset_peak_rss();
+        let heap_before = heap_peak::live_bytes();
+        heap_peak::trace_from_env();
+        heap_peak::reset();
         let (t, c, split0) = (Instant::now(), cpu_seconds(), cpu_split());
         let before = linsolve::stats();
         let mut mark = (linsolve::stats(), cpu_seconds());
@@ -225,18 +242,21 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
             let (s, c) = (linsolve::stats(), cpu_seconds());
             if verbose {
                 eprintln!(
-                    "  point {:.4} Hz: {} iterations, {} factorisations, {} GMRES solves ({} iterations), CPU {:.2} s",
+                    "  point {:.4} Hz: {} iterations, {} factorisations, {} GMRES solves ({} iterations), CPU {:.2} s, heap mark {:.1} MB",
                     p.parameter / (2.0 * PI),
                     p.iterations,
                     s.factorizations - mark.0.factorizations,
                     s.krylov - mark.0.krylov,
                     s.krylov_iterations - mark.0.krylov_iterations,
-                    c - mark.1
+                    c - mark.1,
+                    heap_peak::peak_bytes() as f64 / 1e6
                 );
             }
             mark = (s, c);
         })?;
         let (wall, cpu) = (t.elapsed().as_secs_f64(), cpu_seconds() - c);
+        heap_peak::report(heap_before, 12);
+        heap_peak::stop();
         let system_share = (cpu_split().1 - split0.1) / cpu.max(1e-9);
         let after = linsolve::stats();
         let iterations: usize = path.points.iter().map(|p| p.iterations).sum();
@@ -276,7 +296,7 @@ fn sector(path: &Path, h: usize, points: usize, overrides: &[String]) -> Result<
             print_difference(previous, &points);
         }
         last = Some(points);
-        if let Some(p) = path.points.last() {
+        if let Some(p) = path.points.last().filter(|_| with_split) {
             split(&fp, &system, &p.x, p.parameter, &p.state, true)?;
         }
     }
