@@ -1114,15 +1114,18 @@ impl Default for SmallBuffers {
 impl SmallBuffers {
     /// Sizes the buffers for n_L linear and n_N nonlinear DOFs (kept when they fit).
     fn resize(&mut self, n_l: usize, n_n: usize) {
-        if self.forward.len() != n_l {
-            let par = faer::get_global_parallelism();
-            let scratch = StackReq::any_of(&[
-                lu_in_place_scratch::<usize, c64>(n_l, n_l, par, Default::default()),
-                solve_in_place_scratch::<usize, c64>(n_l, n_n + 1, par),
-            ]);
-            // bytes for the scratch at any alignment
-            let bytes = scratch.size_bytes() + scratch.align_bytes();
+        let par = faer::get_global_parallelism();
+        // the LU of D_LL, the solve of [X | w] (n_N + 1 columns) and that of t (2 columns)
+        let scratch = StackReq::any_of(&[
+            lu_in_place_scratch::<usize, c64>(n_l, n_l, par, Default::default()),
+            solve_in_place_scratch::<usize, c64>(n_l, (n_n + 1).max(2), par),
+        ]);
+        // bytes for the scratch at any alignment
+        let bytes = scratch.size_bytes() + scratch.align_bytes();
+        if self.stack.len() < bytes {
             self.stack.resize(bytes, MaybeUninit::uninit());
+        }
+        if self.forward.len() != n_l {
             self.forward.resize(n_l, 0);
             self.inverse.resize(n_l, 0);
         }
