@@ -563,11 +563,7 @@ fn force_scale_start<F: HarmonicForce>(
         system: fp.system,
         omega: opts.start,
     };
-    let mut sopts = ContinuationOptions::new(0.0, 1.0, 1.0 / 20.0);
-    sopts.max_step = Some(1.0 / 5.0);
-    sopts.min_step = Some(1.0 / 2e4);
-    sopts.max_points = 2000;
-    sopts.newton = opts.newton;
+    let sopts = fixed_frequency_options(0.0, opts);
     let traced = trace(&path, &sopts, &mut |_| {}).map_err(|e| e.to_string())?;
     let reached = traced.points.last().map_or(0.0, |p| p.parameter);
     let ended = match traced.end {
@@ -602,6 +598,22 @@ struct LevelEnd<S> {
     from: f64,
 }
 
+/// The options of the start procedure's continuations at the fixed ω_start (in the excitation
+/// level, [`level_continuation`], and in the force scale, [`force_scale_start`]): from `from` to
+/// 1 in 20 initial steps, at most 5 and at least 2·10⁴ steps over the range, 2000 points, the
+/// sweep's Newton options. The minimum step is explicit: the default (initial step / 1000 in
+/// scaled arc length) is inflated when ‖Q‖ at a small start makes the first tangent nearly
+/// parallel to Q.
+fn fixed_frequency_options(from: f64, opts: &ContinuationOptions) -> ContinuationOptions {
+    let range = 1.0 - from;
+    let mut fixed = ContinuationOptions::new(from, 1.0, range / 20.0);
+    fixed.max_step = Some(range / 5.0);
+    fixed.min_step = Some(range / 2e4);
+    fixed.max_points = 2000;
+    fixed.newton = opts.newton;
+    fixed
+}
+
 /// The continuation in the excitation level of [`start_point`].
 fn level_continuation<F: HarmonicForce>(
     system: &HbmSystem<'_, F>,
@@ -616,13 +628,7 @@ fn level_continuation<F: HarmonicForce>(
     let mut why = String::new();
     while level >= SMALLEST_START_LEVEL {
         tried = level;
-        let mut lopts = ContinuationOptions::new(level, 1.0, (1.0 - level) / 20.0);
-        lopts.max_step = Some((1.0 - level) / 5.0);
-        // explicit: the default (initial step / 1000 in scaled arc length) is inflated when ‖Q‖
-        // at a small start level makes the first tangent nearly parallel to Q
-        lopts.min_step = Some((1.0 - level) / 2e4);
-        lopts.max_points = 2000;
-        lopts.newton = opts.newton;
+        let lopts = fixed_frequency_options(level, opts);
         match trace(&lp, &lopts, &mut |_| {}) {
             Ok(path) => match path.end {
                 PathEnd::ReachedEnd => match path.points.into_iter().last() {
