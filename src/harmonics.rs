@@ -15,7 +15,7 @@ use crate::error::{Error, Result};
 
 pub mod jacobian;
 
-pub use jacobian::{BlockJacobian, Jacobian, JacobianMut};
+pub use jacobian::{BlockJacobian, Jacobian, JacobianMut, JacobianSink};
 
 /// Number of harmonics H and time samples N_t per period used by the alternating
 /// frequency/time (AFT) evaluation of nonlinear forces.
@@ -142,8 +142,9 @@ pub trait HarmonicForce: Send + Sync {
     }
 
     /// As [`HarmonicForce::evaluate_at`] with the Jacobian added into a dense or a block-stored
-    /// matrix ([`JacobianMut`]). The default evaluates a block-stored Jacobian through a dense
-    /// temporary of the force's order; forces with many DOFs add theirs element by element.
+    /// matrix or a [`JacobianSink`](jacobian::JacobianSink) ([`JacobianMut`]). The default
+    /// evaluates a block-stored or sunk Jacobian through a dense temporary of the force's order;
+    /// forces with many DOFs add theirs element by element.
     #[allow(clippy::too_many_arguments)]
     fn evaluate_into(
         &self,
@@ -172,6 +173,26 @@ pub trait HarmonicForce: Send + Sync {
                     d_omega,
                 )?;
                 b.add_dense(dense.as_ref());
+                Ok(())
+            }
+            Some(JacobianMut::Sink(s)) => {
+                let mut dense = Mat::<f64>::zeros(q.len(), q.len());
+                self.evaluate_at(
+                    layout,
+                    q,
+                    omega,
+                    state,
+                    force,
+                    Some(dense.as_mut()),
+                    d_omega,
+                )?;
+                for j in 0..dense.ncols() {
+                    for i in 0..dense.nrows() {
+                        if dense[(i, j)] != 0.0 {
+                            s.add_entry(i, j, dense[(i, j)]);
+                        }
+                    }
+                }
                 Ok(())
             }
         }
