@@ -161,7 +161,7 @@ pub trait HarmonicForce: Send + Sync {
             Some(JacobianMut::Dense(j)) => {
                 self.evaluate_at(layout, q, omega, state, force, Some(j), d_omega)
             }
-            Some(JacobianMut::Blocks(b)) => {
+            Some(mut target) => {
                 let mut dense = Mat::<f64>::zeros(q.len(), q.len());
                 self.evaluate_at(
                     layout,
@@ -172,24 +172,15 @@ pub trait HarmonicForce: Send + Sync {
                     Some(dense.as_mut()),
                     d_omega,
                 )?;
-                b.add_dense(dense.as_ref());
-                Ok(())
-            }
-            Some(JacobianMut::Sink(s)) => {
-                let mut dense = Mat::<f64>::zeros(q.len(), q.len());
-                self.evaluate_at(
-                    layout,
-                    q,
-                    omega,
-                    state,
-                    force,
-                    Some(dense.as_mut()),
-                    d_omega,
-                )?;
-                for j in 0..dense.ncols() {
-                    for i in 0..dense.nrows() {
-                        if dense[(i, j)] != 0.0 {
-                            s.add_entry(i, j, dense[(i, j)]);
+                match target {
+                    JacobianMut::Blocks(b) => b.add_dense(dense.as_ref()),
+                    _ => {
+                        for j in 0..dense.ncols() {
+                            for i in 0..dense.nrows() {
+                                if dense[(i, j)] != 0.0 {
+                                    target.add(i, j, dense[(i, j)]);
+                                }
+                            }
                         }
                     }
                 }

@@ -36,9 +36,18 @@ fn tight() -> NewtonOptions {
     }
 }
 
+/// A chain's matrices K, M, C, its mass-normalised modes Φ (n × n) and ω_r (rad/s).
+struct Chain {
+    k: Mat<f64>,
+    m: Mat<f64>,
+    c: Mat<f64>,
+    phi: Mat<f64>,
+    omega: Vec<f64>,
+}
+
 /// A fixed–free chain of n unit masses (first mode at 1 rad/s) with modal damping ζ = 0.02:
-/// K, M = I, C = Φ diag(2ζω_r) Φᵀ, and the mass-normalised modes Φ (n × n) and ω_r.
-fn chain_model(n: usize) -> (Mat<f64>, Mat<f64>, Mat<f64>, Mat<f64>, Vec<f64>) {
+/// K, M = I, C = Φ diag(2ζω_r) Φᵀ.
+fn chain_model(n: usize) -> Chain {
     let k = chain::spring_for(n, 1.0);
     let mut stiffness = Mat::<f64>::zeros(n, n);
     for (i, j, v) in chain::stiffness(n, k, 0) {
@@ -52,7 +61,13 @@ fn chain_model(n: usize) -> (Mat<f64>, Mat<f64>, Mat<f64>, Mat<f64>, Vec<f64>) {
             .map(|r| phi[(i, r)] * 2.0 * 0.02 * omega[r] * phi[(j, r)])
             .sum()
     });
-    (stiffness, Mat::identity(n, n), damping, phi, omega)
+    Chain {
+        k: stiffness,
+        m: Mat::identity(n, n),
+        c: damping,
+        phi,
+        omega,
+    }
 }
 
 /// The rows `rows` and the first m columns of Φ.
@@ -121,7 +136,13 @@ fn relative_difference(a: &[Vec<c64>], b: &[Vec<c64>]) -> f64 {
 fn full_modal_basis_gives_the_physical_frequency_response() {
     let n = 8;
     let h = 3;
-    let (k, m, c, phi, omega) = chain_model(n);
+    let Chain {
+        k,
+        m,
+        c,
+        phi,
+        omega,
+    } = chain_model(n);
     let contact = [3, 4, 7];
     let outputs = [0, 4, 7];
     let mut force = vec![0.0; n];
@@ -315,7 +336,13 @@ fn truncated_basis_error_decreases_with_the_number_of_modes() {
     let n = 24;
     let h = 3;
     let omega_f = 1.05;
-    let (k, m, c, phi, omega) = chain_model(n);
+    let Chain {
+        k,
+        m,
+        c,
+        phi,
+        omega,
+    } = chain_model(n);
     let tip = n - 1;
     let mut force = vec![0.0; n];
     force[tip] = 1.0;
@@ -403,69 +430,39 @@ fn path_dim(layout: &HarmonicLayout, n: usize) -> usize {
 #[test]
 fn mismatched_modal_data_are_keyed_errors() {
     let shapes = |rows: usize, cols: usize| Mat::from_fn(rows, cols, |i, j| (i + j) as f64);
-    let error = |r: nlrom::Result<ModalModel>| r.unwrap_err().to_string();
-    let ok = || {
+    // frequencies, damping ratios, (rows, columns) of the contact shapes, forced rows
+    let build = |w: &[f64], z: &[f64], contact: (usize, usize), forced: usize| {
         ModalModel::new(
-            vec![1.0, 2.0],
-            vec![0.01, 0.01],
-            shapes(3, 2),
-            shapes(1, 2),
+            w.to_vec(),
+            z.to_vec(),
+            shapes(contact.0, contact.1),
+            shapes(forced, 2),
             vec![1.0],
             shapes(1, 2),
         )
     };
-    assert!(ok().is_ok());
-    let e = error(ModalModel::new(
-        vec![1.0, 2.0],
-        vec![0.01],
-        shapes(3, 2),
-        shapes(1, 2),
-        vec![1.0],
-        shapes(1, 2),
-    ));
-    assert!(
-        e.contains("`damping_ratios` has 1 entries for 2 modes"),
-        "{e}"
-    );
-    let e = error(ModalModel::new(
-        vec![1.0, 2.0],
-        vec![0.01, 0.01],
-        shapes(3, 3),
-        shapes(1, 2),
-        vec![1.0],
-        shapes(1, 2),
-    ));
-    assert!(
-        e.contains("`contact_shapes` has 3 columns for 2 modes"),
-        "{e}"
-    );
-    let e = error(ModalModel::new(
-        vec![1.0, 2.0],
-        vec![0.01, 0.01],
-        shapes(3, 2),
-        shapes(2, 2),
-        vec![1.0],
-        shapes(1, 2),
-    ));
-    assert!(e.contains("`force` has 1 entries for 2 forced DOFs"), "{e}");
-    let e = error(ModalModel::new(
-        vec![1.0, -2.0],
-        vec![0.01, 0.01],
-        shapes(3, 2),
-        shapes(1, 2),
-        vec![1.0],
-        shapes(1, 2),
-    ));
-    assert!(e.contains("`frequencies` has -2"), "{e}");
-    let model = ModalModel::new(
-        vec![1.0, 2.0],
-        vec![0.01, 0.01],
-        shapes(4, 2),
-        shapes(1, 2),
-        vec![1.0],
-        shapes(1, 2),
-    )
-    .unwrap();
+    let error = |r: nlrom::Result<ModalModel>| r.unwrap_err().to_string();
+    let (w, z) = ([1.0, 2.0], [0.01, 0.01]);
+    assert!(build(&w, &z, (3, 2), 1).is_ok());
+    for (model, message) in [
+        (
+            build(&w, &z[..1], (3, 2), 1),
+            "`damping_ratios` has 1 entries for 2 modes",
+        ),
+        (
+            build(&w, &z, (3, 3), 1),
+            "`contact_shapes` has 3 columns for 2 modes",
+        ),
+        (
+            build(&w, &z, (3, 2), 2),
+            "`force` has 1 entries for 2 forced DOFs",
+        ),
+        (build(&[1.0, -2.0], &z, (3, 2), 1), "`frequencies` has -2"),
+    ] {
+        let e = error(model);
+        assert!(e.contains(message), "{e}");
+    }
+    let model = build(&w, &z, (4, 2), 1).unwrap();
     let e = model.project(chain_elements()).err().unwrap().to_string();
     assert!(
         e.contains("acts on 3 DOFs but `contact_shapes` has 4 rows"),

@@ -260,7 +260,7 @@ fn coefficient_index(layout: &HarmonicLayout, c: usize, dof: usize, n_dof: usize
     if c == 0 {
         layout.static_index(dof)
     } else {
-        layout.cos_index(c.div_ceil(2), dof, n_dof) + usize::from(c % 2 == 0)
+        layout.cos_index(c.div_ceil(2), dof, n_dof) + usize::from(c.is_multiple_of(2))
     }
 }
 

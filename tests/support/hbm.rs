@@ -272,8 +272,7 @@ pub fn synthetic_interface(
     HarmonicLayout,
     Vec<f64>,
 )> {
-    use nlrom::contact::law::{ContactParams, Variant};
-    use nlrom::contact::pairs::{PairElement, PairSet};
+    use nlrom::contact::law::ContactParams;
     let pairs = contact_dofs / 6;
     let n = 6 * pairs;
     let k = Mat::from_fn(n, n, |i, j| match i.abs_diff(j) {
@@ -294,22 +293,7 @@ pub fn synthetic_interface(
         h,
     )?;
     let params = ContactParams::new(1.0, 1.0, 0.5, 1.0, "synthetic")?;
-    let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let set = PairSet::new(
-        n,
-        Variant::OneD,
-        (0..pairs)
-            .map(|p| PairElement {
-                contact: [6 * p, 6 * p + 1, 6 * p + 2],
-                target: Some([6 * p + 3, 6 * p + 4, 6 * p + 5]),
-                frame: identity,
-                sigma: 0,
-                params,
-                preload_rate: 1.0,
-            })
-            .collect(),
-        None,
-    )?;
+    let set = synthetic_pairs(pairs, |_| params)?;
     let layout = HarmonicLayout::new(h, samples)?;
     let mut x = vec![0.0; layout.len(n)];
     let every = slipping.map_or(1, |f| (1.0 / f).ceil() as usize);
@@ -347,8 +331,7 @@ pub fn synthetic_modal_interface(
     HarmonicLayout,
     Vec<f64>,
 )> {
-    use nlrom::contact::law::{ContactParams, Variant};
-    use nlrom::contact::pairs::{PairElement, PairSet};
+    use nlrom::contact::law::ContactParams;
     let pairs = contact_dofs / 6;
     let n = 6 * pairs;
     let amplitude = (2.0 / pairs as f64).sqrt();
@@ -374,21 +357,15 @@ pub fn synthetic_modal_interface(
     )?;
     let stuck = ContactParams::new(1.0, 1.0, 0.5, 100.0, "synthetic")?;
     let moving = ContactParams::new(1.0, 1.0, 0.5, 0.2, "synthetic")?;
-    let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let set = PairSet::new(
-        n,
-        Variant::OneD,
-        (0..pairs)
-            .map(|p| PairElement {
-                contact: [6 * p, 6 * p + 1, 6 * p + 2],
-                target: Some([6 * p + 3, 6 * p + 4, 6 * p + 5]),
-                frame: identity,
-                sigma: 0,
-                params: if p % every.max(1) == 0 { moving } else { stuck },
-                preload_rate: 1.0,
-            })
-            .collect(),
-        None,
+    let set = synthetic_pairs(
+        pairs,
+        |p| {
+            if p % every.max(1) == 0 {
+                moving
+            } else {
+                stuck
+            }
+        },
     )?;
     let layout = HarmonicLayout::new(h, samples)?;
     let mut q = vec![0.0; layout.len(modes)];
@@ -419,4 +396,30 @@ pub fn synthetic_modal_interface(
         q[c1 + 1] = s * im[r];
     }
     Ok((model, set, layout, q))
+}
+
+/// `pairs` node-to-node pairs on 6 DOFs each (contact x y z, then target x y z; frames along
+/// x, y, z; 1-D friction), pair p with the parameters `params(p)`.
+fn synthetic_pairs(
+    pairs: usize,
+    params: impl Fn(usize) -> nlrom::contact::law::ContactParams,
+) -> Result<nlrom::contact::pairs::PairSet> {
+    use nlrom::contact::law::Variant;
+    use nlrom::contact::pairs::{PairElement, PairSet};
+    let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    PairSet::new(
+        6 * pairs,
+        Variant::OneD,
+        (0..pairs)
+            .map(|p| PairElement {
+                contact: [6 * p, 6 * p + 1, 6 * p + 2],
+                target: Some([6 * p + 3, 6 * p + 4, 6 * p + 5]),
+                frame: identity,
+                sigma: 0,
+                params: params(p),
+                preload_rate: 1.0,
+            })
+            .collect(),
+        None,
+    )
 }
