@@ -142,7 +142,7 @@ pub trait HarmonicForce: Send + Sync {
     }
 
     /// As [`HarmonicForce::evaluate_at`] with the Jacobian added into a dense or a block-stored
-    /// matrix or a [`JacobianSink`](jacobian::JacobianSink) ([`JacobianMut`]). The default
+    /// matrix or a [`JacobianSink`] ([`JacobianMut`]). The default
     /// evaluates a block-stored or sunk Jacobian through a dense temporary of the force's order;
     /// forces with many DOFs add theirs element by element.
     #[allow(clippy::too_many_arguments)]
