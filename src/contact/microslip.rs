@@ -1269,6 +1269,152 @@ fn closed_form(mo: &Motion, slider: f64, jacobian: bool) -> Option<Harmonics> {
     Some(sums.finish(mo, at_zero, jacobian))
 }
 
+/// Most contact phases of a cycle with separation in [`separation_form`]: the contact window is
+/// shorter than a period, so it holds the phase entered at the re-contact and at most the four
+/// phases of one stick–slip cycle after it.
+const WINDOW_PHASES: usize = 6;
+
+impl Wave {
+    /// The instant τ′ = −2α − τ at which the sinusoid takes its value at τ again (the mirror of
+    /// τ about the extremum between them): cos τ′ = cos 2α cos τ − sin 2α sin τ,
+    /// sin τ′ = −(sin 2α cos τ + cos 2α sin τ), no inverse function.
+    #[inline]
+    fn mirror(&self, a: At) -> At {
+        let c2 = self.ca * self.ca - self.sa * self.sa;
+        let s2 = 2.0 * self.sa * self.ca;
+        At {
+            t: -2.0 * self.phase() - a.t,
+            s: -(s2 * a.c + c2 * a.s),
+            c: c2 * a.c - s2 * a.s,
+        }
+    }
+}
+
+/// The event that ends a contact phase of the state `kind` entered at `start` in a cycle with
+/// separation: (how far ahead of `start`, the event's instant, the state after it), or `None`
+/// if no event but the separation ends it (Cigeroglu, An & Menq 2007, §2.2.2; the conditions of the module documentation):
+/// * positive slip ends at the maximum of g (eq. 8, θ_P of eq. 21), negative slip at the
+///   minimum of h (eq. 9, θ_N of eq. 22), each followed by stick with the slider the slip left;
+/// * stick after positive slip, with c_P = max g, can only end where h falls through c_N
+///   (eqs 12, 24: one arccosine), stick after negative slip only where g rises through c_P
+///   (eqs 11, 23);
+/// * stick after a re-contact at τ_Sp2 with w = u(τ_Sp2) has c_P = g(τ_Sp2) and c_N = h(τ_Sp2)
+///   (n(τ_Sp2) = 0): it ends where g takes its re-contact value again rising (θ_SpP, eq. 27) or h
+///   falling (θ_SpN, eq. 28), the mirrors of τ_Sp2 about the minimum of g and the maximum of h
+///   ([`Wave::mirror`]), whichever comes first.
+///
+/// The levels and their tangency tests are those of the event march ([`Motion::next_event`]), so
+/// both take the same decisions.
+fn window_event(mo: &Motion, kind: PhaseKind, start: At) -> Option<(f64, At, PhaseKind)> {
+    let (g, h) = (&mo.g, &mo.h);
+    let from = start.t;
+    let mun = mo.p.mu * mo.n0e;
+    let ahead_of = |a: At, next: PhaseKind| Some((ahead(a.t, from), a, next));
+    match kind {
+        PhaseKind::PositiveSlip => {
+            let p = g.maximum();
+            let slider = mo.slider_in(PhaseKind::PositiveSlip, p);
+            let origin = SliderOrigin::AfterPositiveSlip(p.t);
+            ahead_of(p, PhaseKind::Stick { slider, origin })
+        }
+        PhaseKind::NegativeSlip => {
+            let n = h.minimum();
+            let slider = mo.slider_in(PhaseKind::NegativeSlip, n);
+            let origin = SliderOrigin::AfterNegativeSlip(n.t);
+            ahead_of(n, PhaseKind::Stick { slider, origin })
+        }
+        PhaseKind::Stick { slider, origin } => {
+            let offset = mo.p.kt * (mo.u[0] - slider);
+            let rp = (mun - offset) / g.amp;
+            let rn = (-mun - offset) / h.amp;
+            let positive = rp < 1.0 - TANGENCY;
+            let negative = rn > -1.0 + TANGENCY;
+            match origin {
+                SliderOrigin::AfterPositiveSlip(_) if negative => {
+                    ahead_of(h.crossing(rn, false), PhaseKind::NegativeSlip)
+                }
+                SliderOrigin::AfterNegativeSlip(_) if positive => {
+                    ahead_of(g.crossing(rp, true), PhaseKind::PositiveSlip)
+                }
+                SliderOrigin::Recontact(_) => {
+                    // the earlier of the two mirrors (g's first on a tie, as in the march)
+                    let sp = positive.then(|| g.mirror(start));
+                    let sn = negative.then(|| h.mirror(start));
+                    let dp = sp.map_or(f64::INFINITY, |a| ahead(a.t, from));
+                    let dn = sn.map_or(f64::INFINITY, |a| ahead(a.t, from));
+                    match (sp, sn) {
+                        (Some(a), _) if dp <= dn => Some((dp, a, PhaseKind::PositiveSlip)),
+                        (_, Some(a)) => Some((dn, a, PhaseKind::NegativeSlip)),
+                        _ => None,
+                    }
+                }
+                _ => None,
+            }
+        }
+        PhaseKind::Separation => None,
+    }
+}
+
+/// The harmonics of a point whose contact window is part of the period (§2.2.2), in closed
+/// form: the cycle starts at the re-contact τ_Sp2 (eqs 13–17; history-free, so the caller's
+/// slider does not enter) in the state of eqs 15–17, and each contact phase ends at the one
+/// event its state allows ([`window_event`]: an extremum, one arccosine, or a mirror of τ_Sp2)
+/// or at the separation τ_Sp1, whichever comes first; separation then lasts until τ_Sp2 + 2π.
+/// The phases are those of the event march of [`build`] (which, from the same start, takes the
+/// earliest of up to three candidate events a phase) and are integrated by the same
+/// [`PhaseSums`]. `None` where the march is needed: no separation, a degenerate sinusoid
+/// (|G| = 0 or |H| = 0, k_t = 0), or more phases than a window holds.
+fn separation_form(mo: &Motion, jacobian: bool) -> Option<Harmonics> {
+    let Window::Part {
+        recontact,
+        separation,
+        ..
+    } = mo.window
+    else {
+        return None;
+    };
+    if mo.p.kt <= 0.0 || mo.g.amp <= 0.0 || mo.h.amp <= 0.0 {
+        return None;
+    }
+    let mut sums = PhaseSums::default();
+    // the state at τ ≡ 0: the first phase that ends at or after it (as in `harmonics`)
+    let zero = recontact.t + wrap(-recontact.t);
+    let mut at_zero = PhaseKind::Separation;
+    let mut found = false;
+    let mut add = |ph: Phase| {
+        if !found && ph.end >= zero {
+            at_zero = ph.kind;
+            found = true;
+        }
+        sums.add(mo, &ph, jacobian);
+    };
+    let mut cur = recontact;
+    let mut kind = mo.recontact_state(recontact);
+    for _ in 0..WINDOW_PHASES {
+        let to_separation = ahead(separation.t, cur.t);
+        match window_event(mo, kind, cur) {
+            Some((d, a, next)) if d <= to_separation => {
+                let at = a.labelled(cur.t + d);
+                if d > 0.0 {
+                    add(Phase::new(kind, cur, at));
+                }
+                cur = at;
+                kind = next;
+            }
+            _ => {
+                let sp1 = separation.labelled(cur.t + to_separation);
+                if to_separation > 0.0 {
+                    add(Phase::new(kind, cur, sp1));
+                }
+                let end = recontact.labelled(recontact.t + TAU);
+                add(Phase::new(PhaseKind::Separation, sp1, end));
+                return Some(sums.finish(mo, at_zero, jacobian));
+            }
+        }
+    }
+    None
+}
+
 fn check_finite(u: &[f64; 3], v: &[f64; 3], slider: f64) -> Result<()> {
     if u.iter().chain(v).chain([&slider]).all(|x| x.is_finite()) {
         Ok(())
@@ -1383,7 +1529,11 @@ pub(crate) fn evaluate_element(
         check_finite(&u, &v, slider[d])?;
         u_all[d] = u;
         let mo = Motion::new(&element.params, u, v);
-        let r = match closed_form(&mo, slider[d], jacobian) {
+        let exact = match mo.window {
+            Window::Part { .. } => separation_form(&mo, jacobian),
+            _ => closed_form(&mo, slider[d], jacobian),
+        };
+        let r = match exact {
             Some(r) => r,
             None => harmonics(&mo, slider[d], jacobian, |_| true)?.0,
         };
@@ -1504,5 +1654,88 @@ mod tests {
         assert!(worst < 1e-12, "{worst:e}");
         assert!(worst_jac < 1e-12, "{worst_jac:e}");
         assert!(worst_grazing < 1e-7, "{worst_grazing:e}");
+    }
+
+    /// The closed form of a cycle with separation ([`separation_form`]) against the event march
+    /// of [`build`] on the same point, over a grid of n̄0 (gaps included), b̄ and φ that separates
+    /// (u = a sin τ, v = b sin(τ + φ), k_t = 2, k_n = 5, μ = 0.4, a = 0.7, with mean offsets U0,
+    /// V0 and sliders, which a cycle with separation forgets; the points with |G| = 0 or |H| = 0,
+    /// b̄ = 1 at φ = 0 or π, are left to the march): forces, normal forces, energy and
+    /// end slider equal to 1e-12 of their scale and both Jacobians to 1e-12 of k_t + k_n. Both
+    /// take the same phases; the closed form reaches a stick's end after a re-contact by the
+    /// mirror of the re-contact instant instead of an arccosine of the level, and the other ends
+    /// by the same expressions as the march.
+    #[test]
+    fn separation_form_equals_the_event_march() {
+        let (kt, kn, mu, a) = (2.0, 5.0, 0.4, 0.7);
+        let (mut separating, mut fallback) = (0, 0);
+        let (mut worst, mut worst_jac) = (0.0f64, 0.0f64);
+        let mut worst_at = (0.0, 0.0, 0.0, 0);
+        for n0bar in [-0.5, -0.2, 0.0, 0.2, 0.5, 0.9, 1.4] {
+            for bbar in [0.1, 0.3, 0.6, 1.0, 1.5, 2.5, 5.0] {
+                for phi in [0.0, 0.7, PI / 2.0, 2.0, PI, 4.0, 5.5] {
+                    for (i, (u0, v0, w)) in [(0.0, 0.0, 0.0), (0.3, 0.01, 0.2), (-0.2, -0.02, -0.5)]
+                        .into_iter()
+                        .enumerate()
+                    {
+                        let b = bbar * kt * a / (mu * kn);
+                        let p = ContactParams {
+                            kt,
+                            kn,
+                            mu,
+                            n0: n0bar * kt * a / mu,
+                        };
+                        let u = [u0, 0.0, -a];
+                        let v = [v0, b * phi.sin(), -b * phi.cos()];
+                        let mo = Motion::new(&p, u, v);
+                        if !matches!(mo.window, Window::Part { .. }) {
+                            continue;
+                        }
+                        separating += 1;
+                        let Some(c) = separation_form(&mo, true) else {
+                            // only a degenerate sinusoid (b̄ = 1 at φ = 0 or π) is left to the march
+                            assert!(mo.g.amp == 0.0 || mo.h.amp == 0.0, "{n0bar} {bbar} {phi}");
+                            fallback += 1;
+                            continue;
+                        };
+                        let (m, regime) = harmonics(&mo, w, true, |_| true).unwrap();
+                        assert_eq!(regime, CycleRegime::Separation);
+                        let scale = kt * a + p.n0.abs() + kn * b;
+                        let pairs = c
+                            .friction
+                            .iter()
+                            .zip(&m.friction)
+                            .chain(c.normal.iter().zip(&m.normal))
+                            .chain([(&c.energy, &m.energy), (&c.slider, &m.slider)]);
+                        for (x, y) in pairs {
+                            worst = worst.max((x - y).abs() / scale);
+                        }
+                        let jac = c
+                            .friction_jacobian
+                            .iter()
+                            .zip(&m.friction_jacobian)
+                            .chain(c.normal_jacobian.iter().zip(&m.normal_jacobian));
+                        for (rc, rm) in jac {
+                            for (x, y) in rc.iter().zip(rm) {
+                                let d = (x - y).abs() / (kt + kn);
+                                if d > worst_jac {
+                                    worst_jac = d;
+                                    worst_at = (n0bar, bbar, phi, i);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        eprintln!(
+            "separation: {separating} points, {fallback} marched; largest difference {worst:.2e} of the scale, Jacobians {worst_jac:.2e} of k_t + k_n (at n̄0, b̄, φ, offsets {worst_at:?})"
+        );
+        assert!(
+            separating >= 400 && fallback == 0,
+            "{separating} separating, {fallback} marched"
+        );
+        assert!(worst < 1e-12, "{worst:e}");
+        assert!(worst_jac < 1e-12, "{worst_jac:e}");
     }
 }
