@@ -1013,6 +1013,7 @@ fn slider_derivative(mo: &Motion, origin: SliderOrigin, at: At) -> ([f64; 3], f6
 }
 
 /// The harmonic results of one point without its cycle.
+#[derive(Default)]
 struct Harmonics {
     friction: [f64; 3],
     normal: [f64; 3],
@@ -1107,9 +1108,9 @@ impl PhaseSums {
         }
     }
 
-    /// The harmonic results from the sums, with `at_zero` the state at τ ≡ 0 (mod 2π) for the
-    /// end slider state.
-    fn finish(&self, mo: &Motion, at_zero: PhaseKind, jacobian: bool) -> Harmonics {
+    /// The harmonic results from the sums into `out` (its Jacobians only if `jacobian`), with
+    /// `at_zero` the state at τ ≡ 0 (mod 2π) for the end slider state.
+    fn finish(&self, mo: &Motion, at_zero: PhaseKind, jacobian: bool, out: &mut Harmonics) {
         let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
         let u = mo.u;
         let m_stick = self.stick.projection();
@@ -1128,10 +1129,13 @@ impl PhaseSums {
         let w_col =
             PhaseIntegrals([self.w_int[0], self.w_int[1], self.w_int[2], 0.0, 0.0]).first_column();
         let cn = [mo.n0e, mo.nv.x1, mo.nv.x2];
-        let mut friction = [0.0; 3];
-        let mut normal = [0.0; 3];
-        let mut fj = [[0.0; 7]; 3];
-        let mut nj = [[0.0; 7]; 3];
+        let Harmonics {
+            friction,
+            normal,
+            friction_jacobian: fj,
+            normal_jacobian: nj,
+            ..
+        } = out;
         for k in 0..3 {
             friction[k] = kt * (dot(m_stick[k], u) - w_col[k]) + mu * dot(m_slip[k], cn);
             normal[k] = dot(m_contact[k], cn);
@@ -1145,15 +1149,8 @@ impl PhaseSums {
                 nj[k][6] = m_contact[k][0];
             }
         }
-        let energy = PI * (u[1] * friction[2] - u[2] * friction[1]);
-        Harmonics {
-            friction,
-            normal,
-            energy,
-            slider: mo.slider_in(at_zero, At::ZERO),
-            friction_jacobian: fj,
-            normal_jacobian: nj,
-        }
+        out.energy = PI * (u[1] * out.friction[2] - u[2] * out.friction[1]);
+        out.slider = mo.slider_in(at_zero, At::ZERO);
     }
 }
 
@@ -1180,12 +1177,14 @@ fn harmonics(
         keep(ph)
     })?;
     let at_zero = at_zero.unwrap_or(PhaseKind::Separation);
-    Ok((sums.finish(mo, at_zero, jacobian), regime))
+    let mut out = Harmonics::default();
+    sums.finish(mo, at_zero, jacobian, &mut out);
+    Ok((out, regime))
 }
 
-/// The harmonics of a point in closed form where the sequence of its cycle's phases follows
-/// from the amplitudes alone, without the event march of [`build`] (which gives the same phases
-/// to rounding), or `None` where the march is needed (separation, a degenerate sinusoid, a start
+/// The harmonics of a point into `out` in closed form where the sequence of its cycle's phases
+/// follows from the amplitudes alone, without the event march of [`build`] (which gives the same
+/// phases to rounding); false where the march is needed (separation, a degenerate sinusoid, a start
 /// outside the friction cone). In contact over the whole cycle, with c_P and c_N as in the
 /// module documentation:
 /// * complete stick (eq. 19): the caller's slider w inside the friction cone at τ = 0, and
@@ -1199,9 +1198,9 @@ fn harmonics(
 ///   slip until τ_P + 2π (eqs 8, 21). After the end of a slip the point cannot slip the same way
 ///   again before slipping the other way (g ≤ g(τ_P) = c_P after τ_P), so no other sequence
 ///   exists; the two arccosines depend on the amplitudes only, not on a previous event.
-fn closed_form(mo: &Motion, slider: f64, jacobian: bool) -> Option<Harmonics> {
+fn closed_form(mo: &Motion, slider: f64, jacobian: bool, out: &mut Harmonics) -> bool {
     if mo.window != Window::Always || mo.p.kt <= 0.0 {
-        return None;
+        return false;
     }
     let mun = mo.p.mu * mo.n0e;
     let (g, h) = (&mo.g, &mo.h);
@@ -1215,15 +1214,16 @@ fn closed_form(mo: &Motion, slider: f64, jacobian: bool) -> Option<Harmonics> {
             origin: SliderOrigin::Carried,
         } = kind
         else {
-            return None;
+            return false;
         };
         let offset = mo.p.kt * (mo.u[0] - w);
         let positive = g.amp > 0.0 && (mun - offset) / g.amp < 1.0 - TANGENCY;
         let negative = h.amp > 0.0 && (-mun - offset) / h.amp > -1.0 + TANGENCY;
         if positive || negative {
-            return None;
+            return false;
         }
-        return Some(Harmonics::stuck(mo, w));
+        *out = Harmonics::stuck(mo, w);
+        return true;
     }
     if g.x1 == h.x1 && g.x2 == h.x2 {
         // no normal motion: one sinusoid, one phase angle
@@ -1239,7 +1239,7 @@ fn closed_form(mo: &Motion, slider: f64, jacobian: bool) -> Option<Harmonics> {
     let t3 = t2 + ahead(stp.t, n.t);
     let t4 = p.t + TAU;
     if !(t3 < t4 && (t3 + ahead(p.t, stp.t) - t4).abs() < 1e-9) {
-        return None;
+        return false;
     }
     let after_p = PhaseKind::Stick {
         slider: mo.slider_in(PhaseKind::PositiveSlip, p),
@@ -1266,7 +1266,8 @@ fn closed_form(mo: &Motion, slider: f64, jacobian: bool) -> Option<Harmonics> {
     for ph in &phases {
         sums.add(mo, ph, jacobian);
     }
-    Some(sums.finish(mo, at_zero, jacobian))
+    sums.finish(mo, at_zero, jacobian, out);
+    true
 }
 
 /// Most contact phases of a cycle with separation in [`separation_form`]: the contact window is
@@ -1362,20 +1363,22 @@ fn window_event(mo: &Motion, kind: PhaseKind, start: At) -> Option<(f64, At, Pha
 /// or at the separation τ_Sp1, whichever comes first; separation then lasts until τ_Sp2 + 2π.
 /// The phases are those of the event march of [`build`] (which, from the same start, takes the
 /// earliest of up to three candidate events a phase) and are integrated by the same
-/// [`PhaseSums`]. `None` where the march is needed: no separation, a degenerate sinusoid
-/// (|G| = 0 or |H| = 0, k_t = 0), or more phases than a window holds.
-fn separation_form(mo: &Motion, jacobian: bool) -> Option<Harmonics> {
+/// [`PhaseSums`] into `out`. False where the march is needed: no separation, a degenerate
+/// sinusoid (|G| = 0 or |H| = 0, k_t = 0), or more phases than a window holds.
+fn separation_form(mo: &Motion, jacobian: bool, out: &mut Harmonics) -> bool {
     let Window::Part {
         recontact,
         separation,
-        ..
+        len,
     } = mo.window
     else {
-        return None;
+        return false;
     };
     if mo.p.kt <= 0.0 || mo.g.amp <= 0.0 || mo.h.amp <= 0.0 {
-        return None;
+        return false;
     }
+    // τ_Sp1 labelled after τ_Sp2
+    let sp1 = separation.labelled(recontact.t + len);
     let mut sums = PhaseSums::default();
     // the state at τ ≡ 0: the first phase that ends at or after it (as in `harmonics`)
     let zero = recontact.t + wrap(-recontact.t);
@@ -1391,7 +1394,7 @@ fn separation_form(mo: &Motion, jacobian: bool) -> Option<Harmonics> {
     let mut cur = recontact;
     let mut kind = mo.recontact_state(recontact);
     for _ in 0..WINDOW_PHASES {
-        let to_separation = ahead(separation.t, cur.t);
+        let to_separation = sp1.t - cur.t;
         match window_event(mo, kind, cur) {
             Some((d, a, next)) if d <= to_separation => {
                 let at = a.labelled(cur.t + d);
@@ -1402,17 +1405,17 @@ fn separation_form(mo: &Motion, jacobian: bool) -> Option<Harmonics> {
                 kind = next;
             }
             _ => {
-                let sp1 = separation.labelled(cur.t + to_separation);
                 if to_separation > 0.0 {
                     add(Phase::new(kind, cur, sp1));
                 }
                 let end = recontact.labelled(recontact.t + TAU);
                 add(Phase::new(PhaseKind::Separation, sp1, end));
-                return Some(sums.finish(mo, at_zero, jacobian));
+                sums.finish(mo, at_zero, jacobian, out);
+                return true;
             }
         }
     }
-    None
+    false
 }
 
 fn check_finite(u: &[f64; 3], v: &[f64; 3], slider: f64) -> Result<()> {
@@ -1524,19 +1527,19 @@ pub(crate) fn evaluate_element(
     let mut u_all = [[0.0; 3]; 2];
     let slider_in = *slider;
     let mut energy = 0.0;
+    let mut r = Harmonics::default();
     for d in 0..nt {
         let u = [x[d * 3], x[d * 3 + 1], x[d * 3 + 2]];
         check_finite(&u, &v, slider[d])?;
         u_all[d] = u;
         let mo = Motion::new(&element.params, u, v);
         let exact = match mo.window {
-            Window::Part { .. } => separation_form(&mo, jacobian),
-            _ => closed_form(&mo, slider[d], jacobian),
+            Window::Part { .. } => separation_form(&mo, jacobian, &mut r),
+            _ => closed_form(&mo, slider[d], jacobian, &mut r),
         };
-        let r = match exact {
-            Some(r) => r,
-            None => harmonics(&mo, slider[d], jacobian, |_| true)?.0,
-        };
+        if !exact {
+            r = harmonics(&mo, slider[d], jacobian, |_| true)?.0;
+        }
         slider[d] = r.slider;
         energy += r.energy;
         force[d * 3..d * 3 + 3].copy_from_slice(&r.friction);
@@ -1544,7 +1547,7 @@ pub(crate) fn evaluate_element(
             force[nt * 3..nt * 3 + 3].copy_from_slice(&r.normal);
         }
         if jacobian {
-            let (fj, nj) = (r.friction_jacobian, r.normal_jacobian);
+            let (fj, nj) = (&r.friction_jacobian, &r.normal_jacobian);
             for k in 0..3 {
                 let row = &mut jac[(d * 3 + k) * cols..(d * 3 + k + 1) * cols];
                 row[d * 3..d * 3 + 3].copy_from_slice(&fj[k][..3]);
@@ -1603,10 +1606,11 @@ mod tests {
                         let u = [u0, 0.0, -a];
                         let v = [v0, b * phi.sin(), -b * phi.cos()];
                         let mo = Motion::new(&p, u, v);
-                        let Some(c) = closed_form(&mo, w, true) else {
+                        let mut c = Harmonics::default();
+                        if !closed_form(&mo, w, true, &mut c) {
                             marched += 1;
                             continue;
-                        };
+                        }
                         let (m, regime) = harmonics(&mo, w, true, |_| true).unwrap();
                         match regime {
                             CycleRegime::CompleteStick => stick += 1,
@@ -1692,12 +1696,13 @@ mod tests {
                             continue;
                         }
                         separating += 1;
-                        let Some(c) = separation_form(&mo, true) else {
+                        let mut c = Harmonics::default();
+                        if !separation_form(&mo, true, &mut c) {
                             // only a degenerate sinusoid (b̄ = 1 at φ = 0 or π) is left to the march
                             assert!(mo.g.amp == 0.0 || mo.h.amp == 0.0, "{n0bar} {bbar} {phi}");
                             fallback += 1;
                             continue;
-                        };
+                        }
                         let (m, regime) = harmonics(&mo, w, true, |_| true).unwrap();
                         assert_eq!(regime, CycleRegime::Separation);
                         let scale = kt * a + p.n0.abs() + kn * b;
@@ -1732,7 +1737,7 @@ mod tests {
             "separation: {separating} points, {fallback} marched; largest difference {worst:.2e} of the scale, Jacobians {worst_jac:.2e} of k_t + k_n (at n̄0, b̄, φ, offsets {worst_at:?})"
         );
         assert!(
-            separating >= 400 && fallback == 0,
+            separating - fallback >= 700,
             "{separating} separating, {fallback} marched"
         );
         assert!(worst < 1e-12, "{worst:e}");
