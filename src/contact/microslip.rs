@@ -1578,6 +1578,47 @@ pub(crate) fn evaluate_element(
 mod tests {
     use super::*;
 
+    /// A point of the tests' grids: k_t = 2, k_n = 5, μ = 0.4, u = U0 + a sin τ with a = 0.7,
+    /// v = V0 + b sin(τ + φ), n̄0 = μ n0/(k_t a) and b̄ = μ k_n b/(k_t a); with its force scale
+    /// k_t a + |n0| + k_n b (N).
+    fn grid_point(n0bar: f64, bbar: f64, phi: f64, u0: f64, v0: f64) -> (Motion, f64) {
+        let (kt, kn, mu, a) = (2.0, 5.0, 0.4, 0.7);
+        let b = bbar * kt * a / (mu * kn);
+        let p = ContactParams {
+            kt,
+            kn,
+            mu,
+            n0: n0bar * kt * a / mu,
+        };
+        let u = [u0, 0.0, -a];
+        let v = [v0, b * phi.sin(), -b * phi.cos()];
+        (Motion::new(&p, u, v), kt * a + p.n0.abs() + kn * b)
+    }
+
+    /// The largest differences of two evaluations of a point: forces, normal forces, energy and
+    /// end slider over `scale`, and the two Jacobians over `jac_scale`.
+    fn differences(c: &Harmonics, m: &Harmonics, scale: f64, jac_scale: f64) -> (f64, f64) {
+        let pairs = c
+            .friction
+            .iter()
+            .zip(&m.friction)
+            .chain(c.normal.iter().zip(&m.normal))
+            .chain([(&c.energy, &m.energy), (&c.slider, &m.slider)]);
+        let values = pairs.fold(0.0f64, |w, (x, y)| w.max((x - y).abs() / scale));
+        let jac = c
+            .friction_jacobian
+            .iter()
+            .zip(&m.friction_jacobian)
+            .chain(c.normal_jacobian.iter().zip(&m.normal_jacobian));
+        let mut d: f64 = 0.0;
+        for (rc, rm) in jac {
+            for (x, y) in rc.iter().zip(rm) {
+                d = d.max((x - y).abs() / jac_scale);
+            }
+        }
+        (values, d)
+    }
+
     /// The closed forms ([`closed_form`]) against the event march of [`build`] on the same
     /// point: forces, normal forces, energy and end slider equal to 1e-12 of their scale, both
     /// Jacobians to 1e-12 of k_t + k_n, over the paper's grid of n̄0, b̄ and φ (u = a sin τ,
@@ -1589,23 +1630,15 @@ mod tests {
     /// Jacobians are compared there to 1e-7 (measured 7.2e-9; elsewhere 5e-16).
     #[test]
     fn closed_forms_equal_the_event_march() {
-        let (kt, kn, mu, a) = (2.0, 5.0, 0.4, 0.7);
+        // k_t + k_n of the grid points (N/m)
+        let (kt, kn) = (2.0, 5.0);
         let (mut stick, mut slip, mut marched, mut grazing) = (0, 0, 0, 0);
         let (mut worst, mut worst_jac, mut worst_grazing) = (0.0f64, 0.0f64, 0.0f64);
         for n0bar in [-0.3, 0.0, 0.2, 0.5, 0.8, 1.2, 2.5, 6.0] {
             for bbar in [0.0, 0.1, 0.3, 0.8, 1.5] {
                 for phi in [0.0, 0.7, PI / 2.0, 2.0, PI, 4.0, 5.5] {
                     for (u0, v0, w) in [(0.0, 0.0, 0.0), (0.3, 0.01, 0.2), (-0.2, -0.02, -0.5)] {
-                        let b = bbar * kt * a / (mu * kn);
-                        let p = ContactParams {
-                            kt,
-                            kn,
-                            mu,
-                            n0: n0bar * kt * a / mu,
-                        };
-                        let u = [u0, 0.0, -a];
-                        let v = [v0, b * phi.sin(), -b * phi.cos()];
-                        let mo = Motion::new(&p, u, v);
+                        let (mo, scale) = grid_point(n0bar, bbar, phi, u0, v0);
                         let mut c = Harmonics::default();
                         if !closed_form(&mo, w, true, &mut c) {
                             marched += 1;
@@ -1617,27 +1650,8 @@ mod tests {
                             CycleRegime::StickSlip => slip += 1,
                             other => panic!("closed form taken in regime {other:?}"),
                         }
-                        let scale = kt * a + p.n0.abs() + kn * b;
-                        let pairs = c
-                            .friction
-                            .iter()
-                            .zip(&m.friction)
-                            .chain(c.normal.iter().zip(&m.normal))
-                            .chain([(&c.energy, &m.energy), (&c.slider, &m.slider)]);
-                        for (x, y) in pairs {
-                            worst = worst.max((x - y).abs() / scale);
-                        }
-                        let jac = c
-                            .friction_jacobian
-                            .iter()
-                            .zip(&m.friction_jacobian)
-                            .chain(c.normal_jacobian.iter().zip(&m.normal_jacobian));
-                        let mut d: f64 = 0.0;
-                        for (rc, rm) in jac {
-                            for (x, y) in rc.iter().zip(rm) {
-                                d = d.max((x - y).abs() / (kt + kn));
-                            }
-                        }
+                        let (values, d) = differences(&c, &m, scale, kt + kn);
+                        worst = worst.max(values);
                         if (mo.n0e - mo.nv.amp).abs() <= 1e-12 * mo.n0e.abs() {
                             grazing += 1;
                             worst_grazing = worst_grazing.max(d);
@@ -1671,8 +1685,11 @@ mod tests {
     /// by the same expressions as the march.
     #[test]
     fn separation_form_equals_the_event_march() {
-        let (kt, kn, mu, a) = (2.0, 5.0, 0.4, 0.7);
+        // k_t + k_n of the grid points (N/m)
+        let (kt, kn) = (2.0, 5.0);
         let (mut separating, mut fallback) = (0, 0);
+        // the states at the re-contact: positive slip, negative slip, stick (mirror ends)
+        let mut entered = [0; 3];
         let (mut worst, mut worst_jac) = (0.0f64, 0.0f64);
         let mut worst_at = (0.0, 0.0, 0.0, 0);
         for n0bar in [-0.5, -0.2, 0.0, 0.2, 0.5, 0.9, 1.4] {
@@ -1682,16 +1699,7 @@ mod tests {
                         .into_iter()
                         .enumerate()
                     {
-                        let b = bbar * kt * a / (mu * kn);
-                        let p = ContactParams {
-                            kt,
-                            kn,
-                            mu,
-                            n0: n0bar * kt * a / mu,
-                        };
-                        let u = [u0, 0.0, -a];
-                        let v = [v0, b * phi.sin(), -b * phi.cos()];
-                        let mo = Motion::new(&p, u, v);
+                        let (mo, scale) = grid_point(n0bar, bbar, phi, u0, v0);
                         if !matches!(mo.window, Window::Part { .. }) {
                             continue;
                         }
@@ -1705,40 +1713,29 @@ mod tests {
                         }
                         let (m, regime) = harmonics(&mo, w, true, |_| true).unwrap();
                         assert_eq!(regime, CycleRegime::Separation);
-                        let scale = kt * a + p.n0.abs() + kn * b;
-                        let pairs = c
-                            .friction
-                            .iter()
-                            .zip(&m.friction)
-                            .chain(c.normal.iter().zip(&m.normal))
-                            .chain([(&c.energy, &m.energy), (&c.slider, &m.slider)]);
-                        for (x, y) in pairs {
-                            worst = worst.max((x - y).abs() / scale);
+                        if let Window::Part { recontact, .. } = mo.window {
+                            entered[match mo.recontact_state(recontact) {
+                                PhaseKind::PositiveSlip => 0,
+                                PhaseKind::NegativeSlip => 1,
+                                _ => 2,
+                            }] += 1;
                         }
-                        let jac = c
-                            .friction_jacobian
-                            .iter()
-                            .zip(&m.friction_jacobian)
-                            .chain(c.normal_jacobian.iter().zip(&m.normal_jacobian));
-                        for (rc, rm) in jac {
-                            for (x, y) in rc.iter().zip(rm) {
-                                let d = (x - y).abs() / (kt + kn);
-                                if d > worst_jac {
-                                    worst_jac = d;
-                                    worst_at = (n0bar, bbar, phi, i);
-                                }
-                            }
+                        let (values, d) = differences(&c, &m, scale, kt + kn);
+                        worst = worst.max(values);
+                        if d > worst_jac {
+                            worst_jac = d;
+                            worst_at = (n0bar, bbar, phi, i);
                         }
                     }
                 }
             }
         }
         eprintln!(
-            "separation: {separating} points, {fallback} marched; largest difference {worst:.2e} of the scale, Jacobians {worst_jac:.2e} of k_t + k_n (at n̄0, b̄, φ, offsets {worst_at:?})"
+            "separation: {separating} points, {fallback} marched, re-contact in +slip, -slip, stick {entered:?}; largest difference {worst:.2e} of the scale, Jacobians {worst_jac:.2e} of k_t + k_n (at n̄0, b̄, φ, offsets {worst_at:?})"
         );
         assert!(
-            separating - fallback >= 700,
-            "{separating} separating, {fallback} marched"
+            separating - fallback >= 700 && entered.iter().all(|&n| n >= 50),
+            "{separating} separating, {fallback} marched, {entered:?}"
         );
         assert!(worst < 1e-12, "{worst:e}");
         assert!(worst_jac < 1e-12, "{worst_jac:e}");
