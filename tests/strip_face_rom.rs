@@ -138,16 +138,47 @@ const MARCH_STRIP: &str =
     "face = \"pads\"\ndirection = [1.0, 0.0, 0.0]\nkt = 1.2e9\nmu = 0.3\npreload = 1000.0\n";
 
 /// `nlrom march` of the reduced and the unreduced case from rest at 1330 Hz (the case's scheme,
-/// 64 steps a period, 3 periods): the tip's displacement at every step of the third period within
-/// 1e-3 of its largest value.
+/// 64 steps a period, 3 periods) with the tip's axial load and response as rows (the march takes
+/// `excitation.dofs`; `excitation.group` is a keyed error): the tip's displacement at every step
+/// of the third period within 1e-3 of its largest value.
 #[test]
 fn reduced_face_strip_case_marches_as_the_unreduced_one() {
     let dir = tempfile::tempdir().unwrap();
     let m = mesh(dir.path());
     let tables = "\n[march]\nfrequency_hz = 1330.0\nperiods = 3\nsteps_per_period = 64\n";
+    let text = |extra: &str| case_text(&m, MARCH_STRIP, &format!("{extra}{tables}"));
+    let grouped = Case::from_str(&text(""), &dir.path().join("bar.toml")).unwrap();
+    let msg = case_march(&grouped, None, &mut |_| {})
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        msg.contains("excitation.group") && msg.contains("excitation.dofs"),
+        "{msg}"
+    );
+    // the tip nodes' axial rows (3·node), 2 N in all
+    let tip: Vec<usize> = (0..BAR.nodes())
+        .filter(|i| i % (BAR.nx + 1) == BAR.nx)
+        .map(|i| 3 * i)
+        .collect();
+    let rows = |r: &[usize]| {
+        r.iter()
+            .map(|d| d.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let per = 2.0 / tip.len() as f64;
+    let forces = vec![format!("{per:e}"); tip.len()].join(", ");
+    let as_rows = |extra: &str| {
+        text(extra)
+            .replace(
+                "group = \"tip\"\nforce = [2.0, 0.0, 0.0]",
+                &format!("dofs = [{}]\nforce = [{forces}]", rows(&tip)),
+            )
+            .replace("groups = [\"tip\"]", &format!("dofs = [{}]", rows(&tip)))
+    };
     let run = |extra: &str| {
-        let text = case_text(&m, MARCH_STRIP, &format!("{extra}{tables}"));
-        let c = Case::from_str(&text, &dir.path().join("bar.toml")).unwrap();
+        let c = Case::from_str(&as_rows(extra), &dir.path().join("bar.toml")).unwrap();
         let cm = case_march(&c, None, &mut |_| {}).unwrap();
         let out = march(&cm.system, &cm.settings).unwrap();
         (cm, out)
@@ -156,6 +187,7 @@ fn reduced_face_strip_case_marches_as_the_unreduced_one() {
     let (rom_case, rom) = run(REDUCTION);
     assert!(rom_case.system.n < full_case.system.n);
     assert_eq!(full_case.response_dofs, rom_case.response_dofs);
+    assert_eq!(full_case.response.len(), tip.len());
     let (nf, nr) = (full_case.system.n, rom_case.system.n);
     let steps = full.history.time.len();
     assert_eq!(steps, rom.history.time.len());
