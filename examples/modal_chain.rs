@@ -24,7 +24,6 @@ use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::frf::frequency_response;
 use nlrom::hbm::modal::ModalModel;
 use nlrom::hbm::{HbmSystem, ResponseOptions};
-use nlrom::nonlinear::SolverChoice;
 
 fn main() -> nlrom::Result<()> {
     let n = 20;
@@ -64,9 +63,8 @@ fn main() -> nlrom::Result<()> {
         let linear = model.linear_model(h)?;
         let force = model.project(jenkins)?;
         let system = HbmSystem::new(HarmonicLayout::new(h, 64)?, &linear, &force)?;
-        // the modal Jacobian is dense: the dense LU
-        let mut options = ContinuationOptions::new(0.6, 1.6, 0.02);
-        options.newton.linear_solver = SolverChoice::Dense;
+        // the modal Jacobian is dense: every solver choice takes the dense LU
+        let options = ContinuationOptions::new(0.6, 1.6, 0.02);
         let response = ResponseOptions::default();
         let frf = frequency_response(&system, &options, &response, &mut |_| {})?;
         let mut peak = (0.0, 0.0);
