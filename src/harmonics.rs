@@ -117,6 +117,15 @@ pub trait HarmonicForce: Send + Sync {
         jacobian: Option<MatMut<'_, f64>>,
     ) -> Result<()>;
 
+    /// Whether ∂F_nl/∂Q couples different harmonics only on the DOFs of a few elements (those
+    /// whose state changes within the period), so that a harmonic balance Jacobian is its
+    /// harmonic blocks plus a sparse term of low rank (the structured solve). Default: true;
+    /// false for a force whose every DOF is coupled across harmonics as soon as one element is
+    /// (a contact force projected on modes): its Jacobian is solved by the dense LU.
+    fn sparse_harmonic_coupling(&self) -> bool {
+        true
+    }
+
     /// Whether F_nl reads velocities q̇ = ω ∂q/∂τ and so depends on the frequency ω (then it is
     /// evaluated with [`HarmonicForce::evaluate_at`]). Default: false.
     fn reads_velocity(&self) -> bool {

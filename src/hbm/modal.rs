@@ -23,8 +23,10 @@
 //!   (2 |T| m² flops per pair).
 //!
 //! The modal Jacobian is dense in the m(2H + 1) unknowns (an element in transition couples every
-//! pair of modes across harmonics): solve it with the dense LU
-//! ([`crate::nonlinear::SolverChoice::Dense`]), (2/3)(m(2H + 1))³ flops per factorisation.
+//! pair of modes across harmonics): the force reports no sparse harmonic coupling
+//! ([`HarmonicForce::sparse_harmonic_coupling`]), so the harmonic balance gives no block
+//! partition and every linear solver choice takes the dense LU, (2/3)(m(2H + 1))³ flops per
+//! factorisation.
 //! The response at physical DOFs is Φ_o Q per harmonic ([`ModalModel::physical_response`]).
 
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -648,6 +650,11 @@ impl<F: HarmonicForce> HarmonicForce for ModalForce<F> {
 
     fn reads_velocity(&self) -> bool {
         self.inner.reads_velocity()
+    }
+
+    /// An element in transition couples every pair of modes across harmonics.
+    fn sparse_harmonic_coupling(&self) -> bool {
+        false
     }
 
     fn evaluate_at(
