@@ -196,22 +196,31 @@ impl Aft {
 
     /// `beta` (length m) += Σ_j ∂Q/∂q(τ_j) over the `length` samples j = `first`, `first` + 1,
     /// … taken cyclically (a run that passes τ_{N_t−1} goes on at τ_0): the analysis columns
-    /// ([`Aft::analysis_column`]) of a run of samples, in O(m) from their cumulative sums
-    /// whatever its length. The cumulative sums are bounded by about 1 (|Σ_{i<j} cos pτ_i| ≤
-    /// 1/sin(pπ/N_t), times 2/N_t), so the difference of two of them is within a few ε of
-    /// the direct sum.
+    /// ([`Aft::analysis_column`]) of a run of samples. A run of more than [`DIRECT_RUN`]
+    /// samples costs O(m) whatever its length, from the cumulative sums of the columns: these
+    /// are bounded by about 1 (|Σ_{i<j} cos pτ_i| ≤ 1/sin(pπ/N_t), times 2/N_t), so their
+    /// difference is within a few ε of the direct sum. A shorter run is summed column by
+    /// column in the order of the samples: as cheap, and accurate relative to its own size.
     pub fn add_analysis_sum(&self, first: usize, length: usize, beta: &mut [f64]) {
         let m = self.layout.coefficients();
         let n = self.layout.time_samples;
         debug_assert!(first < n && length <= n);
-        let row = |j: usize| &self.analysis_prefix[j * m..(j + 1) * m];
         let end = first + length;
+        if length <= DIRECT_RUN {
+            // [first, N_t) then [0, end − N_t)
+            for j in (first..end.min(n)).chain(0..end.saturating_sub(n)) {
+                for (b, a) in beta.iter_mut().zip(self.analysis_column(j)) {
+                    *b += a;
+                }
+            }
+            return;
+        }
+        let row = |j: usize| &self.analysis_prefix[j * m..(j + 1) * m];
         if end <= n {
             for ((b, hi), lo) in beta.iter_mut().zip(row(end)).zip(row(first)) {
                 *b += hi - lo;
             }
         } else {
-            // [first, N_t) then [0, end − N_t)
             let (whole, lo, wrapped) = (row(n), row(first), row(end - n));
             for (((b, w), l), r) in beta.iter_mut().zip(whole).zip(lo).zip(wrapped) {
                 *b += (w - l) + r;
@@ -304,6 +313,9 @@ impl Aft {
     }
 }
 
+/// The longest run of samples that [`Aft::add_analysis_sum`] sums directly.
+pub const DIRECT_RUN: usize = 16;
+
 /// The cumulative sums of the rows of `rows` (row length `m`): N + 1 rows, row j the sum of
 /// rows 0..j, each by compensated (Kahan) summation, so that every entry is the exact sum
 /// correctly rounded to within about ε.
@@ -381,7 +393,8 @@ mod tests {
 
     /// The sum of the analysis columns of a cyclic run of samples from the cumulative table
     /// equals the direct sum to 1e-15 (absolute; the columns are of order 2/N_t), for runs
-    /// inside the period, wrapping round it, of one sample and of the whole period.
+    /// inside the period, wrapping round it, of one sample, of the whole period and on either
+    /// side of the length summed directly.
     #[test]
     fn analysis_sum_equals_the_direct_sum() {
         for (h, n) in [(1, 4), (3, 16), (7, 33), (7, 1024)] {

@@ -419,11 +419,16 @@ fn forgets_start(element: &LocalElement, ws: &Workspace) -> bool {
         for (j, r) in ws.regime.iter().enumerate() {
             match r[d] {
                 Regime::Separation => return true,
-                Regime::Slip => slips[usize::from(ws.ft[d][j] > 0.0)] = true,
+                Regime::Slip => {
+                    slips[usize::from(ws.ft[d][j] > 0.0)] = true;
+                    if slips[0] && slips[1] {
+                        return true;
+                    }
+                }
                 Regime::Stick => {}
             }
         }
-        slips[0] && slips[1]
+        false
     })
 }
 
@@ -465,10 +470,12 @@ fn march_periods(
     jacobian: bool,
     ws: &mut Workspace,
 ) -> Marched {
-    let scale = ws.u[0]
+    // the second direction's samples are zero without it ([`signals_to_time`])
+    let scale = ws.u[..element.tangential]
         .iter()
-        .chain(ws.u[1].iter())
-        .fold(slider[0].abs().max(slider[1].abs()), |a, b| a.max(b.abs()));
+        .fold(slider[0].abs().max(slider[1].abs()), |a, u| {
+            largest_magnitude(u, a)
+        });
     let tol = STATE_TOLERANCE * scale;
     let w_in = *slider;
     let mut w = w_in;
@@ -510,6 +517,25 @@ fn march_periods(
         w_start,
         differentiated,
     }
+}
+
+/// The largest of `start` and the magnitudes of `values`, NaN ignored as by `f64::max`: in four
+/// independent lanes, so that the loop vectorises (the maximum does not depend on the order).
+fn largest_magnitude(values: &[f64], start: f64) -> f64 {
+    let mut lanes = [start; 4];
+    let chunks = values.chunks_exact(4);
+    let rest = chunks.remainder();
+    for chunk in chunks {
+        for (lane, v) in lanes.iter_mut().zip(chunk) {
+            let a = v.abs();
+            if a > *lane {
+                *lane = a;
+            }
+        }
+    }
+    rest.iter()
+        .chain(&lanes)
+        .fold(start, |largest, v| largest.max(v.abs()))
 }
 
 /// The forces of the last marched period to harmonics, and the Jacobian if asked for.
@@ -844,11 +870,18 @@ impl StickRuns<'_> {
     /// all period has none (stuck all period: ∂w_start = 0, one period marched,
     /// [`samples_suffice`]).
     fn add(&mut self, aft: &Aft, runs: &[(usize, SampleClass)], n_t: usize) {
-        for (r, &(first, class)) in runs.iter().enumerate() {
+        // from the run after the period's last reset: the last run first if it sticks
+        let count = runs.len();
+        let first_run = match runs.last() {
+            Some(&(_, SampleClass::Stick)) => count - 1,
+            _ => 0,
+        };
+        for r in (first_run..count).chain(0..first_run) {
+            let (first, class) = runs[r];
             if class != SampleClass::Stick {
                 continue;
             }
-            let reset = runs[(r + runs.len() - 1) % runs.len()].1;
+            let reset = runs[(r + count - 1) % count].1;
             self.beta.fill(0.0);
             aft.add_analysis_sum(first, run_length(runs, r, n_t), self.beta);
             self.emit(aft.synthesis_row((first + n_t - 1) % n_t), reset.sigma());

@@ -151,7 +151,7 @@ mod tests {
     /// are not multiples of 4; a single harmonic's peak is |Q⁽¹⁾| where a sample
     /// meets the maximum (phase 0).
     #[test]
-    fn peak_by_powers_equals_the_direct_sum() {
+    fn peak_from_the_circle_table_equals_the_direct_sum() {
         for h in [1usize, 7, 15] {
             let harmonics: Vec<c64> = (0..=h)
                 .map(|n| {
