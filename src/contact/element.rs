@@ -691,10 +691,10 @@ fn jacobian_1d(element: &LocalElement, aft: &Aft, ws: &mut Workspace) {
             }
         }
     }
-    for d in 0..element.tangential {
+    for (d, force) in ft.iter().enumerate().take(element.tangential) {
         let row0 = d * m;
         let n_t = regime.len();
-        let whole = class_runs(regime, &ft[d], d, &mut b.runs);
+        let whole = class_runs(regime, force, d, &mut b.runs);
         let runs = &b.runs;
         // Stick indicator χ_stick and slip sign σ χ_slip, from their jumps.
         if run_fourier_sums(aft, runs, whole, n_t, SampleClass::stick, &mut b.sums) {

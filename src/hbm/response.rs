@@ -109,7 +109,7 @@ fn unit_circle(samples: usize) -> Vec<c64> {
         let (sin, cos) = tau.sin_cos();
         c64::new(cos, sin)
     };
-    if samples % 4 != 0 {
+    if !samples.is_multiple_of(4) {
         return (0..samples).map(direct).collect();
     }
     let quarter = samples / 4;
