@@ -10,11 +10,77 @@
 use super::integrate::{MarchHistory, PeriodSummary};
 use super::system::MarchSystem;
 
+/// What the periodicity check needs of the period being marched, kept step by step as the
+/// history is recorded (a pass over the period's records at its end would read them DOF by DOF,
+/// across rows of n entries): the extremes of every DOF and the number of state changes.
+#[derive(Clone, Debug)]
+pub struct PeriodStats {
+    /// DOF n.
+    n: usize,
+    /// Elements E.
+    ne: usize,
+    /// Smallest q of each DOF since the period's start (m).
+    lo: Vec<f64>,
+    /// Largest q of each DOF (m).
+    hi: Vec<f64>,
+    /// Instants whose states differ from the previous instant's.
+    changes: usize,
+}
+
+impl PeriodStats {
+    /// For `n` DOF and `ne` elements.
+    pub fn new(n: usize, ne: usize) -> Self {
+        PeriodStats {
+            n,
+            ne,
+            lo: vec![0.0; n],
+            hi: vec![0.0; n],
+            changes: 0,
+        }
+    }
+
+    /// Starts a period at the state `q` (the previous period's end, the first instant of its
+    /// range).
+    pub fn start(&mut self, q: &[f64]) {
+        self.lo.copy_from_slice(q);
+        self.hi.copy_from_slice(q);
+        self.changes = 0;
+    }
+
+    /// Takes in the instant just recorded last in `h` (at least two recorded).
+    pub fn record(&mut self, h: &MarchHistory) {
+        let (n, ne, k) = (self.n, self.ne, h.len() - 1);
+        for ((lo, hi), &x) in self
+            .lo
+            .iter_mut()
+            .zip(&mut self.hi)
+            .zip(&h.q[k * n..(k + 1) * n])
+        {
+            *lo = lo.min(x);
+            *hi = hi.max(x);
+        }
+        if h.state[k * ne..(k + 1) * ne] != h.state[(k - 1) * ne..k * ne] {
+            self.changes += 1;
+        }
+    }
+
+    /// The largest half peak-to-peak displacement of a DOF (m).
+    fn amplitude(&self) -> f64 {
+        self.lo
+            .iter()
+            .zip(&self.hi)
+            .fold(0.0, |a, (lo, hi)| a.max(0.5 * (hi - lo)))
+    }
+}
+
 /// The summary of the period recorded at history indices `first..=last` (`first` is the previous
-/// period's end). `prev_end` is (q, q̇) at `first`; `compare` is false for the first period.
+/// period's end), whose extremes and state changes `stats` kept. `prev_end` is (q, q̇) at `first`;
+/// `compare` is false for the first period.
+#[allow(clippy::too_many_arguments)]
 pub fn summarize(
     h: &MarchHistory,
     sys: &MarchSystem,
+    stats: &PeriodStats,
     omega: f64,
     first: usize,
     last: usize,
@@ -22,16 +88,7 @@ pub fn summarize(
     compare: bool,
 ) -> PeriodSummary {
     let n = sys.n;
-    let ne = sys.elements.len();
-    let mut amp: f64 = 0.0;
-    for d in 0..n {
-        let (lo, hi) = (first..=last)
-            .map(|k| h.q[k * n + d])
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
-                (lo.min(x), hi.max(x))
-            });
-        amp = amp.max(0.5 * (hi - lo));
-    }
+    let amp = stats.amplitude();
     let amp = if amp > 0.0 {
         amp
     } else {
@@ -44,13 +101,10 @@ pub fn summarize(
         let dv = max_difference(v, prev_end.1);
         (dq / amp).max(dv / (omega * amp))
     });
-    let state_changes = (first + 1..=last)
-        .filter(|&k| h.state[k * ne..(k + 1) * ne] != h.state[(k - 1) * ne..k * ne])
-        .count();
     PeriodSummary {
         end_index: last,
         periodicity_error,
-        state_changes,
+        state_changes: stats.changes,
         steps: last - first,
     }
 }
@@ -88,21 +142,26 @@ pub fn harmonics(
     };
     let mut wc = vec![0.0; last + 1 - first];
     let mut ws = vec![0.0; last + 1 - first];
+    // row by row (each instant's n DOF in one run), every DOF's sums in the order of the instants
+    let (mut re, mut im) = (vec![0.0; n_dof], vec![0.0; n_dof]);
     for m in 0..=harmonics {
         for (j, k) in (first..=last).enumerate() {
             let (s, c) = (m as f64 * omega * h.time[k]).sin_cos();
             let w = weight(k);
             (wc[j], ws[j]) = (w * c, -w * s);
         }
-        let scale = if m == 0 { 1.0 } else { 2.0 } / span;
-        for (d, row) in out.iter_mut().enumerate() {
-            let (mut re, mut im) = (0.0, 0.0);
-            for (j, k) in (first..=last).enumerate() {
-                let q = h.q[k * n_dof + d];
-                re += wc[j] * q;
-                im += ws[j] * q;
+        re.iter_mut().for_each(|x| *x = 0.0);
+        im.iter_mut().for_each(|x| *x = 0.0);
+        for (j, k) in (first..=last).enumerate() {
+            let row = &h.q[k * n_dof..(k + 1) * n_dof];
+            for ((r, i), &q) in re.iter_mut().zip(&mut im).zip(row) {
+                *r += wc[j] * q;
+                *i += ws[j] * q;
             }
-            row[m] = (re * scale, im * scale);
+        }
+        let scale = if m == 0 { 1.0 } else { 2.0 } / span;
+        for ((row, r), i) in out.iter_mut().zip(&re).zip(&im) {
+            row[m] = (r * scale, i * scale);
         }
     }
     out
