@@ -12,6 +12,8 @@
 //!   contact states of a period of piecewise-linear Newmark at 170 Hz, the same, and the rung is
 //!   never above the one of the spectral radius of M⁻¹(K + K_c) (eq. 8 as the dense path takes it).
 
+mod support;
+
 use std::path::Path;
 
 use faer::Mat;
@@ -22,6 +24,7 @@ use nlrom::march::law::{ContactState, FrictionParams, LawSample, Sign};
 use nlrom::march::signal::Harmonic;
 use nlrom::march::{march, InitialCondition, MarchSettings, MarchSystem};
 use nlrom::problem::march_case::case_march;
+use support::random::Lcg;
 
 const N: usize = 20;
 
@@ -37,12 +40,9 @@ fn direction(weights: &[(usize, f64)]) -> Direction {
 /// without applying their normal force.
 fn chain() -> MarchSystem {
     let mut k = vec![0.0; N * N];
-    for i in 0..N {
-        k[i * N + i] = if i + 1 == N { 100.0 } else { 200.0 };
-        if i + 1 < N {
-            k[i * N + i + 1] = -100.0;
-            k[(i + 1) * N + i] = -100.0;
-        }
+    for (i, j, x) in support::chain::stiffness(N, 100.0, 0) {
+        k[i * N + j] = x;
+        k[j * N + i] = x;
     }
     let mut mass = vec![0.0; N * N];
     for i in 0..N {
@@ -149,15 +149,13 @@ fn inertia_tests_find_the_rung_of_the_symmetric_pencil_on_a_chain() {
     assert_eq!(steps.stick(), dt_stick);
     let mut states = sys.stick_states();
     // a deterministic walk: one or two elements change per state
-    let mut seed = 12345u64;
+    let mut random = Lcg(12345);
     let mut rungs = std::collections::BTreeMap::new();
+    let elements: Vec<usize> = (0..states.len()).collect();
     for step in 0..300 {
         for _ in 0..1 + step % 2 {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            let e = (seed >> 33) as usize % states.len();
-            states[e] = all[(seed >> 20) as usize % 4];
+            let e = random.pick(&elements);
+            states[e] = random.pick(&all);
         }
         let dt = steps.step(&sys, &codes(&states), &samples(&states));
         let expected = rung_of(symmetric_top(&sys, &states), ratio, dt_stick, dt_max);
@@ -269,19 +267,17 @@ fn ladder_rungs_lie_below_the_step_within_one_ratio() {
 
 #[test]
 fn inertia_counts_the_negative_eigenvalues() {
-    let mut seed = 987654321u64;
-    let mut next = || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-    };
+    let mut random = Lcg(987654321);
     for n in 1..40 {
         let mut a = vec![0.0; n * n];
         for i in 0..n {
             for j in 0..=i {
                 // some zero diagonals, to force 2 × 2 pivots
-                let x = if i == j && i % 3 == 0 { 0.0 } else { next() };
+                let x = if i == j && i % 3 == 0 {
+                    0.0
+                } else {
+                    random.next() - 0.5
+                };
                 a[i * n + j] = x;
                 a[j * n + i] = x;
             }

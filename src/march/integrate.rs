@@ -13,7 +13,6 @@ use super::schemes::{
 use super::system::{InitialCondition, MarchSystem};
 use crate::case::MarchScheme;
 use crate::error::{Error, Result};
-use crate::mesh::huge_pages;
 
 /// The convergence limit Δτ/𝕋 < 1/π ≈ 0.318 of Newmark's fixed-point corrector (paper §4.2).
 pub const STEP_RATIO_LIMIT: f64 = std::f64::consts::FRAC_1_PI;
@@ -162,10 +161,7 @@ impl MarchHistory {
         self.time.is_empty()
     }
 
-    /// Room for `steps` more instants of `n` DOF and `ne` elements, backed by huge pages where
-    /// possible ([`huge_pages`]): every slot is written once as the march records it, and a
-    /// sector's march records hundreds of MB, whose first touch cost both schemes of a comparison
-    /// a page fault per 4 KiB page (8 % of the CPU of a sector march, `docs/performance.md`).
+    /// Room for `steps` more instants of `n` DOF and `ne` elements.
     fn reserve(&mut self, steps: usize, n: usize, ne: usize) {
         self.time.reserve(steps);
         self.q.reserve(steps * n);
@@ -174,16 +170,6 @@ impl MarchHistory {
         self.force.reserve(steps * ne * 2);
         self.state.reserve(steps * ne);
         self.iterations.reserve(steps);
-        for v in [
-            &mut self.time,
-            &mut self.q,
-            &mut self.v,
-            &mut self.local,
-            &mut self.force,
-        ] {
-            huge_pages(v);
-        }
-        huge_pages(&mut self.state);
     }
 
     /// Records the instant `t` (the prescribed parts of the elements from `exc`).

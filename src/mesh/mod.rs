@@ -17,8 +17,6 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use rayon::prelude::*;
 
-/// Huge pages for large buffers written once (the readers' outputs, the march's records).
-pub use ascii::huge_pages;
 pub use element::ElementType;
 
 use crate::error::{Error, Result};
