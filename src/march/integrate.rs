@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use super::adaptive::AdaptiveSteps;
 use super::law::{ContactState, LawSample};
-use super::periodic::{self, PeriodStats};
+use super::periodic::{self, Extremes};
 use super::schemes::{
     self, Cache, Excitation, ExcitationAt, Kinematics, Snapshot, StepContext, Workspace,
 };
@@ -283,8 +283,8 @@ pub struct Marcher<'a> {
     adaptive_dt: Option<AdaptiveSteps>,
     codes: Vec<u8>,
     history: MarchHistory,
-    /// The running extremes and state changes of the period being marched.
-    stats: PeriodStats,
+    /// The scratch of the period's amplitude.
+    extremes: Extremes,
     summaries: Vec<PeriodSummary>,
     steady_period: Option<usize>,
     rejected: usize,
@@ -338,7 +338,7 @@ impl<'a> Marcher<'a> {
             adaptive_dt: None,
             codes: Vec::with_capacity(ne),
             history: MarchHistory::default(),
-            stats: PeriodStats::new(n, ne),
+            extremes: Extremes::new(n),
             summaries: Vec::with_capacity(settings.periods),
             steady_period: None,
             rejected: 0,
@@ -398,7 +398,6 @@ impl<'a> Marcher<'a> {
         let t0 = p as f64 * period;
         let t_end = t0 + period;
         let first_index = self.history.len() - 1;
-        self.stats.start(&self.cur.kin.q);
         if !s.adaptive() {
             for j in 0..self.table.len() {
                 let (t_rel, dt, exc) = self.table.get(j);
@@ -417,7 +416,6 @@ impl<'a> Marcher<'a> {
                 std::mem::swap(&mut self.cur, &mut self.next);
                 self.t = t1;
                 self.history.push(sys, t1, &self.cur, exc, its);
-                self.stats.record(&self.history);
             }
         } else {
             while t_end - self.t > 1e-9 * period {
@@ -469,14 +467,13 @@ impl<'a> Marcher<'a> {
                     self.excitation.view(),
                     its.min(u32::MAX as u64) as u32,
                 );
-                self.stats.record(&self.history);
             }
         }
         let end_index = self.history.len() - 1;
         let summary = periodic::summarize(
             &self.history,
             sys,
-            &self.stats,
+            &mut self.extremes,
             s.omega,
             first_index,
             end_index,

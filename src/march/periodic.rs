@@ -10,62 +10,37 @@
 use super::integrate::{MarchHistory, PeriodSummary};
 use super::system::MarchSystem;
 
-/// What the periodicity check needs of the period being marched, kept step by step as the
-/// history is recorded (a pass over the period's records at its end would read them DOF by DOF,
-/// across rows of n entries): the extremes of every DOF and the number of state changes.
+/// The running extremes of every DOF over a period's records (m), the scratch of [`summarize`],
+/// sized once for the model so that a period's summary allocates nothing.
 #[derive(Clone, Debug)]
-pub struct PeriodStats {
-    /// DOF n.
-    n: usize,
-    /// Elements E.
-    ne: usize,
-    /// Smallest q of each DOF since the period's start (m).
+pub struct Extremes {
     lo: Vec<f64>,
-    /// Largest q of each DOF (m).
     hi: Vec<f64>,
-    /// Instants whose states differ from the previous instant's.
-    changes: usize,
 }
 
-impl PeriodStats {
-    /// For `n` DOF and `ne` elements.
-    pub fn new(n: usize, ne: usize) -> Self {
-        PeriodStats {
-            n,
-            ne,
+impl Extremes {
+    /// For `n` DOF.
+    pub fn new(n: usize) -> Self {
+        Extremes {
             lo: vec![0.0; n],
             hi: vec![0.0; n],
-            changes: 0,
         }
     }
 
-    /// Starts a period at the state `q` (the previous period's end, the first instant of its
-    /// range).
-    pub fn start(&mut self, q: &[f64]) {
-        self.lo.copy_from_slice(q);
-        self.hi.copy_from_slice(q);
-        self.changes = 0;
-    }
-
-    /// Takes in the instant just recorded last in `h` (at least two recorded).
-    pub fn record(&mut self, h: &MarchHistory) {
-        let (n, ne, k) = (self.n, self.ne, h.len() - 1);
-        for ((lo, hi), &x) in self
-            .lo
-            .iter_mut()
-            .zip(&mut self.hi)
-            .zip(&h.q[k * n..(k + 1) * n])
-        {
-            *lo = lo.min(x);
-            *hi = hi.max(x);
+    /// The largest half peak-to-peak displacement of a DOF over the instants `first..=last` of
+    /// `h` (m), read instant by instant (each a run of n values; read DOF by DOF, a sector's
+    /// period of records cost a cache miss per value).
+    fn amplitude(&mut self, h: &MarchHistory, first: usize, last: usize) -> f64 {
+        let n = self.lo.len();
+        self.lo.copy_from_slice(&h.q[first * n..(first + 1) * n]);
+        self.hi.copy_from_slice(&self.lo);
+        for k in first + 1..=last {
+            let row = &h.q[k * n..(k + 1) * n];
+            for ((lo, hi), &x) in self.lo.iter_mut().zip(&mut self.hi).zip(row) {
+                *lo = lo.min(x);
+                *hi = hi.max(x);
+            }
         }
-        if h.state[k * ne..(k + 1) * ne] != h.state[(k - 1) * ne..k * ne] {
-            self.changes += 1;
-        }
-    }
-
-    /// The largest half peak-to-peak displacement of a DOF (m).
-    fn amplitude(&self) -> f64 {
         self.lo
             .iter()
             .zip(&self.hi)
@@ -74,13 +49,13 @@ impl PeriodStats {
 }
 
 /// The summary of the period recorded at history indices `first..=last` (`first` is the previous
-/// period's end), whose extremes and state changes `stats` kept. `prev_end` is (q, q̇) at `first`;
+/// period's end; `extremes` the scratch of its amplitude). `prev_end` is (q, q̇) at `first`;
 /// `compare` is false for the first period.
 #[allow(clippy::too_many_arguments)]
 pub fn summarize(
     h: &MarchHistory,
     sys: &MarchSystem,
-    stats: &PeriodStats,
+    extremes: &mut Extremes,
     omega: f64,
     first: usize,
     last: usize,
@@ -88,7 +63,8 @@ pub fn summarize(
     compare: bool,
 ) -> PeriodSummary {
     let n = sys.n;
-    let amp = stats.amplitude();
+    let ne = sys.elements.len();
+    let amp = extremes.amplitude(h, first, last);
     let amp = if amp > 0.0 {
         amp
     } else {
@@ -101,10 +77,13 @@ pub fn summarize(
         let dv = max_difference(v, prev_end.1);
         (dq / amp).max(dv / (omega * amp))
     });
+    let state_changes = (first + 1..=last)
+        .filter(|&k| h.state[k * ne..(k + 1) * ne] != h.state[(k - 1) * ne..k * ne])
+        .count();
     PeriodSummary {
         end_index: last,
         periodicity_error,
-        state_changes: stats.changes,
+        state_changes,
         steps: last - first,
     }
 }
