@@ -8,6 +8,11 @@
 //! the automatic choice; and the evaluation of residual and Jacobian into dense and into block
 //! storage. The rank of the correction and the ratio of the two solve times are printed once.
 //!
+//! Group `hbm_scale_modal`: the harmonic balance on modal coordinates (`nlrom::hbm::modal`) of
+//! the synthetic modal interface of `tests/support/hbm.rs` (`MODAL_CONTACT_DOFS` contact DOF,
+//! `MODES` modes, one pair in 8 slipping and separating, H = 5): one evaluation of the residual
+//! and the projected Jacobian into a dense matrix, and its dense LU and solve.
+//!
 //! Run: `cargo bench --bench hbm_scale` (about a minute).
 
 #[path = "../tests/support/hbm.rs"]
@@ -16,7 +21,7 @@ mod hbm_support;
 use std::time::{Duration, Instant};
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use hbm_support::synthetic_interface;
+use hbm_support::{synthetic_interface, synthetic_modal_interface};
 use nlrom::hbm::{FrequencyPath, HbmSystem};
 use nlrom::nonlinear::linsolve::SolvePath;
 use nlrom::nonlinear::{LinearSolver, Linearization, ParameterSystem, SolverChoice};
@@ -96,5 +101,35 @@ fn scale(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, scale);
+/// Contact DOF of the modal interface.
+const MODAL_CONTACT_DOFS: usize = 1200;
+/// Modes of the modal interface.
+const MODES: usize = 60;
+
+fn modal(c: &mut Criterion) {
+    let (model, set, layout, q) =
+        synthetic_modal_interface(MODAL_CONTACT_DOFS, MODES, 5, 32, 8).unwrap();
+    let linear = model.linear_model(5).unwrap();
+    let force = model.project(set).unwrap();
+    let system = HbmSystem::new(layout, &linear, &force).unwrap();
+    let fp = FrequencyPath {
+        system: &system,
+        level: 1.0,
+    };
+    let dense = LinearSolver::dense();
+    let mut lin = Linearization::zeros(fp.dim());
+    fp.evaluate(&q, 0.8, &fp.initial_state(), &mut lin).unwrap();
+    let b = lin.residual.clone();
+    let mut g = c.benchmark_group("hbm_scale_modal");
+    g.sample_size(10).measurement_time(Duration::from_secs(5));
+    g.bench_function("evaluate", |bench| {
+        bench.iter(|| fp.evaluate(&q, 0.8, &fp.initial_state(), &mut lin).unwrap())
+    });
+    g.bench_function("dense_lu", |bench| {
+        bench.iter(|| dense.factor_solve(&mut lin.jacobian, &b).unwrap())
+    });
+    g.finish();
+}
+
+criterion_group!(benches, scale, modal);
 criterion_main!(benches);

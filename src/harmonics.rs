@@ -15,7 +15,7 @@ use crate::error::{Error, Result};
 
 pub mod jacobian;
 
-pub use jacobian::{BlockJacobian, Jacobian, JacobianMut};
+pub use jacobian::{BlockJacobian, Jacobian, JacobianMut, JacobianSink};
 
 /// Number of harmonics H and time samples N_t per period used by the alternating
 /// frequency/time (AFT) evaluation of nonlinear forces.
@@ -117,6 +117,15 @@ pub trait HarmonicForce: Send + Sync {
         jacobian: Option<MatMut<'_, f64>>,
     ) -> Result<()>;
 
+    /// Whether ∂F_nl/∂Q couples different harmonics only on the DOFs of a few elements (those
+    /// whose state changes within the period), so that a harmonic balance Jacobian is its
+    /// harmonic blocks plus a sparse term of low rank (the structured solve). Default: true;
+    /// false for a force whose every DOF is coupled across harmonics as soon as one element is
+    /// (a contact force projected on modes): its Jacobian is solved by the dense LU.
+    fn sparse_harmonic_coupling(&self) -> bool {
+        true
+    }
+
     /// Whether F_nl reads velocities q̇ = ω ∂q/∂τ and so depends on the frequency ω (then it is
     /// evaluated with [`HarmonicForce::evaluate_at`]). Default: false.
     fn reads_velocity(&self) -> bool {
@@ -142,8 +151,9 @@ pub trait HarmonicForce: Send + Sync {
     }
 
     /// As [`HarmonicForce::evaluate_at`] with the Jacobian added into a dense or a block-stored
-    /// matrix ([`JacobianMut`]). The default evaluates a block-stored Jacobian through a dense
-    /// temporary of the force's order; forces with many DOFs add theirs element by element.
+    /// matrix or a [`JacobianSink`] ([`JacobianMut`]). The default
+    /// evaluates a block-stored or sunk Jacobian through a dense temporary of the force's order;
+    /// forces with many DOFs add theirs element by element.
     #[allow(clippy::too_many_arguments)]
     fn evaluate_into(
         &self,
@@ -160,7 +170,7 @@ pub trait HarmonicForce: Send + Sync {
             Some(JacobianMut::Dense(j)) => {
                 self.evaluate_at(layout, q, omega, state, force, Some(j), d_omega)
             }
-            Some(JacobianMut::Blocks(b)) => {
+            Some(mut target) => {
                 let mut dense = Mat::<f64>::zeros(q.len(), q.len());
                 self.evaluate_at(
                     layout,
@@ -171,7 +181,18 @@ pub trait HarmonicForce: Send + Sync {
                     Some(dense.as_mut()),
                     d_omega,
                 )?;
-                b.add_dense(dense.as_ref());
+                match target {
+                    JacobianMut::Blocks(b) => b.add_dense(dense.as_ref()),
+                    _ => {
+                        for j in 0..dense.ncols() {
+                            for i in 0..dense.nrows() {
+                                if dense[(i, j)] != 0.0 {
+                                    target.add(i, j, dense[(i, j)]);
+                                }
+                            }
+                        }
+                    }
+                }
                 Ok(())
             }
         }

@@ -19,7 +19,7 @@ use faer::MatMut;
 use rayon::prelude::*;
 
 use crate::error::Result;
-use crate::harmonics::{BlockJacobian, JacobianMut};
+use crate::harmonics::{BlockJacobian, JacobianMut, JacobianSink};
 
 /// Most f64 entries of per-element Jacobians held at once (16 MB).
 const JACOBIAN_BUDGET: usize = 1 << 21;
@@ -233,6 +233,7 @@ where
                 slots.add_matrix(&st.jacobian, jac_cap, j.rb_mut(), matrix_threads)
             }
             Some(JacobianMut::Blocks(j)) => slots.add_patches(&st.jacobian, jac_cap, j),
+            Some(JacobianMut::Sink(j)) => slots.add_to_sink(&st.jacobian, jac_cap, &mut **j),
             None => {}
         }
     }
@@ -286,6 +287,15 @@ impl Slots<'_> {
     /// (the entries of each position summed in the order of the elements, as
     /// [`Slots::add_matrix`]).
     fn add_patches(&self, values: &[f64], stride: usize, out: &mut BlockJacobian) {
+        for e in 0..self.count {
+            let idx = self.indices(e);
+            let l = idx.len();
+            out.add_patch(idx, &values[e * stride..e * stride + l * l]);
+        }
+    }
+
+    /// Hands every slot's column-major block to `out`, element by element in their order.
+    fn add_to_sink(&self, values: &[f64], stride: usize, out: &mut dyn JacobianSink) {
         for e in 0..self.count {
             let idx = self.indices(e);
             let l = idx.len();

@@ -537,12 +537,27 @@ impl IndexMut<(usize, usize)> for Jacobian {
     }
 }
 
-/// Where a force adds its Jacobian: a dense matrix or a block-stored one.
+/// A receiver of a force's Jacobian, element by element, that stores or transforms the
+/// contributions itself instead of adding them into a matrix of the force's order (e.g. the
+/// projection on modal coordinates of `hbm::modal`, which never forms the physical matrix).
+pub trait JacobianSink: Send {
+    /// Adds the l × l matrix `values` (column-major: entry (r, c) at `c·l + r`) at the rows and
+    /// columns `index` (one element's Jacobian on its DOFs' coefficients).
+    fn add_patch(&mut self, index: &[usize], values: &[f64]);
+
+    /// Adds `v` at (i, j).
+    fn add_entry(&mut self, i: usize, j: usize, v: f64);
+}
+
+/// Where a force adds its Jacobian: a dense matrix, a block-stored one, or a
+/// [`JacobianSink`].
 pub enum JacobianMut<'a> {
     /// A dense matrix.
     Dense(MatMut<'a, f64>),
     /// A block-stored matrix.
     Blocks(&'a mut BlockJacobian),
+    /// A receiver of element Jacobians.
+    Sink(&'a mut (dyn JacobianSink + 'static)),
 }
 
 impl JacobianMut<'_> {
@@ -551,6 +566,7 @@ impl JacobianMut<'_> {
         match self {
             JacobianMut::Dense(a) => JacobianMut::Dense(a.as_mut()),
             JacobianMut::Blocks(b) => JacobianMut::Blocks(b),
+            JacobianMut::Sink(s) => JacobianMut::Sink(&mut **s),
         }
     }
 
@@ -559,6 +575,7 @@ impl JacobianMut<'_> {
         match self {
             JacobianMut::Dense(a) => a[(i, j)] += v,
             JacobianMut::Blocks(b) => b.add(i, j, v),
+            JacobianMut::Sink(s) => s.add_entry(i, j, v),
         }
     }
 }

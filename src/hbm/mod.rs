@@ -11,6 +11,8 @@
 //!   and the [`ParameterSystem`](crate::nonlinear::ParameterSystem) views [`FrequencyPath`]
 //!   (λ = ω), [`LevelPath`] (λ = excitation level at fixed ω) and [`PreloadPath`] (λ = the
 //!   force's parameter, e.g. the preload n0, at fixed ω);
+//! - [`modal`]: [`modal::ModalModel`] and [`modal::ModalForce`] — the linear part given by m
+//!   modes and the contact force projected on them, the m(2H + 1) modal harmonics as unknowns;
 //! - [`response`]: harmonics, amplitude and peak of the output DOFs at a solution;
 //! - [`frf`]: a frequency response (continuation + recovery);
 //! - [`stability`]: Hill's method on the uncondensed model — Floquet exponents and a `stable`
@@ -23,6 +25,7 @@
 
 pub mod frf;
 pub mod linear;
+pub mod modal;
 pub mod preload;
 pub mod response;
 pub mod stability;

@@ -116,8 +116,12 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
     /// Sizes of the diagonal blocks of ∂r/∂Q over the harmonics
     /// ([`HarmonicLayout::blocks`]): D̄ is block-diagonal over them, and the contact Jacobian
     /// couples them only on the DOFs of elements whose state changes within the period (the
-    /// structured solve of [`crate::nonlinear::linsolve`]).
+    /// structured solve of [`crate::nonlinear::linsolve`]). Empty (no such structure: the
+    /// dense LU) for a force without [`HarmonicForce::sparse_harmonic_coupling`].
     pub fn jacobian_blocks(&self) -> Vec<usize> {
+        if !self.force.sparse_harmonic_coupling() {
+            return Vec::new();
+        }
         self.layout.blocks(self.linear.n_condensed())
     }
 

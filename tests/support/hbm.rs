@@ -272,8 +272,7 @@ pub fn synthetic_interface(
     HarmonicLayout,
     Vec<f64>,
 )> {
-    use nlrom::contact::law::{ContactParams, Variant};
-    use nlrom::contact::pairs::{PairElement, PairSet};
+    use nlrom::contact::law::ContactParams;
     let pairs = contact_dofs / 6;
     let n = 6 * pairs;
     let k = Mat::from_fn(n, n, |i, j| match i.abs_diff(j) {
@@ -294,22 +293,7 @@ pub fn synthetic_interface(
         h,
     )?;
     let params = ContactParams::new(1.0, 1.0, 0.5, 1.0, "synthetic")?;
-    let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let set = PairSet::new(
-        n,
-        Variant::OneD,
-        (0..pairs)
-            .map(|p| PairElement {
-                contact: [6 * p, 6 * p + 1, 6 * p + 2],
-                target: Some([6 * p + 3, 6 * p + 4, 6 * p + 5]),
-                frame: identity,
-                sigma: 0,
-                params,
-                preload_rate: 1.0,
-            })
-            .collect(),
-        None,
-    )?;
+    let set = synthetic_pairs(pairs, |_| params)?;
     let layout = HarmonicLayout::new(h, samples)?;
     let mut x = vec![0.0; layout.len(n)];
     let every = slipping.map_or(1, |f| (1.0 / f).ceil() as usize);
@@ -323,4 +307,119 @@ pub fn synthetic_interface(
         x[c1 + 1] = a * phi.sin();
     }
     Ok((linear, set, layout, x))
+}
+
+/// A synthetic modal interface: `contact_dofs` / 6 node-to-node pairs (frames along x, y, z;
+/// k_t = k_n = 1 N/m, μ = 0.5, 1-D friction) at x_p = (p + ½)/P along a strip of length 1, seen
+/// by `modes` smooth mode shapes: mode r at side s (contact, target) in direction k,
+/// φ_r(x) = √(2/P) sin((1 + r/2) π x + θ_rsk) (θ_rsk = 0.3(r + 2s + 3k) rad), natural
+/// frequencies ω_r = 1 + r/2 rad/s, damping ratios 0.01, forced at one DOF (φ at x = 0.3,
+/// 1 N on harmonic 1) and one response DOF (the first contact DOF). Returns the modal model, the
+/// physical pairs, the layout (H, `samples`) and a harmonic-1 modal state q (q_r ∝ 1/(r + 1),
+/// varied phases) scaled so that the largest relative displacement of a pair is 2 m. One pair in
+/// `every` has n0 = 0.2 N (it slips and separates at that state), the others n0 = 100 N (they
+/// stick all period).
+pub fn synthetic_modal_interface(
+    contact_dofs: usize,
+    modes: usize,
+    h: usize,
+    samples: usize,
+    every: usize,
+) -> Result<(
+    nlrom::hbm::modal::ModalModel,
+    nlrom::contact::pairs::PairSet,
+    HarmonicLayout,
+    Vec<f64>,
+)> {
+    use nlrom::contact::law::ContactParams;
+    let pairs = contact_dofs / 6;
+    let n = 6 * pairs;
+    let amplitude = (2.0 / pairs as f64).sqrt();
+    let shape = |r: usize, side: usize, k: usize, x: f64| {
+        let theta = 0.3 * (r + 2 * side + 3 * k) as f64;
+        amplitude * ((1.0 + 0.5 * r as f64) * std::f64::consts::PI * x + theta).sin()
+    };
+    let x_of = |p: usize| (p as f64 + 0.5) / pairs as f64;
+    let contact = Mat::from_fn(n, modes, |i, r| {
+        let (p, side, k) = (i / 6, (i % 6) / 3, i % 3);
+        shape(r, side, k, x_of(p))
+    });
+    let forced = Mat::from_fn(1, modes, |_, r| shape(r, 0, 1, 0.3));
+    let response = Mat::from_fn(1, modes, |_, r| contact[(0, r)]);
+    let frequencies: Vec<f64> = (0..modes).map(|r| 1.0 + 0.5 * r as f64).collect();
+    let model = nlrom::hbm::modal::ModalModel::new(
+        frequencies,
+        vec![0.01; modes],
+        contact.clone(),
+        forced,
+        vec![1.0],
+        response,
+    )?;
+    let stuck = ContactParams::new(1.0, 1.0, 0.5, 100.0, "synthetic")?;
+    let moving = ContactParams::new(1.0, 1.0, 0.5, 0.2, "synthetic")?;
+    let set = synthetic_pairs(
+        pairs,
+        |p| {
+            if p % every.max(1) == 0 {
+                moving
+            } else {
+                stuck
+            }
+        },
+    )?;
+    let layout = HarmonicLayout::new(h, samples)?;
+    let mut q = vec![0.0; layout.len(modes)];
+    let (mut re, mut im) = (vec![0.0; modes], vec![0.0; modes]);
+    for r in 0..modes {
+        let phase = 0.7 * r as f64;
+        re[r] = phase.cos() / (r + 1) as f64;
+        im[r] = phase.sin() / (r + 1) as f64;
+    }
+    // the largest relative displacement amplitude of a pair at this q
+    let mut largest = 0.0_f64;
+    for i in 0..n {
+        if (i % 6) >= 3 {
+            continue;
+        }
+        let (mut a, mut b) = (0.0, 0.0);
+        for r in 0..modes {
+            let rel = contact[(i, r)] - contact[(i + 3, r)];
+            a += rel * re[r];
+            b += rel * im[r];
+        }
+        largest = largest.max((a * a + b * b).sqrt());
+    }
+    let s = 2.0 / largest;
+    for r in 0..modes {
+        let c1 = layout.cos_index(1, r, modes);
+        q[c1] = s * re[r];
+        q[c1 + 1] = s * im[r];
+    }
+    Ok((model, set, layout, q))
+}
+
+/// `pairs` node-to-node pairs on 6 DOFs each (contact x y z, then target x y z; frames along
+/// x, y, z; 1-D friction), pair p with the parameters `params(p)`.
+fn synthetic_pairs(
+    pairs: usize,
+    params: impl Fn(usize) -> nlrom::contact::law::ContactParams,
+) -> Result<nlrom::contact::pairs::PairSet> {
+    use nlrom::contact::law::Variant;
+    use nlrom::contact::pairs::{PairElement, PairSet};
+    let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    PairSet::new(
+        6 * pairs,
+        Variant::OneD,
+        (0..pairs)
+            .map(|p| PairElement {
+                contact: [6 * p, 6 * p + 1, 6 * p + 2],
+                target: Some([6 * p + 3, 6 * p + 4, 6 * p + 5]),
+                frame: identity,
+                sigma: 0,
+                params: params(p),
+                preload_rate: 1.0,
+            })
+            .collect(),
+        None,
+    )
 }

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Batch speed-up of `nlrom batch`: the same cases with --jobs 1 and --jobs 2 (issue 8 goal: ≥ 1.7×).
+"""Batch speed-up of `nlrom batch`: the same cases with --jobs 1 and --jobs 2 (goal: ≥ 1.7×).
 
     python3 tools/benchmarks/bench_batch.py [--case cases/demo.toml] [--copies 8] [--rounds 2]
                                  [--nlrom target/release/nlrom] [--keep DIR]

@@ -4,6 +4,7 @@
 //! ```text
 //! cargo run --release --example hbm_speed -- sector CASE.toml [H] [POINTS] [KEY=VALUE ...]
 //! cargo run --release --example hbm_speed -- synthetic [CONTACT_DOFS] [H] [SAMPLES] [EVERY] [nodense]
+//! cargo run --release --example hbm_speed -- modal [CONTACT_DOFS] [H] [MODES] [SAMPLES] [EVERY] [newton]
 //! ```
 //!
 //! `sector`: the case's sector problem (reduction, SAMA interfaces, preload balance) with H
@@ -24,6 +25,18 @@
 //! of one Newton iteration. With EVERY > 1 only one pair in EVERY moves that much, the others 50
 //! times less and stick all period (microslip of the interface). `nodense` leaves out the dense
 //! Jacobian and its LU (whose n² memory and n³ time are out of reach beyond about 15 000 unknowns).
+//!
+//! `modal`: the harmonic balance on modal coordinates (`nlrom::hbm::modal`) of a synthetic
+//! modal interface (`synthetic_modal_interface` of `tests/support/hbm.rs`): CONTACT_DOFS / 6
+//! node-to-node pairs along a strip seen by MODES smooth mode shapes (default 1 500 contact DOF,
+//! H = 5, 300 modes, 32 samples), one pair in EVERY (default 8) with a small preload so that it
+//! slips and separates at the state timed, the others stuck all period; MODES·(2H + 1) unknowns.
+//! The split of one Newton iteration at that state (ω = 0.8 rad/s): the contact forces alone
+//! (U = Φ_c Q, the physical AFT, Φ_cᵀ F), the forces with the projected Jacobian, the whole
+//! evaluation (linear part, forces, Jacobian into a dense matrix), the residual alone and the
+//! dense LU and solve; the heap's high-water mark above the heap before the split and the peak
+//! resident memory. `newton` adds a Newton solve from that state (dense LU): iterations and CPU
+//! time per iteration.
 //!
 //! The split (best of `HBM_SPEED_REPEAT` runs, default 2, wall clock,
 //! `faer::get_global_parallelism` threads):
@@ -62,16 +75,17 @@ use std::f64::consts::PI;
 use std::path::Path;
 use std::time::Instant;
 
-use hbm_support::synthetic_interface;
+use hbm_support::{synthetic_interface, synthetic_modal_interface};
 
 use faer::Mat;
 use nlrom::case::{Case, LinearSolverKey};
 use nlrom::continuation::trace;
-use nlrom::harmonics::HarmonicForce;
+use nlrom::harmonics::{HarmonicForce, JacobianMut};
 use nlrom::hbm::{FrequencyPath, HbmSystem};
 use nlrom::interface::build_interfaces;
 use nlrom::nonlinear::{
-    linsolve, solve_dense, LinearSolver, Linearization, ParameterSystem, SolverChoice,
+    linsolve, solve_dense, solve_fixed, LinearSolver, Linearization, NewtonOptions,
+    ParameterSystem, SolverChoice,
 };
 use nlrom::problem::sector::SectorProblem;
 use nlrom::problem::settings::case_continuation;
@@ -113,8 +127,19 @@ fn main() -> Result<()> {
             let dense = args.get(5).map(String::as_str) != Some("nodense");
             synthetic(num(1, 1500), h, samples, num(4, 1), dense)
         }
+        Some("modal") => {
+            let newton = args.get(6).map(String::as_str) == Some("newton");
+            modal(
+                num(1, 1500),
+                num(2, 5),
+                num(3, 300),
+                num(4, 32),
+                num(5, 8),
+                newton,
+            )
+        }
         _ => {
-            eprintln!("usage: hbm_speed sector CASE.toml [H] [POINTS] | synthetic [CONTACT_DOFS] [H] [SAMPLES] [EVERY] [nodense]");
+            eprintln!("usage: hbm_speed sector CASE.toml [H] [POINTS] | synthetic [CONTACT_DOFS] [H] [SAMPLES] [EVERY] [nodense] | modal [CONTACT_DOFS] [H] [MODES] [SAMPLES] [EVERY] [newton]");
             Ok(())
         }
     }
@@ -517,4 +542,114 @@ fn synthetic(
         pairs.div_ceil(every.max(1))
     );
     split(&fp, &system, &x, 0.8, &set.initial_state(), dense)
+}
+
+/// The split of one Newton iteration of the harmonic balance on modal coordinates (module
+/// documentation, `modal`).
+fn modal(
+    contact_dofs: usize,
+    h: usize,
+    modes: usize,
+    samples: usize,
+    every: usize,
+    newton: bool,
+) -> Result<()> {
+    let (model, set, layout, q) =
+        synthetic_modal_interface(contact_dofs, modes, h, samples, every)?;
+    let pairs = contact_dofs / 6;
+    let linear = model.linear_model(h)?;
+    let force = model.project(set)?;
+    let system = HbmSystem::new(layout, &linear, &force)?;
+    let fp = FrequencyPath {
+        system: &system,
+        level: 1.0,
+    };
+    let n = fp.dim();
+    let state = force.initial_state();
+    let omega = 0.8;
+    println!(
+        "modal: {pairs} pairs ({} with n0 = 0.2 N), {} contact DOF, {modes} modes, H = {h}, N_t = {samples}: {n} unknowns",
+        pairs.div_ceil(every.max(1)),
+        6 * pairs
+    );
+    let heap_before = heap_peak::live_bytes();
+    heap_peak::reset();
+    let rss_before = reset_peak_rss();
+    let forces = best(|| {
+        let mut s = state.clone();
+        let mut f = vec![0.0; n];
+        force
+            .evaluate_into(&layout, &q, omega, &mut s, &mut f, None, None)
+            .unwrap();
+    });
+    let mut jac = Mat::<f64>::zeros(n, n);
+    let projected = best(|| {
+        let mut s = state.clone();
+        let mut f = vec![0.0; n];
+        jac.fill(0.0);
+        let target = Some(JacobianMut::Dense(jac.as_mut()));
+        force
+            .evaluate_into(&layout, &q, omega, &mut s, &mut f, target, None)
+            .unwrap();
+    });
+    let (constant, coupled) = force.last_split();
+    drop(jac);
+    let mut lin = Linearization::zeros(n);
+    let whole = best(|| fp.evaluate(&q, omega, &state, &mut lin).unwrap());
+    let residual = best(|| {
+        let mut r = vec![0.0; n];
+        fp.evaluate_residual(&q, omega, &state, &mut r).unwrap();
+    });
+    let dense = lin.jacobian.as_dense().expect("a dense Jacobian");
+    let lu = best(|| solve_dense(dense, &lin.residual).unwrap());
+    let total = whole.0 + lu.0;
+    let row = |what: &str, t: (f64, f64)| {
+        println!(
+            "  {what:<52} {:>9.4} s {:>5.1} %  (CPU {:.2} s)",
+            t.0,
+            100.0 * t.0 / total,
+            t.1
+        )
+    };
+    println!(
+        "one Newton iteration, {n} unknowns (best of {}, wall; % of the iteration {total:.4} s):",
+        repeat()
+    );
+    row("contact forces (Φ_c Q, AFT, Φ_cᵀ F)", forces);
+    row(
+        "projected contact Jacobian (forces + Jacobian − forces)",
+        (projected.0 - forces.0, projected.1 - forces.1),
+    );
+    row("whole evaluation (linear part, forces, Jacobian)", whole);
+    row("residual alone (a damping trial)", residual);
+    row("dense LU + solve", lu);
+    println!(
+        "  pairs projected as constant {constant}, in transition {coupled}; iteration CPU {:.2} s; heap mark {:.1} MB above the {:.1} MB before; peak resident {:.2} GB ({:.2} GB before)",
+        whole.1 + lu.1,
+        heap_peak::peak_bytes().saturating_sub(heap_before) as f64 / 1e6,
+        heap_before as f64 / 1e6,
+        peak_rss_gb(),
+        rss_before
+    );
+    drop(lin);
+    if newton {
+        let opts = NewtonOptions {
+            linear_solver: SolverChoice::Dense,
+            ..NewtonOptions::default()
+        };
+        let cpu = cpu_seconds();
+        match solve_fixed(&fp, &q, omega, &state, &opts) {
+            Ok(sol) => {
+                let spent = cpu_seconds() - cpu;
+                println!(
+                    "  Newton from that state: {} iterations, {spent:.2} CPU s, {:.2} CPU s per iteration; pairs at the solution: {:?} (constant, in transition)",
+                    sol.iterations,
+                    spent / sol.iterations.max(1) as f64,
+                    force.last_split()
+                );
+            }
+            Err(e) => println!("  Newton from that state failed: {}", e.message),
+        }
+    }
+    Ok(())
 }

@@ -695,7 +695,7 @@ def sector_params(variant: str, **overrides) -> SectorParams:
         p.target_size_factor = 0.6 if p.target_size_factor is None else p.target_size_factor
     if variant == "coarse_target":
         # coarser target face (2 x): 33 target nodes against 65 contact nodes, about the ratio of
-        # the paper's FEM2 (seed 004 Table 1: 169 target nodes against 289 contact nodes)
+        # the paper's FEM2 (Battiato 2021, Table 1: 169 target nodes against 289 contact nodes)
         p.target_size_factor = 2.0 if p.target_size_factor is None else p.target_size_factor
     return p
 

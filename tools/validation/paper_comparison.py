@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The SAMA paper's experiment (seed 004, §6.2) on the bundled shrouded sector, in one command.
+"""The SAMA paper's experiment (Battiato 2021, §6.2) on the bundled shrouded sector, in one command.
 
     python3 tools/validation/paper_comparison.py [--modes m1 m2] [--harmonics H] [--skip-solve] [--out results/paper] [--figures docs/paper]
 
@@ -12,7 +12,7 @@ For every mode (cases/paper/<mode>_{conforming,nonconforming,misaligned}.toml) i
     preload the resonance frequency, peak amplitude and Q-factor of each model, the differences of
     the non-conforming (SAMA) and misaligned models relative to the conforming (node-to-node)
     benchmark and a path column ('folds' where the frequency turns back, 'stops at F Hz' where
-    the continuation failed), with the acceptance check of issue 8 per mode (SAMA vs conforming:
+    the continuation failed), with the acceptance check per mode (SAMA vs conforming:
     resonance within 0.5 %, amplitude within 3 %);
   - plots <out>/<mode>_*_frf.png (FRFs per preload, Figs 19-20), <out>/<mode>_frf_compare.png
     (Figs 21-22 / 26-27 at n0 = 113 N) and <out>/<mode>_performance.png (Figs 23-25 / 28-30),
@@ -152,7 +152,7 @@ def run_mode(mode, out_dir, skip_solve, harmonics):
 
 
 def compare(mode, tables):
-    """The comparison.md rows of one mode and the SAMA-vs-conforming failures (issue 8): a
+    """The comparison.md rows of one mode and the SAMA-vs-conforming failures (the acceptance): a
     difference beyond the tolerance, or a conforming or SAMA path that stops inside the window."""
     lines, failures = [], []
     worst = {}
