@@ -1013,6 +1013,7 @@ fn slider_derivative(mo: &Motion, origin: SliderOrigin, at: At) -> ([f64; 3], f6
 }
 
 /// The harmonic results of one point without its cycle.
+#[derive(Default)]
 struct Harmonics {
     friction: [f64; 3],
     normal: [f64; 3],
@@ -1107,9 +1108,9 @@ impl PhaseSums {
         }
     }
 
-    /// The harmonic results from the sums, with `at_zero` the state at τ ≡ 0 (mod 2π) for the
-    /// end slider state.
-    fn finish(&self, mo: &Motion, at_zero: PhaseKind, jacobian: bool) -> Harmonics {
+    /// The harmonic results from the sums into `out` (its Jacobians only if `jacobian`), with
+    /// `at_zero` the state at τ ≡ 0 (mod 2π) for the end slider state.
+    fn finish(&self, mo: &Motion, at_zero: PhaseKind, jacobian: bool, out: &mut Harmonics) {
         let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
         let u = mo.u;
         let m_stick = self.stick.projection();
@@ -1128,10 +1129,13 @@ impl PhaseSums {
         let w_col =
             PhaseIntegrals([self.w_int[0], self.w_int[1], self.w_int[2], 0.0, 0.0]).first_column();
         let cn = [mo.n0e, mo.nv.x1, mo.nv.x2];
-        let mut friction = [0.0; 3];
-        let mut normal = [0.0; 3];
-        let mut fj = [[0.0; 7]; 3];
-        let mut nj = [[0.0; 7]; 3];
+        let Harmonics {
+            friction,
+            normal,
+            friction_jacobian: fj,
+            normal_jacobian: nj,
+            ..
+        } = out;
         for k in 0..3 {
             friction[k] = kt * (dot(m_stick[k], u) - w_col[k]) + mu * dot(m_slip[k], cn);
             normal[k] = dot(m_contact[k], cn);
@@ -1145,15 +1149,8 @@ impl PhaseSums {
                 nj[k][6] = m_contact[k][0];
             }
         }
-        let energy = PI * (u[1] * friction[2] - u[2] * friction[1]);
-        Harmonics {
-            friction,
-            normal,
-            energy,
-            slider: mo.slider_in(at_zero, At::ZERO),
-            friction_jacobian: fj,
-            normal_jacobian: nj,
-        }
+        out.energy = PI * (u[1] * out.friction[2] - u[2] * out.friction[1]);
+        out.slider = mo.slider_in(at_zero, At::ZERO);
     }
 }
 
@@ -1180,12 +1177,14 @@ fn harmonics(
         keep(ph)
     })?;
     let at_zero = at_zero.unwrap_or(PhaseKind::Separation);
-    Ok((sums.finish(mo, at_zero, jacobian), regime))
+    let mut out = Harmonics::default();
+    sums.finish(mo, at_zero, jacobian, &mut out);
+    Ok((out, regime))
 }
 
-/// The harmonics of a point in closed form where the sequence of its cycle's phases follows
-/// from the amplitudes alone, without the event march of [`build`] (which gives the same phases
-/// to rounding), or `None` where the march is needed (separation, a degenerate sinusoid, a start
+/// The harmonics of a point into `out` in closed form where the sequence of its cycle's phases
+/// follows from the amplitudes alone, without the event march of [`build`] (which gives the same
+/// phases to rounding); false where the march is needed (separation, a degenerate sinusoid, a start
 /// outside the friction cone). In contact over the whole cycle, with c_P and c_N as in the
 /// module documentation:
 /// * complete stick (eq. 19): the caller's slider w inside the friction cone at τ = 0, and
@@ -1199,9 +1198,9 @@ fn harmonics(
 ///   slip until τ_P + 2π (eqs 8, 21). After the end of a slip the point cannot slip the same way
 ///   again before slipping the other way (g ≤ g(τ_P) = c_P after τ_P), so no other sequence
 ///   exists; the two arccosines depend on the amplitudes only, not on a previous event.
-fn closed_form(mo: &Motion, slider: f64, jacobian: bool) -> Option<Harmonics> {
+fn closed_form(mo: &Motion, slider: f64, jacobian: bool, out: &mut Harmonics) -> bool {
     if mo.window != Window::Always || mo.p.kt <= 0.0 {
-        return None;
+        return false;
     }
     let mun = mo.p.mu * mo.n0e;
     let (g, h) = (&mo.g, &mo.h);
@@ -1215,15 +1214,16 @@ fn closed_form(mo: &Motion, slider: f64, jacobian: bool) -> Option<Harmonics> {
             origin: SliderOrigin::Carried,
         } = kind
         else {
-            return None;
+            return false;
         };
         let offset = mo.p.kt * (mo.u[0] - w);
         let positive = g.amp > 0.0 && (mun - offset) / g.amp < 1.0 - TANGENCY;
         let negative = h.amp > 0.0 && (-mun - offset) / h.amp > -1.0 + TANGENCY;
         if positive || negative {
-            return None;
+            return false;
         }
-        return Some(Harmonics::stuck(mo, w));
+        *out = Harmonics::stuck(mo, w);
+        return true;
     }
     if g.x1 == h.x1 && g.x2 == h.x2 {
         // no normal motion: one sinusoid, one phase angle
@@ -1239,7 +1239,7 @@ fn closed_form(mo: &Motion, slider: f64, jacobian: bool) -> Option<Harmonics> {
     let t3 = t2 + ahead(stp.t, n.t);
     let t4 = p.t + TAU;
     if !(t3 < t4 && (t3 + ahead(p.t, stp.t) - t4).abs() < 1e-9) {
-        return None;
+        return false;
     }
     let after_p = PhaseKind::Stick {
         slider: mo.slider_in(PhaseKind::PositiveSlip, p),
@@ -1266,7 +1266,156 @@ fn closed_form(mo: &Motion, slider: f64, jacobian: bool) -> Option<Harmonics> {
     for ph in &phases {
         sums.add(mo, ph, jacobian);
     }
-    Some(sums.finish(mo, at_zero, jacobian))
+    sums.finish(mo, at_zero, jacobian, out);
+    true
+}
+
+/// Most contact phases of a cycle with separation in [`separation_form`]: the contact window is
+/// shorter than a period, so it holds the phase entered at the re-contact and at most the four
+/// phases of one stick–slip cycle after it.
+const WINDOW_PHASES: usize = 6;
+
+impl Wave {
+    /// The instant τ′ = −2α − τ at which the sinusoid takes its value at τ again (the mirror of
+    /// τ about the extremum between them): cos τ′ = cos 2α cos τ − sin 2α sin τ,
+    /// sin τ′ = −(sin 2α cos τ + cos 2α sin τ), no inverse function.
+    #[inline]
+    fn mirror(&self, a: At) -> At {
+        let c2 = self.ca * self.ca - self.sa * self.sa;
+        let s2 = 2.0 * self.sa * self.ca;
+        At {
+            t: -2.0 * self.phase() - a.t,
+            s: -(s2 * a.c + c2 * a.s),
+            c: c2 * a.c - s2 * a.s,
+        }
+    }
+}
+
+/// The event that ends a contact phase of the state `kind` entered at `start` in a cycle with
+/// separation: (how far ahead of `start`, the event's instant, the state after it), or `None`
+/// if no event but the separation ends it (Cigeroglu, An & Menq 2007, §2.2.2; the conditions of the module documentation):
+/// * positive slip ends at the maximum of g (eq. 8, θ_P of eq. 21), negative slip at the
+///   minimum of h (eq. 9, θ_N of eq. 22), each followed by stick with the slider the slip left;
+/// * stick after positive slip, with c_P = max g, can only end where h falls through c_N
+///   (eqs 12, 24: one arccosine), stick after negative slip only where g rises through c_P
+///   (eqs 11, 23);
+/// * stick after a re-contact at τ_Sp2 with w = u(τ_Sp2) has c_P = g(τ_Sp2) and c_N = h(τ_Sp2)
+///   (n(τ_Sp2) = 0): it ends where g takes its re-contact value again rising (θ_SpP, eq. 27) or h
+///   falling (θ_SpN, eq. 28), the mirrors of τ_Sp2 about the minimum of g and the maximum of h
+///   ([`Wave::mirror`]), whichever comes first.
+///
+/// The levels and their tangency tests are those of the event march ([`Motion::next_event`]), so
+/// both take the same decisions.
+fn window_event(mo: &Motion, kind: PhaseKind, start: At) -> Option<(f64, At, PhaseKind)> {
+    let (g, h) = (&mo.g, &mo.h);
+    let from = start.t;
+    let mun = mo.p.mu * mo.n0e;
+    let ahead_of = |a: At, next: PhaseKind| Some((ahead(a.t, from), a, next));
+    match kind {
+        PhaseKind::PositiveSlip => {
+            let p = g.maximum();
+            let slider = mo.slider_in(PhaseKind::PositiveSlip, p);
+            let origin = SliderOrigin::AfterPositiveSlip(p.t);
+            ahead_of(p, PhaseKind::Stick { slider, origin })
+        }
+        PhaseKind::NegativeSlip => {
+            let n = h.minimum();
+            let slider = mo.slider_in(PhaseKind::NegativeSlip, n);
+            let origin = SliderOrigin::AfterNegativeSlip(n.t);
+            ahead_of(n, PhaseKind::Stick { slider, origin })
+        }
+        PhaseKind::Stick { slider, origin } => {
+            let offset = mo.p.kt * (mo.u[0] - slider);
+            let rp = (mun - offset) / g.amp;
+            let rn = (-mun - offset) / h.amp;
+            let positive = rp < 1.0 - TANGENCY;
+            let negative = rn > -1.0 + TANGENCY;
+            match origin {
+                SliderOrigin::AfterPositiveSlip(_) if negative => {
+                    ahead_of(h.crossing(rn, false), PhaseKind::NegativeSlip)
+                }
+                SliderOrigin::AfterNegativeSlip(_) if positive => {
+                    ahead_of(g.crossing(rp, true), PhaseKind::PositiveSlip)
+                }
+                SliderOrigin::Recontact(_) => {
+                    // the earlier of the two mirrors (g's first on a tie, as in the march)
+                    let sp = positive.then(|| g.mirror(start));
+                    let sn = negative.then(|| h.mirror(start));
+                    let dp = sp.map_or(f64::INFINITY, |a| ahead(a.t, from));
+                    let dn = sn.map_or(f64::INFINITY, |a| ahead(a.t, from));
+                    match (sp, sn) {
+                        (Some(a), _) if dp <= dn => Some((dp, a, PhaseKind::PositiveSlip)),
+                        (_, Some(a)) => Some((dn, a, PhaseKind::NegativeSlip)),
+                        _ => None,
+                    }
+                }
+                _ => None,
+            }
+        }
+        PhaseKind::Separation => None,
+    }
+}
+
+/// The harmonics of a point whose contact window is part of the period (§2.2.2), in closed
+/// form: the cycle starts at the re-contact τ_Sp2 (eqs 13–17; history-free, so the caller's
+/// slider does not enter) in the state of eqs 15–17, and each contact phase ends at the one
+/// event its state allows ([`window_event`]: an extremum, one arccosine, or a mirror of τ_Sp2)
+/// or at the separation τ_Sp1, whichever comes first; separation then lasts until τ_Sp2 + 2π.
+/// The phases are those of the event march of [`build`] (which, from the same start, takes the
+/// earliest of up to three candidate events a phase) and are integrated by the same
+/// [`PhaseSums`] into `out`. False where the march is needed: no separation, a degenerate
+/// sinusoid (|G| = 0 or |H| = 0, k_t = 0), or more phases than a window holds.
+fn separation_form(mo: &Motion, jacobian: bool, out: &mut Harmonics) -> bool {
+    let Window::Part {
+        recontact,
+        separation,
+        len,
+    } = mo.window
+    else {
+        return false;
+    };
+    if mo.p.kt <= 0.0 || mo.g.amp <= 0.0 || mo.h.amp <= 0.0 {
+        return false;
+    }
+    // τ_Sp1 labelled after τ_Sp2
+    let sp1 = separation.labelled(recontact.t + len);
+    let mut sums = PhaseSums::default();
+    // the state at τ ≡ 0: the first phase that ends at or after it (as in `harmonics`)
+    let zero = recontact.t + wrap(-recontact.t);
+    let mut at_zero = PhaseKind::Separation;
+    let mut found = false;
+    let mut add = |ph: Phase| {
+        if !found && ph.end >= zero {
+            at_zero = ph.kind;
+            found = true;
+        }
+        sums.add(mo, &ph, jacobian);
+    };
+    let mut cur = recontact;
+    let mut kind = mo.recontact_state(recontact);
+    for _ in 0..WINDOW_PHASES {
+        let to_separation = sp1.t - cur.t;
+        match window_event(mo, kind, cur) {
+            Some((d, a, next)) if d <= to_separation => {
+                let at = a.labelled(cur.t + d);
+                if d > 0.0 {
+                    add(Phase::new(kind, cur, at));
+                }
+                cur = at;
+                kind = next;
+            }
+            _ => {
+                if to_separation > 0.0 {
+                    add(Phase::new(kind, cur, sp1));
+                }
+                let end = recontact.labelled(recontact.t + TAU);
+                add(Phase::new(PhaseKind::Separation, sp1, end));
+                sums.finish(mo, at_zero, jacobian, out);
+                return true;
+            }
+        }
+    }
+    false
 }
 
 fn check_finite(u: &[f64; 3], v: &[f64; 3], slider: f64) -> Result<()> {
@@ -1378,15 +1527,19 @@ pub(crate) fn evaluate_element(
     let mut u_all = [[0.0; 3]; 2];
     let slider_in = *slider;
     let mut energy = 0.0;
+    let mut r = Harmonics::default();
     for d in 0..nt {
         let u = [x[d * 3], x[d * 3 + 1], x[d * 3 + 2]];
         check_finite(&u, &v, slider[d])?;
         u_all[d] = u;
         let mo = Motion::new(&element.params, u, v);
-        let r = match closed_form(&mo, slider[d], jacobian) {
-            Some(r) => r,
-            None => harmonics(&mo, slider[d], jacobian, |_| true)?.0,
+        let exact = match mo.window {
+            Window::Part { .. } => separation_form(&mo, jacobian, &mut r),
+            _ => closed_form(&mo, slider[d], jacobian, &mut r),
         };
+        if !exact {
+            r = harmonics(&mo, slider[d], jacobian, |_| true)?.0;
+        }
         slider[d] = r.slider;
         energy += r.energy;
         force[d * 3..d * 3 + 3].copy_from_slice(&r.friction);
@@ -1394,7 +1547,7 @@ pub(crate) fn evaluate_element(
             force[nt * 3..nt * 3 + 3].copy_from_slice(&r.normal);
         }
         if jacobian {
-            let (fj, nj) = (r.friction_jacobian, r.normal_jacobian);
+            let (fj, nj) = (&r.friction_jacobian, &r.normal_jacobian);
             for k in 0..3 {
                 let row = &mut jac[(d * 3 + k) * cols..(d * 3 + k + 1) * cols];
                 row[d * 3..d * 3 + 3].copy_from_slice(&fj[k][..3]);
@@ -1425,6 +1578,47 @@ pub(crate) fn evaluate_element(
 mod tests {
     use super::*;
 
+    /// A point of the tests' grids: k_t = 2, k_n = 5, μ = 0.4, u = U0 + a sin τ with a = 0.7,
+    /// v = V0 + b sin(τ + φ), n̄0 = μ n0/(k_t a) and b̄ = μ k_n b/(k_t a); with its force scale
+    /// k_t a + |n0| + k_n b (N).
+    fn grid_point(n0bar: f64, bbar: f64, phi: f64, u0: f64, v0: f64) -> (Motion, f64) {
+        let (kt, kn, mu, a) = (2.0, 5.0, 0.4, 0.7);
+        let b = bbar * kt * a / (mu * kn);
+        let p = ContactParams {
+            kt,
+            kn,
+            mu,
+            n0: n0bar * kt * a / mu,
+        };
+        let u = [u0, 0.0, -a];
+        let v = [v0, b * phi.sin(), -b * phi.cos()];
+        (Motion::new(&p, u, v), kt * a + p.n0.abs() + kn * b)
+    }
+
+    /// The largest differences of two evaluations of a point: forces, normal forces, energy and
+    /// end slider over `scale`, and the two Jacobians over `jac_scale`.
+    fn differences(c: &Harmonics, m: &Harmonics, scale: f64, jac_scale: f64) -> (f64, f64) {
+        let pairs = c
+            .friction
+            .iter()
+            .zip(&m.friction)
+            .chain(c.normal.iter().zip(&m.normal))
+            .chain([(&c.energy, &m.energy), (&c.slider, &m.slider)]);
+        let values = pairs.fold(0.0f64, |w, (x, y)| w.max((x - y).abs() / scale));
+        let jac = c
+            .friction_jacobian
+            .iter()
+            .zip(&m.friction_jacobian)
+            .chain(c.normal_jacobian.iter().zip(&m.normal_jacobian));
+        let mut d: f64 = 0.0;
+        for (rc, rm) in jac {
+            for (x, y) in rc.iter().zip(rm) {
+                d = d.max((x - y).abs() / jac_scale);
+            }
+        }
+        (values, d)
+    }
+
     /// The closed forms ([`closed_form`]) against the event march of [`build`] on the same
     /// point: forces, normal forces, energy and end slider equal to 1e-12 of their scale, both
     /// Jacobians to 1e-12 of k_t + k_n, over the paper's grid of n̄0, b̄ and φ (u = a sin τ,
@@ -1436,54 +1630,28 @@ mod tests {
     /// Jacobians are compared there to 1e-7 (measured 7.2e-9; elsewhere 5e-16).
     #[test]
     fn closed_forms_equal_the_event_march() {
-        let (kt, kn, mu, a) = (2.0, 5.0, 0.4, 0.7);
+        // k_t + k_n of the grid points (N/m)
+        let (kt, kn) = (2.0, 5.0);
         let (mut stick, mut slip, mut marched, mut grazing) = (0, 0, 0, 0);
         let (mut worst, mut worst_jac, mut worst_grazing) = (0.0f64, 0.0f64, 0.0f64);
         for n0bar in [-0.3, 0.0, 0.2, 0.5, 0.8, 1.2, 2.5, 6.0] {
             for bbar in [0.0, 0.1, 0.3, 0.8, 1.5] {
                 for phi in [0.0, 0.7, PI / 2.0, 2.0, PI, 4.0, 5.5] {
                     for (u0, v0, w) in [(0.0, 0.0, 0.0), (0.3, 0.01, 0.2), (-0.2, -0.02, -0.5)] {
-                        let b = bbar * kt * a / (mu * kn);
-                        let p = ContactParams {
-                            kt,
-                            kn,
-                            mu,
-                            n0: n0bar * kt * a / mu,
-                        };
-                        let u = [u0, 0.0, -a];
-                        let v = [v0, b * phi.sin(), -b * phi.cos()];
-                        let mo = Motion::new(&p, u, v);
-                        let Some(c) = closed_form(&mo, w, true) else {
+                        let (mo, scale) = grid_point(n0bar, bbar, phi, u0, v0);
+                        let mut c = Harmonics::default();
+                        if !closed_form(&mo, w, true, &mut c) {
                             marched += 1;
                             continue;
-                        };
+                        }
                         let (m, regime) = harmonics(&mo, w, true, |_| true).unwrap();
                         match regime {
                             CycleRegime::CompleteStick => stick += 1,
                             CycleRegime::StickSlip => slip += 1,
                             other => panic!("closed form taken in regime {other:?}"),
                         }
-                        let scale = kt * a + p.n0.abs() + kn * b;
-                        let pairs = c
-                            .friction
-                            .iter()
-                            .zip(&m.friction)
-                            .chain(c.normal.iter().zip(&m.normal))
-                            .chain([(&c.energy, &m.energy), (&c.slider, &m.slider)]);
-                        for (x, y) in pairs {
-                            worst = worst.max((x - y).abs() / scale);
-                        }
-                        let jac = c
-                            .friction_jacobian
-                            .iter()
-                            .zip(&m.friction_jacobian)
-                            .chain(c.normal_jacobian.iter().zip(&m.normal_jacobian));
-                        let mut d: f64 = 0.0;
-                        for (rc, rm) in jac {
-                            for (x, y) in rc.iter().zip(rm) {
-                                d = d.max((x - y).abs() / (kt + kn));
-                            }
-                        }
+                        let (values, d) = differences(&c, &m, scale, kt + kn);
+                        worst = worst.max(values);
                         if (mo.n0e - mo.nv.amp).abs() <= 1e-12 * mo.n0e.abs() {
                             grazing += 1;
                             worst_grazing = worst_grazing.max(d);
@@ -1504,5 +1672,72 @@ mod tests {
         assert!(worst < 1e-12, "{worst:e}");
         assert!(worst_jac < 1e-12, "{worst_jac:e}");
         assert!(worst_grazing < 1e-7, "{worst_grazing:e}");
+    }
+
+    /// The closed form of a cycle with separation ([`separation_form`]) against the event march
+    /// of [`build`] on the same point, over a grid of n̄0 (gaps included), b̄ and φ that separates
+    /// (u = a sin τ, v = b sin(τ + φ), k_t = 2, k_n = 5, μ = 0.4, a = 0.7, with mean offsets U0,
+    /// V0 and sliders, which a cycle with separation forgets; the points with |G| = 0 or |H| = 0,
+    /// b̄ = 1 at φ = 0 or π, are left to the march): forces, normal forces, energy and
+    /// end slider equal to 1e-12 of their scale and both Jacobians to 1e-12 of k_t + k_n. Both
+    /// take the same phases; the closed form reaches a stick's end after a re-contact by the
+    /// mirror of the re-contact instant instead of an arccosine of the level, and the other ends
+    /// by the same expressions as the march.
+    #[test]
+    fn separation_form_equals_the_event_march() {
+        // k_t + k_n of the grid points (N/m)
+        let (kt, kn) = (2.0, 5.0);
+        let (mut separating, mut fallback) = (0, 0);
+        // the states at the re-contact: positive slip, negative slip, stick (mirror ends)
+        let mut entered = [0; 3];
+        let (mut worst, mut worst_jac) = (0.0f64, 0.0f64);
+        let mut worst_at = (0.0, 0.0, 0.0, 0);
+        for n0bar in [-0.5, -0.2, 0.0, 0.2, 0.5, 0.9, 1.4] {
+            for bbar in [0.1, 0.3, 0.6, 1.0, 1.5, 2.5, 5.0] {
+                for phi in [0.0, 0.7, PI / 2.0, 2.0, PI, 4.0, 5.5] {
+                    for (i, (u0, v0, w)) in [(0.0, 0.0, 0.0), (0.3, 0.01, 0.2), (-0.2, -0.02, -0.5)]
+                        .into_iter()
+                        .enumerate()
+                    {
+                        let (mo, scale) = grid_point(n0bar, bbar, phi, u0, v0);
+                        if !matches!(mo.window, Window::Part { .. }) {
+                            continue;
+                        }
+                        separating += 1;
+                        let mut c = Harmonics::default();
+                        if !separation_form(&mo, true, &mut c) {
+                            // only a degenerate sinusoid (b̄ = 1 at φ = 0 or π) is left to the march
+                            assert!(mo.g.amp == 0.0 || mo.h.amp == 0.0, "{n0bar} {bbar} {phi}");
+                            fallback += 1;
+                            continue;
+                        }
+                        let (m, regime) = harmonics(&mo, w, true, |_| true).unwrap();
+                        assert_eq!(regime, CycleRegime::Separation);
+                        if let Window::Part { recontact, .. } = mo.window {
+                            entered[match mo.recontact_state(recontact) {
+                                PhaseKind::PositiveSlip => 0,
+                                PhaseKind::NegativeSlip => 1,
+                                _ => 2,
+                            }] += 1;
+                        }
+                        let (values, d) = differences(&c, &m, scale, kt + kn);
+                        worst = worst.max(values);
+                        if d > worst_jac {
+                            worst_jac = d;
+                            worst_at = (n0bar, bbar, phi, i);
+                        }
+                    }
+                }
+            }
+        }
+        eprintln!(
+            "separation: {separating} points, {fallback} marched, re-contact in +slip, -slip, stick {entered:?}; largest difference {worst:.2e} of the scale, Jacobians {worst_jac:.2e} of k_t + k_n (at n̄0, b̄, φ, offsets {worst_at:?})"
+        );
+        assert!(
+            separating - fallback >= 700 && entered.iter().all(|&n| n >= 50),
+            "{separating} separating, {fallback} marched, {entered:?}"
+        );
+        assert!(worst < 1e-12, "{worst:e}");
+        assert!(worst_jac < 1e-12, "{worst_jac:e}");
     }
 }

@@ -542,7 +542,7 @@ pub fn matrix_march(case: &Case, sm: &StructuralModel) -> Result<(MarchSystem, V
             }
             ExcitationLoad::Group { .. } => {
                 return Err(Error::input(format!(
-                    "{file}: excitation.group needs a mesh; a matrix model gives `dofs` and `force`"
+                    "{file}: excitation.group is not marched: `nlrom march` of a matrix case takes `excitation.dofs` and `force` (on a mesh the rows 3·node + component)"
                 )))
             }
         }
