@@ -19,9 +19,8 @@
 //! the "same loops" check. Then criterion's wall-time estimates on the damper and the oscillator.
 //! The sector ROM (one round, each march's times printed as it ends: the step compatible with full
 //! stick is 0.14 µs, 41 917 steps per period, and the adaptive step meets thousands of contact
-//! states, each with an eigenproblem and a factorisation) runs only with `NLROM_BENCH_SECTOR=1`
-//! (every scheme) or `NLROM_BENCH_SECTOR=piecewise-linear,quasi-static` (standard Newmark and
-//! the schemes named).
+//! states) runs only with `NLROM_BENCH_SECTOR=1` (every scheme) or
+//! `NLROM_BENCH_SECTOR=piecewise-linear,quasi-static` (standard Newmark and the schemes named).
 //!
 //! With `NLROM_BENCH_SECTOR_QS=1` it adds the sector where the quasi-static method applies (15 Hz,
 //! standard Newmark and the quasi-static method, [`sector_quasi_static`]; about 70 s of CPU).

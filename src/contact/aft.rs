@@ -26,9 +26,11 @@ pub struct Aft {
     /// [1, cos τ_j, −sin τ_j, cos 2τ_j, …]; q(τ_j) = Σ_l synthesis[j][l] Q_l.
     synthesis: Vec<f64>,
     /// The analysis table (Q_k = Σ_j A[k][j] q(τ_j) for a band-limited q) transposed: row j
-    /// (length m) holds ∂Q_k/∂q(τ_j) for k = 0..2H; followed by a few zeros, so that
-    /// [`Aft::add_analysis_columns`] may read a whole register block from the last row.
+    /// (length m) holds ∂Q_k/∂q(τ_j) for k = 0..2H.
     analysis_columns: Vec<f64>,
+    /// Cumulative sums of the analysis columns: row j (length m, j = 0..=N_t) holds
+    /// Σ_{i<j} ∂Q_k/∂q(τ_i), for [`Aft::add_analysis_sum`].
+    analysis_prefix: Vec<f64>,
     /// cos(2πq/N_t), sin(2πq/N_t) for q = 0..N_t−1.
     unit_circle: (Vec<f64>, Vec<f64>),
     /// 1/(1 − z_p) as (Re, Im) for z_p = e^{−2πip/N_t}, p = 0..=2H (entry 0 unused), for
@@ -74,12 +76,13 @@ impl Aft {
                 analysis[2 * h * n + j] = -2.0 * s / n as f64;
             }
         }
-        let mut analysis_columns = vec![0.0; n * m + COLUMN_PAD];
+        let mut analysis_columns = vec![0.0; n * m];
         for k in 0..m {
             for j in 0..n {
                 analysis_columns[j * m + k] = analysis[k * n + j];
             }
         }
+        let analysis_prefix = prefix_sums(&analysis_columns, m);
         let unit_circle = (0..n)
             .map(|q| {
                 let (s, c) = (2.0 * std::f64::consts::PI * q as f64 / n as f64).sin_cos();
@@ -115,6 +118,7 @@ impl Aft {
             inverse,
             synthesis,
             analysis_columns,
+            analysis_prefix,
             unit_circle,
             step_factors,
             step_table,
@@ -190,23 +194,36 @@ impl Aft {
         &self.analysis_columns[j * m..(j + 1) * m]
     }
 
-    /// `beta` (length m) += Σ_{j ∈ range} ∂Q/∂q(τ_j), the analysis columns of the samples
-    /// `range` ([`Aft::analysis_column`]), each coefficient summed in the order of j exactly as
-    /// one addition per sample would: for m ≤ 15 the sums are kept in a block of registers
-    /// rather than in `beta` between the samples.
-    pub fn add_analysis_columns(&self, range: std::ops::Range<usize>, beta: &mut [f64]) {
+    /// `beta` (length m) += Σ_j ∂Q/∂q(τ_j) over the `length` samples j = `first`, `first` + 1,
+    /// … taken cyclically (a run that passes τ_{N_t−1} goes on at τ_0): the analysis columns
+    /// ([`Aft::analysis_column`]) of a run of samples. A run of more than [`DIRECT_RUN`]
+    /// samples costs O(m) whatever its length, from the cumulative sums of the columns: these
+    /// are bounded by about 1 (|Σ_{i<j} cos pτ_i| ≤ 1/sin(pπ/N_t), times 2/N_t), so their
+    /// difference is within a few ε of the direct sum. A shorter run is summed column by
+    /// column in the order of the samples: as cheap, and accurate relative to its own size.
+    pub fn add_analysis_sum(&self, first: usize, length: usize, beta: &mut [f64]) {
         let m = self.layout.coefficients();
-        match m.div_ceil(4) * 4 {
-            4 => add_columns_in_block::<4>(&self.analysis_columns, m, range, beta),
-            8 => add_columns_in_block::<8>(&self.analysis_columns, m, range, beta),
-            12 => add_columns_in_block::<12>(&self.analysis_columns, m, range, beta),
-            16 => add_columns_in_block::<16>(&self.analysis_columns, m, range, beta),
-            _ => {
-                for j in range {
-                    for (bk, bv) in beta.iter_mut().zip(self.analysis_column(j)) {
-                        *bk += bv;
-                    }
+        let n = self.layout.time_samples;
+        debug_assert!(first < n && length <= n);
+        let end = first + length;
+        if length <= DIRECT_RUN {
+            // [first, N_t) then [0, end − N_t)
+            for j in (first..end.min(n)).chain(0..end.saturating_sub(n)) {
+                for (b, a) in beta.iter_mut().zip(self.analysis_column(j)) {
+                    *b += a;
                 }
+            }
+            return;
+        }
+        let row = |j: usize| &self.analysis_prefix[j * m..(j + 1) * m];
+        if end <= n {
+            for ((b, hi), lo) in beta.iter_mut().zip(row(end)).zip(row(first)) {
+                *b += hi - lo;
+            }
+        } else {
+            let (whole, lo, wrapped) = (row(n), row(first), row(end - n));
+            for (((b, w), l), r) in beta.iter_mut().zip(whole).zip(lo).zip(wrapped) {
+                *b += (w - l) + r;
             }
         }
     }
@@ -243,25 +260,39 @@ impl Aft {
     /// contact indicators, a few runs per period). Returns false if `a` is all zero (`sums`
     /// then zero).
     pub fn step_fourier_sums(&self, a: &[f64], sums: &mut [f64]) -> bool {
-        let h2 = 2 * self.layout.harmonics;
         let n = self.layout.time_samples;
         debug_assert_eq!(a.len(), n);
-        sums[..2 * h2 + 2].fill(0.0);
-        let mut total = 0.0;
-        let mut jumps = false;
+        let total: f64 = a.iter().sum();
         let mut prev = a[n - 1];
-        // Y_p = Σ_j Δ_j z_p^j accumulated in sums[2p], sums[2p + 1] (Re, Im).
-        let y = &mut sums[2..2 * h2 + 2];
-        for (j, &aj) in a.iter().enumerate() {
-            total += aj;
+        let jumps = a.iter().enumerate().filter_map(|(j, &aj)| {
             let delta = aj - prev;
             prev = aj;
-            if delta != 0.0 {
-                jumps = true;
-                let row = &self.step_table[j * 2 * h2..(j + 1) * 2 * h2];
-                for (yp, z) in y.iter_mut().zip(row) {
-                    *yp += delta * z;
-                }
+            (delta != 0.0).then_some((j, delta))
+        });
+        self.jump_fourier_sums(jumps, total, sums)
+    }
+
+    /// The Fourier sums of [`Aft::step_fourier_sums`] of a piecewise-constant cyclic sequence
+    /// given by its jumps (j, Δ_j) (the samples where it changes, in increasing j, Δ_j = a_j −
+    /// a_{j−1}) and its sum `total` = Σ_j a_j: O(J·H) for J jumps, without visiting the samples.
+    /// Returns false if the sequence is all zero (no jump and `total` zero; `sums` then zero).
+    pub fn jump_fourier_sums(
+        &self,
+        jumps: impl Iterator<Item = (usize, f64)>,
+        total: f64,
+        sums: &mut [f64],
+    ) -> bool {
+        let h2 = 2 * self.layout.harmonics;
+        let n = self.layout.time_samples;
+        sums[..2 * h2 + 2].fill(0.0);
+        let mut jumped = false;
+        // Y_p = Σ_j Δ_j z_p^j accumulated in sums[2p], sums[2p + 1] (Re, Im).
+        let y = &mut sums[2..2 * h2 + 2];
+        for (j, delta) in jumps {
+            jumped = true;
+            let row = &self.step_table[j * 2 * h2..(j + 1) * 2 * h2];
+            for (yp, z) in y.iter_mut().zip(row) {
+                *yp += delta * z;
             }
         }
         let scale = 1.0 / n as f64;
@@ -273,7 +304,7 @@ impl Aft {
             sums[2 * p] = (yr * rr - yi * ri) * scale;
             sums[2 * p + 1] = -(yr * ri + yi * rr) * scale;
         }
-        jumps || total != 0.0
+        jumped || total != 0.0
     }
 
     /// cos(2πq/N_t) and sin(2πq/N_t) for q = 0..N_t−1.
@@ -282,30 +313,27 @@ impl Aft {
     }
 }
 
-/// Zeros after the analysis table ([`Aft::add_analysis_columns`]): the widest register block
-/// (16) less the narrowest row it serves (13).
-const COLUMN_PAD: usize = 3;
+/// The longest run of samples that [`Aft::add_analysis_sum`] sums directly.
+pub const DIRECT_RUN: usize = 16;
 
-/// [`Aft::add_analysis_columns`] with the `m` coefficients (m ≤ W ≤ m + [`COLUMN_PAD`]) held in
-/// W registers: row j of `columns` (stride m) is read as W values, of which the last W − m
-/// belong to the next row (or the padding) and are summed into lanes that are dropped.
-fn add_columns_in_block<const W: usize>(
-    columns: &[f64],
-    m: usize,
-    range: std::ops::Range<usize>,
-    beta: &mut [f64],
-) {
-    let mut sums = [0.0; W];
-    sums[..m].copy_from_slice(&beta[..m]);
-    for j in range {
-        let row: &[f64; W] = columns[j * m..j * m + W]
-            .try_into()
-            .expect("the table is padded for a whole block");
-        for (s, v) in sums.iter_mut().zip(row) {
-            *s += v;
+/// The cumulative sums of the rows of `rows` (row length `m`): N + 1 rows, row j the sum of
+/// rows 0..j, each by compensated (Kahan) summation, so that every entry is the exact sum
+/// correctly rounded to within about ε.
+fn prefix_sums(rows: &[f64], m: usize) -> Vec<f64> {
+    let n = rows.len() / m;
+    let mut out = vec![0.0; (n + 1) * m];
+    let mut sum = vec![0.0; m];
+    let mut carry = vec![0.0; m];
+    for j in 0..n {
+        for k in 0..m {
+            let y = rows[j * m + k] - carry[k];
+            let t = sum[k] + y;
+            carry[k] = (t - sum[k]) - y;
+            sum[k] = t;
         }
+        out[(j + 1) * m..(j + 2) * m].copy_from_slice(&sum);
     }
-    beta[..m].copy_from_slice(&sums[..m]);
+    out
 }
 
 /// Copies the coefficients of `dof` from the harmonic-major vector `q` of `n_dof` DOFs into
@@ -362,6 +390,41 @@ impl AftCache {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The sum of the analysis columns of a cyclic run of samples from the cumulative table
+    /// equals the direct sum to 1e-15 (absolute; the columns are of order 2/N_t), for runs
+    /// inside the period, wrapping round it, of one sample, of the whole period and on either
+    /// side of the length summed directly.
+    #[test]
+    fn analysis_sum_equals_the_direct_sum() {
+        for (h, n) in [(1, 4), (3, 16), (7, 33), (7, 1024)] {
+            let aft = Aft::new(HarmonicLayout::new(h, n).unwrap()).unwrap();
+            let m = 2 * h + 1;
+            for (first, length) in [
+                (0, 1),
+                (0, n),
+                (n - 1, 1),
+                (n / 3, n / 2),
+                (n - 2, 3),
+                (1, n),
+            ] {
+                let mut direct = vec![0.0; m];
+                for i in 0..length {
+                    for (d, a) in direct.iter_mut().zip(aft.analysis_column((first + i) % n)) {
+                        *d += a;
+                    }
+                }
+                let mut beta = vec![0.5; m];
+                aft.add_analysis_sum(first, length, &mut beta);
+                for (k, (b, d)) in beta.iter().zip(&direct).enumerate() {
+                    assert!(
+                        (b - 0.5 - d).abs() <= 1e-15,
+                        "H={h} N_t={n} run ({first}, {length}) coefficient {k}: {b} vs {d} + 0.5"
+                    );
+                }
+            }
+        }
+    }
 
     /// The summation-by-parts Fourier sums equal the FFT ones for a piecewise-constant sequence
     /// (the weights of the 1-D law), a constant, a zero and an arbitrary sequence.

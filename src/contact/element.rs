@@ -419,11 +419,16 @@ fn forgets_start(element: &LocalElement, ws: &Workspace) -> bool {
         for (j, r) in ws.regime.iter().enumerate() {
             match r[d] {
                 Regime::Separation => return true,
-                Regime::Slip => slips[usize::from(ws.ft[d][j] > 0.0)] = true,
+                Regime::Slip => {
+                    slips[usize::from(ws.ft[d][j] > 0.0)] = true;
+                    if slips[0] && slips[1] {
+                        return true;
+                    }
+                }
                 Regime::Stick => {}
             }
         }
-        slips[0] && slips[1]
+        false
     })
 }
 
@@ -465,10 +470,12 @@ fn march_periods(
     jacobian: bool,
     ws: &mut Workspace,
 ) -> Marched {
-    let scale = ws.u[0]
+    // the second direction's samples are zero without it ([`signals_to_time`])
+    let scale = ws.u[..element.tangential]
         .iter()
-        .chain(ws.u[1].iter())
-        .fold(slider[0].abs().max(slider[1].abs()), |a, b| a.max(b.abs()));
+        .fold(slider[0].abs().max(slider[1].abs()), |a, u| {
+            largest_magnitude(u, a)
+        });
     let tol = STATE_TOLERANCE * scale;
     let w_in = *slider;
     let mut w = w_in;
@@ -510,6 +517,25 @@ fn march_periods(
         w_start,
         differentiated,
     }
+}
+
+/// The largest of `start` and the magnitudes of `values`, NaN ignored as by `f64::max`: in four
+/// independent lanes, so that the loop vectorises (the maximum does not depend on the order).
+fn largest_magnitude(values: &[f64], start: f64) -> f64 {
+    let mut lanes = [start; 4];
+    let chunks = values.chunks_exact(4);
+    let rest = chunks.remainder();
+    for chunk in chunks {
+        for (lane, v) in lanes.iter_mut().zip(chunk) {
+            let a = v.abs();
+            if a > *lane {
+                *lane = a;
+            }
+        }
+    }
+    rest.iter()
+        .chain(&lanes)
+        .fold(start, |largest, v| largest.max(v.abs()))
 }
 
 /// The forces of the last marched period to harmonics, and the Jacobian if asked for.
@@ -606,19 +632,22 @@ fn samples_suffice(element: &LocalElement, ws: &Workspace) -> bool {
 }
 
 /// The local Jacobian of the 1-D law ([`finish_jacobian`]: the same matrix up to rounding) from
-/// the regimes and forces of the last period alone, in O(N_t·H + R·H²) for R stick runs.
+/// the regimes and forces of the last period alone, in O(N_t + J·H + R·H²) for J changes of
+/// regime or slip direction and R stick runs: the samples are visited once, to find the runs
+/// ([`class_runs`]).
 ///
 /// Per sample the 1-D law has piecewise-constant weights (SAMA paper eqs 13–14): stick
 /// ∂f_d = k_t (∂u_d − ∂w_d), slip ∂f_d = σ μ (k_n ∂v + ∂n0) with σ = sgn f_d, and
 /// ∂f_n = k_n ∂v + ∂n0 in contact. So the fixed-w part is k_t M(χ_stick) on (F_d, U_d),
 /// μ k_n M(σ χ_slip) on (F_d, V) and k_n M(χ_contact) on (F_n, V), M(a) the harmonic
 /// multiplication matrix ([`add_multiplication_block`]) from the Fourier sums of the indicator
-/// sequences ([`Aft::step_fourier_sums`]); the n0 column is M(a)'s first column (∂n0 acts as a
+/// sequences (from their jumps, [`Aft::jump_fourier_sums`]); the n0 column is M(a)'s first column (∂n0 acts as a
 /// constant signal), with the factors μ and 1.
 ///
 /// Memory: a slip or separation sample j0 resets the slider, ∂w_d = E_j0 ∂U_d
 /// − (σ μ/k_t)(k_n E_j0 ∂V + ∂n0) (the second term only in slip), which then holds over the stick
-/// run R that follows; the run adds −k_t β_R ⊗ ∂w_d with β_R = Σ_{j∈R} B_·j. The period is
+/// run R that follows; the run adds −k_t β_R ⊗ ∂w_d with β_R = Σ_{j∈R} B_·j (from the
+/// cumulative sums of the analysis columns, [`Aft::add_analysis_sum`]). The period is
 /// cyclic: the run before the first reset follows the last one (w_start = w_end); a direction
 /// stuck all period marched once has ∂w_start = 0 (the caller's state is a parameter).
 fn jacobian_1d(element: &LocalElement, aft: &Aft, ws: &mut Workspace) {
@@ -636,11 +665,11 @@ fn jacobian_1d(element: &LocalElement, aft: &Aft, ws: &mut Workspace) {
         fnormal,
         ..
     } = ws;
-    jacobian.clear();
+    // zeroed by one fill (a memset) once the length is set
     jacobian.resize(element.signals() * m * cols, 0.0);
+    jacobian.fill(0.0);
     *jacobian_cols = cols;
     b.sequence.resize(regime.len(), 0.0);
-    b.slip_sequence.resize(regime.len(), 0.0);
     b.sums.resize(2 * m, 0.0);
     b.beta[0].resize(m, 0.0);
     let normal = shape.offsets.of(2);
@@ -662,35 +691,24 @@ fn jacobian_1d(element: &LocalElement, aft: &Aft, ws: &mut Workspace) {
             }
         }
     }
-    for d in 0..element.tangential {
+    for (d, force) in ft.iter().enumerate().take(element.tangential) {
         let row0 = d * m;
-        // Stick indicator and slip sign σ = sgn f_d.
-        for (((st, sl), r), f) in b
-            .sequence
-            .iter_mut()
-            .zip(b.slip_sequence.iter_mut())
-            .zip(regime.iter())
-            .zip(&ft[d])
-        {
-            (*st, *sl) = match r[d] {
-                Regime::Stick => (1.0, 0.0),
-                Regime::Slip => (0.0, f.signum()),
-                Regime::Separation => (0.0, 0.0),
-            };
-        }
-        if aft.step_fourier_sums(&b.sequence, &mut b.sums) {
+        let n_t = regime.len();
+        let whole = class_runs(regime, force, d, &mut b.runs);
+        let runs = &b.runs;
+        // Stick indicator χ_stick and slip sign σ χ_slip, from their jumps.
+        if run_fourier_sums(aft, runs, whole, n_t, SampleClass::stick, &mut b.sums) {
             scale_sums(&mut b.sums, p.kt);
             add_multiplication_block(h, &b.sums, &mut b.signed, jacobian, cols, row0, row0);
         }
-        if aft.step_fourier_sums(&b.slip_sequence, &mut b.sums) {
+        if run_fourier_sums(aft, runs, whole, n_t, SampleClass::slip, &mut b.sums) {
             add_first_column(h, &b.sums, p.mu, jacobian, cols, row0, n0_col);
             if let Some(vo) = normal {
                 scale_sums(&mut b.sums, p.mu * p.kn);
                 add_multiplication_block(h, &b.sums, &mut b.signed, jacobian, cols, row0, vo);
             }
         }
-        let slip_sign = |j: usize| (regime[j][d] == Regime::Slip).then(|| ft[d][j].signum());
-        let mut runs = StickRuns {
+        let mut memory = StickRuns {
             jac: jacobian,
             cols,
             row0,
@@ -699,13 +717,112 @@ fn jacobian_1d(element: &LocalElement, aft: &Aft, ws: &mut Workspace) {
             params: p,
             beta: &mut b.beta[0],
         };
-        runs.add(
-            aft,
-            regime.len(),
-            |j| regime[j][d] == Regime::Stick,
-            slip_sign,
-        );
+        memory.add(aft, runs, n_t);
     }
+}
+
+/// What the 1-D law's Jacobian needs of one sample of one direction ([`jacobian_1d`]): its
+/// regime and, in slip, the sign σ of its force.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum SampleClass {
+    Stick,
+    /// Slip with f_d > 0 (σ = +1).
+    SlipUp,
+    /// Slip with f_d < 0 (σ = −1).
+    SlipDown,
+    Separation,
+}
+
+impl SampleClass {
+    /// The class of a sample in `regime` with the force `f` (N).
+    fn of(regime: Regime, f: f64) -> SampleClass {
+        match regime {
+            Regime::Stick => SampleClass::Stick,
+            Regime::Slip if f.is_sign_negative() => SampleClass::SlipDown,
+            Regime::Slip => SampleClass::SlipUp,
+            Regime::Separation => SampleClass::Separation,
+        }
+    }
+
+    /// The stick indicator χ_stick (1 or 0).
+    fn stick(self) -> f64 {
+        if self == SampleClass::Stick {
+            1.0
+        } else {
+            0.0
+        }
+    }
+
+    /// σ χ_slip: the sign of the force in slip, else 0.
+    fn slip(self) -> f64 {
+        self.sigma().unwrap_or(0.0)
+    }
+
+    /// σ of a slip sample, None otherwise.
+    fn sigma(self) -> Option<f64> {
+        match self {
+            SampleClass::SlipUp => Some(1.0),
+            SampleClass::SlipDown => Some(-1.0),
+            SampleClass::Stick | SampleClass::Separation => None,
+        }
+    }
+}
+
+/// The maximal runs of samples of one class of direction `d` over the period, cyclically: into
+/// `runs` the first sample and class of each run, in increasing sample order (empty when the
+/// whole period is one class); returns the class of the last sample (the whole period's class
+/// when `runs` is empty).
+fn class_runs(
+    regime: &[[Regime; 2]],
+    f: &[f64],
+    d: usize,
+    runs: &mut Vec<(usize, SampleClass)>,
+) -> SampleClass {
+    runs.clear();
+    let n_t = regime.len();
+    let last = SampleClass::of(regime[n_t - 1][d], f[n_t - 1]);
+    let mut previous = last;
+    for (j, (r, &fj)) in regime.iter().zip(f).enumerate() {
+        let class = SampleClass::of(r[d], fj);
+        if class != previous {
+            runs.push((j, class));
+            previous = class;
+        }
+    }
+    last
+}
+
+/// The length (samples) of run `r` of the cyclic runs `runs` over `n_t` samples.
+fn run_length(runs: &[(usize, SampleClass)], r: usize, n_t: usize) -> usize {
+    match runs.get(r + 1) {
+        Some(&(next, _)) => next - runs[r].0,
+        None => n_t - runs[r].0 + runs[0].0,
+    }
+}
+
+/// The Fourier sums ([`Aft::jump_fourier_sums`]) of the weight sequence `value`(class) of the
+/// samples, from the runs of [`class_runs`] (`whole`: its returned class); the same values as
+/// [`Aft::step_fourier_sums`] on the sequence. Returns false if the sequence is all zero.
+fn run_fourier_sums(
+    aft: &Aft,
+    runs: &[(usize, SampleClass)],
+    whole: SampleClass,
+    n_t: usize,
+    value: fn(SampleClass) -> f64,
+    sums: &mut [f64],
+) -> bool {
+    if runs.is_empty() {
+        return aft.jump_fourier_sums(std::iter::empty(), n_t as f64 * value(whole), sums);
+    }
+    let total: f64 = (0..runs.len())
+        .map(|r| value(runs[r].1) * run_length(runs, r, n_t) as f64)
+        .sum();
+    let before = |r: usize| runs[(r + runs.len() - 1) % runs.len()].1;
+    let jumps = (0..runs.len()).filter_map(|r| {
+        let delta = value(runs[r].1) - value(before(r));
+        (delta != 0.0).then_some((runs[r].0, delta))
+    });
+    aft.jump_fourier_sums(jumps, total, sums)
 }
 
 /// Multiplies Fourier sums by `factor`.
@@ -747,50 +864,27 @@ struct StickRuns<'a> {
 }
 
 impl StickRuns<'_> {
-    /// Walks the `n_t` samples of the period cyclically from the sample after the last reset;
-    /// `stick(j)` per sample, `slip_sign(j)` = Some(σ) for a slip sample, None for separation
-    /// (or stick).
-    fn add(
-        &mut self,
-        aft: &Aft,
-        n_t: usize,
-        stick: impl Fn(usize) -> bool,
-        slip_sign: impl Fn(usize) -> Option<f64>,
-    ) {
-        // Stuck all period: ∂w_start = 0 (one period marched, [`samples_suffice`]).
-        let Some(last) = (0..n_t).rev().find(|&j| !stick(j)) else {
-            return;
+    /// Adds the terms of every stick run of the cyclic runs `runs` of a period of `n_t`
+    /// samples ([`class_runs`]): the sample before a stick run resets the slider (slip or
+    /// separation), and β_R is the sum of the run's analysis columns. A direction of one class
+    /// all period has none (stuck all period: ∂w_start = 0, one period marched,
+    /// [`samples_suffice`]).
+    fn add(&mut self, aft: &Aft, runs: &[(usize, SampleClass)], n_t: usize) {
+        // from the run after the period's last reset: the last run first if it sticks
+        let count = runs.len();
+        let first_run = match runs.last() {
+            Some(&(_, SampleClass::Stick)) => count - 1,
+            _ => 0,
         };
-        self.beta.fill(0.0);
-        let mut live = false;
-        let mut j0 = last;
-        // the samples after `last`, cyclically, ending at `last` (not stuck): positions 1..=n_t
-        let at = |p: usize| (last + p) % n_t;
-        let mut p = 1;
-        while p <= n_t {
-            let j = at(p);
-            if stick(j) {
-                // the stick run from position p: β += its analysis columns, in the order of the
-                // samples (split where the run wraps round the period)
-                let mut end = p;
-                while end <= n_t && stick(at(end)) {
-                    end += 1;
-                }
-                let (first, length) = (j, end - p);
-                let direct = length.min(n_t - first);
-                aft.add_analysis_columns(first..first + direct, self.beta);
-                aft.add_analysis_columns(0..length - direct, self.beta);
-                live = true;
-                p = end;
+        for r in (first_run..count).chain(0..first_run) {
+            let (first, class) = runs[r];
+            if class != SampleClass::Stick {
                 continue;
             }
-            if live {
-                self.emit(aft.synthesis_row(j0), slip_sign(j0));
-                self.beta.fill(0.0);
-                live = false;
-            }
-            j0 = j;
-            p += 1;
+            let reset = runs[(r + count - 1) % count].1;
+            self.beta.fill(0.0);
+            aft.add_analysis_sum(first, run_length(runs, r, n_t), self.beta);
+            self.emit(aft.synthesis_row((first + n_t - 1) % n_t), reset.sigma());
         }
     }
 
@@ -942,8 +1036,8 @@ struct DerivativeBuffers {
     sequence: Vec<f64>,
     /// Fourier sums of one weight sequence (2(2H+1)).
     sums: Vec<f64>,
-    /// The slip-sign sequence of a direction of the 1-D law ([`jacobian_1d`]; N_t).
-    slip_sequence: Vec<f64>,
+    /// The runs of one class of a direction of the 1-D law ([`class_runs`]).
+    runs: Vec<(usize, SampleClass)>,
     /// Scratch of [`add_multiplication_block`] (4H+1).
     signed: Vec<[f64; 2]>,
     /// Harmonics of one n0 weight sequence (m).

@@ -281,6 +281,88 @@ pub fn spectral_radius(a: &[f64], n: usize) -> Option<f64> {
     Some(ev.ok()?.iter().map(|z| z.norm()).fold(0.0, f64::max))
 }
 
+/// The number of negative eigenvalues of the symmetric row-major `a` (n×n; its lower triangle is
+/// read), by Sylvester's law of inertia from its Bunch–Kaufman factorisation P A Pᵀ = L B Lᵀ
+/// (faer, on the calling thread): the negative eigenvalues of the 1 × 1 and 2 × 2 blocks of B.
+pub fn negative_eigenvalues(a: &[f64], n: usize) -> usize {
+    use faer::linalg::cholesky::lblt::factor::{cholesky_in_place, cholesky_in_place_scratch};
+    let par = faer::Par::Seq;
+    let mut m = to_faer(a, n);
+    let mut subdiag = faer::diag::Diag::<f64>::zeros(n);
+    let (mut perm, mut perm_inv) = (vec![0usize; n], vec![0usize; n]);
+    let req = cholesky_in_place_scratch::<usize, f64>(n, par, Default::default());
+    let mut stack = faer::dyn_stack::MemBuffer::new(req);
+    cholesky_in_place(
+        m.as_mut(),
+        subdiag.as_mut(),
+        &mut perm,
+        &mut perm_inv,
+        par,
+        faer::dyn_stack::MemStack::new(&mut stack),
+        Default::default(),
+    );
+    release_vector_registers();
+    let mut negative = 0;
+    let mut i = 0;
+    while i < n {
+        let e = subdiag[i];
+        if e != 0.0 && i + 1 < n {
+            let (d0, d1) = (m[(i, i)], m[(i + 1, i + 1)]);
+            let det = d0 * d1 - e * e;
+            negative += if det < 0.0 {
+                1
+            } else if d0 + d1 < 0.0 {
+                2
+            } else {
+                0
+            };
+            i += 2;
+        } else {
+            negative += usize::from(m[(i, i)] < 0.0);
+            i += 1;
+        }
+    }
+    negative
+}
+
+/// The eigenvalues λ (ascending) of the symmetric-definite pencil K φ = λ M φ (row-major n×n,
+/// K symmetric, M symmetric positive definite), by M = L Lᵀ and the symmetric eigenproblem of
+/// L⁻¹ K L⁻ᵀ, and the eigenvectors (row-major n×n, column j the φ_j of λ_j, Φᵀ M Φ = I); `None`
+/// when M is not positive definite or the iteration fails.
+pub fn generalized_symmetric_eigen(k: &[f64], m: &[f64], n: usize) -> Option<(Vec<f64>, Vec<f64>)> {
+    use faer::linalg::triangular_solve::{
+        solve_lower_triangular_in_place, solve_upper_triangular_in_place,
+    };
+    if n == 0 {
+        return None;
+    }
+    let par = par_for(n);
+    let symmetric = |a: &[f64]| Mat::from_fn(n, n, |i, j| 0.5 * (a[i * n + j] + a[j * n + i]));
+    let llt = symmetric(m).llt(faer::Side::Lower).ok()?;
+    let l = llt.L().to_owned();
+    // L⁻¹ K L⁻ᵀ: two triangular solves (K symmetric)
+    let mut x = symmetric(k);
+    solve_lower_triangular_in_place(l.as_ref(), x.as_mut(), par);
+    let mut y = x.transpose().to_owned();
+    solve_lower_triangular_in_place(l.as_ref(), y.as_mut(), par);
+    let b = Mat::from_fn(n, n, |i, j| 0.5 * (y[(i, j)] + y[(j, i)]));
+    let evd = b.self_adjoint_eigen(faer::Side::Lower).ok();
+    let out = evd.map(|e| {
+        let values: Vec<f64> = (0..n).map(|i| e.S()[i]).collect();
+        let mut v = e.U().to_owned();
+        solve_upper_triangular_in_place(l.transpose(), v.as_mut(), par);
+        let mut vectors = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                vectors[i * n + j] = v[(i, j)];
+            }
+        }
+        (values, vectors)
+    });
+    release_vector_registers();
+    out
+}
+
 /// The product A B of row-major n×n matrices.
 pub fn matmul(a: &[f64], b: &[f64], n: usize) -> Vec<f64> {
     let mut c = vec![0.0; n * n];

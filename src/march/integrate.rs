@@ -2,11 +2,11 @@
 //! Gastaldi & Berruti 2018 §4.2), the scheme's step ([`super::schemes`]), the record of every step,
 //! and steady-state (periodicity) detection at the end of each excitation period.
 
-use std::collections::HashMap;
 use std::time::Instant;
 
+use super::adaptive::AdaptiveSteps;
 use super::law::{ContactState, LawSample};
-use super::periodic;
+use super::periodic::{self, Extremes};
 use super::schemes::{
     self, Cache, Excitation, ExcitationAt, Kinematics, Snapshot, StepContext, Workspace,
 };
@@ -277,13 +277,14 @@ pub struct Marcher<'a> {
     /// Fixed step: the steps of one period with the excitation at their ends.
     table: StepTable,
     tolerance: f64,
-    dt_max: f64,
     /// The adaptive step of full stick, the shortest (adaptive schemes; else the largest step).
     dt_stick: f64,
-    /// Adaptive step per contact-state combination (codes).
-    adaptive_dt: AdaptiveSteps,
+    /// Adaptive step per contact-state combination (adaptive schemes).
+    adaptive_dt: Option<AdaptiveSteps>,
     codes: Vec<u8>,
     history: MarchHistory,
+    /// The scratch of the period's amplitude.
+    extremes: Extremes,
     summaries: Vec<PeriodSummary>,
     steady_period: Option<usize>,
     rejected: usize,
@@ -309,8 +310,15 @@ impl<'a> Marcher<'a> {
         let start = Instant::now();
         let (n, ne) = (sys.n, sys.elements.len());
         let mut cache = Cache::default();
-        // fixed-step piecewise-linear Newmark: two n × n products per step (schemes::Premultiplied)
-        cache.use_premultiplied(sys, settings.scheme == MarchScheme::PiecewiseLinear);
+        // piecewise-linear Newmark: two n × n products per step (schemes::Premultiplied), per
+        // step size (the adaptive steps share a few rungs of the ladder, adaptive::ladder_step)
+        cache.use_premultiplied(
+            sys,
+            matches!(
+                settings.scheme,
+                MarchScheme::PiecewiseLinear | MarchScheme::AdaptivePiecewiseLinear
+            ),
+        );
         let period = settings.period();
         let dt_max = period / settings.steps_per_period as f64;
         let cur = initial_state(sys, settings, &mut cache)?;
@@ -326,11 +334,11 @@ impl<'a> Marcher<'a> {
             excitation: Excitation::at(sys, settings.omega, 0.0, settings.dynamic()),
             table: StepTable::default(),
             tolerance: settings.tolerance * sys.displacement_scale,
-            dt_max,
             dt_stick: dt_max,
-            adaptive_dt: AdaptiveSteps::default(),
+            adaptive_dt: None,
             codes: Vec::with_capacity(ne),
             history: MarchHistory::default(),
+            extremes: Extremes::new(n),
             summaries: Vec::with_capacity(settings.periods),
             steady_period: None,
             rejected: 0,
@@ -341,8 +349,10 @@ impl<'a> Marcher<'a> {
         };
         let steps_per_period = if settings.adaptive() {
             // the stiffest state (full stick) sets the shortest adaptive step (paper §4.2)
-            let dt = m.step_for(&sys.stick_states());
+            let steps = AdaptiveSteps::new(sys, settings.step_ratio, dt_max);
+            let dt = steps.stick();
             m.dt_stick = dt;
+            m.adaptive_dt = Some(steps);
             (1.25 * period / dt).ceil() as usize + 2
         } else {
             let dt = fixed_step(sys, settings, dt_max)?;
@@ -367,21 +377,6 @@ impl<'a> Marcher<'a> {
         m.prev_q = m.cur.kin.q.clone();
         m.prev_v = m.cur.kin.v.clone();
         Ok(m)
-    }
-
-    /// The adaptive step of the contact `states`: min(r·𝕋(states), largest step) (paper §4.2,
-    /// eq. 8), computed once per state combination.
-    fn step_for(&mut self, states: &[ContactState]) -> f64 {
-        self.codes.clear();
-        self.codes.extend(states.iter().map(|s| s.code()));
-        adaptive_step(
-            &mut self.adaptive_dt,
-            self.sys,
-            self.settings,
-            self.dt_max,
-            &self.codes,
-            states.iter().copied(),
-        )
     }
 
     /// Step-matrix factorisations made so far (a state or step size met for the first time).
@@ -425,16 +420,9 @@ impl<'a> Marcher<'a> {
         } else {
             while t_end - self.t > 1e-9 * period {
                 let remaining = t_end - self.t;
-                let states = self.cur.samples.iter().map(|x| x.state);
+                let steps = self.adaptive_dt.as_mut().expect("adaptive steps set up");
                 state_codes_into(&self.cur.samples, &mut self.codes);
-                let mut dt = adaptive_step(
-                    &mut self.adaptive_dt,
-                    sys,
-                    s,
-                    self.dt_max,
-                    &self.codes,
-                    states,
-                );
+                let mut dt = steps.step(sys, &self.codes, &self.cur.samples);
                 // the step closing the period (shortened to its end) is a one-off size
                 let end_time = |dt: f64, t: f64| {
                     if dt > remaining * (1.0 - 1e-9) {
@@ -459,15 +447,8 @@ impl<'a> Marcher<'a> {
                 // paper §4.2: re-run with the smaller step the new state asks for
                 for _ in 0..8 {
                     state_codes_into(&self.next.samples, &mut self.codes);
-                    let states = self.next.samples.iter().map(|x| x.state);
-                    let dt_new = adaptive_step(
-                        &mut self.adaptive_dt,
-                        sys,
-                        s,
-                        self.dt_max,
-                        &self.codes,
-                        states,
-                    );
+                    let steps = self.adaptive_dt.as_mut().expect("adaptive steps set up");
+                    let dt_new = steps.step(sys, &self.codes, &self.next.samples);
                     if dt_new >= dt * (1.0 - 1e-12) {
                         break;
                     }
@@ -492,6 +473,7 @@ impl<'a> Marcher<'a> {
         let summary = periodic::summarize(
             &self.history,
             sys,
+            &mut self.extremes,
             s.omega,
             first_index,
             end_index,
@@ -652,45 +634,6 @@ fn context<'b>(
 /// State codes of `samples` into `out`.
 fn state_codes_into(samples: &[LawSample], out: &mut Vec<u8>) {
     schemes::state_codes(samples, out);
-}
-
-/// The adaptive steps met so far, per state combination (codes), with the last one used checked
-/// first without hashing (most steps keep the previous step's states).
-#[derive(Default)]
-struct AdaptiveSteps {
-    map: HashMap<Vec<u8>, f64>,
-    last: Vec<u8>,
-    last_dt: f64,
-}
-
-/// The adaptive step of the state with `codes` (states `states`), from `cache` or computed:
-/// min(r·𝕋(states), largest step) (paper §4.2, eq. 8).
-fn adaptive_step(
-    cache: &mut AdaptiveSteps,
-    sys: &MarchSystem,
-    s: &MarchSettings,
-    dt_max: f64,
-    codes: &[u8],
-    states: impl Iterator<Item = ContactState>,
-) -> f64 {
-    if !cache.last.is_empty() && cache.last.iter().eq(codes.iter()) {
-        return cache.last_dt;
-    }
-    let dt = match cache.map.get(codes) {
-        Some(&dt) => dt,
-        None => {
-            let states: Vec<ContactState> = states.collect();
-            let dt = sys
-                .shortest_period(&states)
-                .map_or(dt_max, |t| (s.step_ratio * t).min(dt_max));
-            cache.map.insert(codes.to_vec(), dt);
-            dt
-        }
-    };
-    cache.last.clear();
-    cache.last.extend_from_slice(codes);
-    cache.last_dt = dt;
-    dt
 }
 
 /// Marches `sys` with `settings`: [`Marcher::march_period`] for each of the settings' periods,

@@ -15,7 +15,8 @@
 //! | [`system`] | the marched model (dense M, C, K, forces, elements), shortest period (eq. 8) |
 //! | [`schemes`] | one step of each scheme |
 //! | [`lowrank`] | a state's step matrix as a low-rank change of the all-stick one |
-//! | [`integrate`] | the time loop, adaptive step, records, counts |
+//! | [`adaptive`] | the adaptive step (eq. 8): the states' shortest periods, the step ladder |
+//! | [`integrate`] | the time loop, records, counts |
 //! | [`periodic`] | steady-state detection and harmonics of the last period |
 //! | [`dense`] | small dense linear algebra |
 //! | [`obstacle`] | rigid obstacles with unilateral contact, the nonsmooth (thermo-mechanical) model, records |
@@ -27,6 +28,7 @@
 //! The march of a case file (a `[damper]`, a model on matrix rows, a reduced sector) is built by
 //! [`crate::problem::march_case`].
 
+pub mod adaptive;
 pub mod carpenter;
 pub mod dense;
 pub mod element;

@@ -10,11 +10,52 @@
 use super::integrate::{MarchHistory, PeriodSummary};
 use super::system::MarchSystem;
 
+/// The running extremes of every DOF over a period's records (m), the scratch of [`summarize`],
+/// sized once for the model so that a period's summary allocates nothing.
+#[derive(Clone, Debug)]
+pub struct Extremes {
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+}
+
+impl Extremes {
+    /// For `n` DOF.
+    pub fn new(n: usize) -> Self {
+        Extremes {
+            lo: vec![0.0; n],
+            hi: vec![0.0; n],
+        }
+    }
+
+    /// The largest half peak-to-peak displacement of a DOF over the instants `first..=last` of
+    /// `h` (m), read instant by instant (each a run of n values; read DOF by DOF, a sector's
+    /// period of records cost a cache miss per value).
+    fn amplitude(&mut self, h: &MarchHistory, first: usize, last: usize) -> f64 {
+        let n = self.lo.len();
+        self.lo.copy_from_slice(&h.q[first * n..(first + 1) * n]);
+        self.hi.copy_from_slice(&self.lo);
+        for k in first + 1..=last {
+            let row = &h.q[k * n..(k + 1) * n];
+            for ((lo, hi), &x) in self.lo.iter_mut().zip(&mut self.hi).zip(row) {
+                *lo = lo.min(x);
+                *hi = hi.max(x);
+            }
+        }
+        self.lo
+            .iter()
+            .zip(&self.hi)
+            .fold(0.0, |a, (lo, hi)| a.max(0.5 * (hi - lo)))
+    }
+}
+
 /// The summary of the period recorded at history indices `first..=last` (`first` is the previous
-/// period's end). `prev_end` is (q, q̇) at `first`; `compare` is false for the first period.
+/// period's end; `extremes` the scratch of its amplitude). `prev_end` is (q, q̇) at `first`;
+/// `compare` is false for the first period.
+#[allow(clippy::too_many_arguments)]
 pub fn summarize(
     h: &MarchHistory,
     sys: &MarchSystem,
+    extremes: &mut Extremes,
     omega: f64,
     first: usize,
     last: usize,
@@ -23,15 +64,7 @@ pub fn summarize(
 ) -> PeriodSummary {
     let n = sys.n;
     let ne = sys.elements.len();
-    let mut amp: f64 = 0.0;
-    for d in 0..n {
-        let (lo, hi) = (first..=last)
-            .map(|k| h.q[k * n + d])
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
-                (lo.min(x), hi.max(x))
-            });
-        amp = amp.max(0.5 * (hi - lo));
-    }
+    let amp = extremes.amplitude(h, first, last);
     let amp = if amp > 0.0 {
         amp
     } else {
@@ -88,21 +121,26 @@ pub fn harmonics(
     };
     let mut wc = vec![0.0; last + 1 - first];
     let mut ws = vec![0.0; last + 1 - first];
+    // row by row (each instant's n DOF in one run), every DOF's sums in the order of the instants
+    let (mut re, mut im) = (vec![0.0; n_dof], vec![0.0; n_dof]);
     for m in 0..=harmonics {
         for (j, k) in (first..=last).enumerate() {
             let (s, c) = (m as f64 * omega * h.time[k]).sin_cos();
             let w = weight(k);
             (wc[j], ws[j]) = (w * c, -w * s);
         }
-        let scale = if m == 0 { 1.0 } else { 2.0 } / span;
-        for (d, row) in out.iter_mut().enumerate() {
-            let (mut re, mut im) = (0.0, 0.0);
-            for (j, k) in (first..=last).enumerate() {
-                let q = h.q[k * n_dof + d];
-                re += wc[j] * q;
-                im += ws[j] * q;
+        re.iter_mut().for_each(|x| *x = 0.0);
+        im.iter_mut().for_each(|x| *x = 0.0);
+        for (j, k) in (first..=last).enumerate() {
+            let row = &h.q[k * n_dof..(k + 1) * n_dof];
+            for ((r, i), &q) in re.iter_mut().zip(&mut im).zip(row) {
+                *r += wc[j] * q;
+                *i += ws[j] * q;
             }
-            row[m] = (re * scale, im * scale);
+        }
+        let scale = if m == 0 { 1.0 } else { 2.0 } / span;
+        for ((row, r), i) in out.iter_mut().zip(&re).zip(&im) {
+            row[m] = (r * scale, i * scale);
         }
     }
     out

@@ -224,10 +224,10 @@ impl Workspace {
 pub const MAX_CACHED_BYTES: usize = 256 << 20;
 
 /// Most memory (bytes) the matrices and factors of all the step sizes together may take: the
-/// adaptive step gives each contact-state combination its own size (paper §4.2, eq. 8), and a
-/// reduced sector meets hundreds of combinations, each with n × n matrices (0.67 MB at n = 289).
-/// Beyond this every step size but the one being entered is dropped and rebuilt on its next use
-/// (the same matrices: the results do not change).
+/// adaptive step (paper §4.2, eq. 8) takes a few sizes of a ladder ([`super::adaptive`]), each
+/// with n × n matrices (0.67 MB at n = 289) and the factors of its states. Beyond this every step
+/// size but the one being entered is dropped and rebuilt on its next use (the same matrices: the
+/// results do not change).
 pub const MAX_CACHED_TOTAL_BYTES: usize = 1 << 30;
 
 /// Most f64 entries of a low-rank factor kept per state (4 MiB): larger ones (a travelling wave's
