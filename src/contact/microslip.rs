@@ -494,6 +494,7 @@ impl Motion {
 
     /// The slider position w (m) at the instant `a` in the state `kind`: the stick slider, the
     /// slider a slip drags (w = u ∓ μ n/k_t) or, separated, u.
+    #[inline(always)]
     fn slider_in(&self, kind: PhaseKind, a: At) -> f64 {
         match kind {
             PhaseKind::Stick { slider, .. } => slider,
@@ -998,6 +999,7 @@ fn same_state(a: &PhaseKind, b: &PhaseKind) -> bool {
 /// ∂w/∂(U0, U1, U2, V0, V1, V2, n0) of a stick phase's slider in the form every origin shares,
 /// ∂w = e·∂U + r (k_n e·∂V + ∂n0), returned as (e, r) (r in m/N); `at` is the instant the slider
 /// was set (the start of the stick phase). A carried slider has e = 0 and r = 0.
+#[inline(always)]
 fn slider_derivative(mo: &Motion, origin: SliderOrigin, at: At) -> ([f64; 3], f64) {
     let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
     // w = u(τ) − s μ (n0 + k_n v(τ))/k_t at a fixed τ (or at an extremum of g or h, where the
@@ -1088,7 +1090,7 @@ struct PhaseSums {
 
 impl PhaseSums {
     /// Adds one phase of the cycle (with its slider's derivative if `jacobian`).
-    #[inline]
+    #[inline(always)]
     fn add(&mut self, mo: &Motion, ph: &Phase, jacobian: bool) {
         match ph.kind {
             PhaseKind::Separation => self.separates = true,
@@ -1216,6 +1218,7 @@ fn harmonics(
 ///   slip until τ_P + 2π (eqs 8, 21). After the end of a slip the point cannot slip the same way
 ///   again before slipping the other way (g ≤ g(τ_P) = c_P after τ_P), so no other sequence
 ///   exists; the two arccosines depend on the amplitudes only, not on a previous event.
+#[inline(always)]
 fn closed_form(
     mo: &Motion,
     slider: f64,
@@ -1393,6 +1396,7 @@ fn window_event(mo: &Motion, kind: PhaseKind, start: At) -> Option<(f64, At, Pha
 /// earliest of up to three candidate events a phase) and are integrated by the same
 /// [`PhaseSums`] into `out`. False where the march is needed: no separation, a degenerate
 /// sinusoid (|G| = 0 or |H| = 0, k_t = 0), or more phases than a window holds.
+#[inline(always)]
 fn separation_form(mo: &Motion, jac: Option<&mut PointJacobian>, out: &mut Harmonics) -> bool {
     let jacobian = jac.is_some();
     let Window::Part {
@@ -1474,9 +1478,7 @@ pub fn evaluate(
     let mut cycle = Cycle::empty();
     let mut j: PointJacobian = [[0.0; 7]; 6];
     let jac = jacobian.then_some(&mut j);
-    let (r, regime) = harmonics(&Motion::new(p, u, v), slider, jac, |ph| {
-        cycle.push(*ph)
-    })?;
+    let (r, regime) = harmonics(&Motion::new(p, u, v), slider, jac, |ph| cycle.push(*ph))?;
     cycle.regime = regime;
     Ok(PointResult {
         friction: r.friction,
