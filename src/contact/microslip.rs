@@ -494,7 +494,6 @@ impl Motion {
 
     /// The slider position w (m) at the instant `a` in the state `kind`: the stick slider, the
     /// slider a slip drags (w = u ∓ μ n/k_t) or, separated, u.
-    #[inline(always)]
     fn slider_in(&self, kind: PhaseKind, a: At) -> f64 {
         match kind {
             PhaseKind::Stick { slider, .. } => slider,
@@ -999,7 +998,6 @@ fn same_state(a: &PhaseKind, b: &PhaseKind) -> bool {
 /// ∂w/∂(U0, U1, U2, V0, V1, V2, n0) of a stick phase's slider in the form every origin shares,
 /// ∂w = e·∂U + r (k_n e·∂V + ∂n0), returned as (e, r) (r in m/N); `at` is the instant the slider
 /// was set (the start of the stick phase). A carried slider has e = 0 and r = 0.
-#[inline(always)]
 fn slider_derivative(mo: &Motion, origin: SliderOrigin, at: At) -> ([f64; 3], f64) {
     let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
     // w = u(τ) − s μ (n0 + k_n v(τ))/k_t at a fixed τ (or at an extremum of g or h, where the
@@ -1090,7 +1088,7 @@ struct PhaseSums {
 
 impl PhaseSums {
     /// Adds one phase of the cycle (with its slider's derivative if `jacobian`).
-    #[inline(always)]
+    #[inline]
     fn add(&mut self, mo: &Motion, ph: &Phase, jacobian: bool) {
         match ph.kind {
             PhaseKind::Separation => self.separates = true,
@@ -1218,7 +1216,6 @@ fn harmonics(
 ///   slip until τ_P + 2π (eqs 8, 21). After the end of a slip the point cannot slip the same way
 ///   again before slipping the other way (g ≤ g(τ_P) = c_P after τ_P), so no other sequence
 ///   exists; the two arccosines depend on the amplitudes only, not on a previous event.
-#[inline(always)]
 fn closed_form(
     mo: &Motion,
     slider: f64,
@@ -1288,12 +1285,10 @@ fn closed_form(
     ];
     // the state at τ ≡ 0: the first phase that ends at or after it (as in `harmonics`)
     let zero = p.t + wrap(-p.t);
-    let mut at_zero = PhaseKind::PositiveSlip;
-    for ph in phases.iter().rev() {
-        if ph.end >= zero {
-            at_zero = ph.kind;
-        }
-    }
+    let at_zero = phases
+        .iter()
+        .find(|ph| ph.end >= zero)
+        .map_or(PhaseKind::PositiveSlip, |ph| ph.kind);
     for ph in &phases {
         sums.add(mo, ph, jac.is_some());
     }
@@ -1396,7 +1391,6 @@ fn window_event(mo: &Motion, kind: PhaseKind, start: At) -> Option<(f64, At, Pha
 /// earliest of up to three candidate events a phase) and are integrated by the same
 /// [`PhaseSums`] into `out`. False where the march is needed: no separation, a degenerate
 /// sinusoid (|G| = 0 or |H| = 0, k_t = 0), or more phases than a window holds.
-#[inline(always)]
 fn separation_form(mo: &Motion, jac: Option<&mut PointJacobian>, out: &mut Harmonics) -> bool {
     let jacobian = jac.is_some();
     let Window::Part {
