@@ -814,8 +814,14 @@ impl PhaseIntegrals {
     #[inline]
     fn of(ph: &Phase) -> Self {
         let [sa, ca, sb, cb] = ph.sc;
+        PhaseIntegrals::between(ph.start, [sa, ca], ph.end, [sb, cb])
+    }
+
+    /// The five numbers of the phase [a, b] (rad) from sin and cos of its ends, `[sin, cos]`.
+    #[inline]
+    fn between(a: f64, [sa, ca]: [f64; 2], b: f64, [sb, cb]: [f64; 2]) -> Self {
         PhaseIntegrals([
-            ph.end - ph.start,
+            b - a,
             sb - sa,
             cb - ca,
             sb * cb - sa * ca,
@@ -1087,6 +1093,47 @@ struct PhaseSums {
 }
 
 impl PhaseSums {
+    /// The sums of the four phases of a stick–slip cycle in contact ([`closed_form`]): the
+    /// integrals of stick after positive slip, negative slip, stick after negative slip and
+    /// positive slip, in this order, and the two sticks' sliders w (m) with the instants the
+    /// slips left them, written out as [`PhaseSums::add`] would sum them phase by phase (the
+    /// same operations in the same order, without the dispatch on each phase's state).
+    #[inline]
+    fn stick_slip(
+        mo: &Motion,
+        [i_p, i_neg, i_n, i_pos]: [PhaseIntegrals; 4],
+        [(w_p, at_p), (w_n, at_n)]: [(f64, At); 2],
+        jacobian: bool,
+    ) -> PhaseSums {
+        let (a, b) = (&i_p.0, &i_n.0);
+        let stick = PhaseIntegrals(std::array::from_fn(|k| a[k] + b[k]));
+        let w_int = std::array::from_fn(|k| w_p * a[k] + w_n * b[k]);
+        let mut w_u = [[0.0; 3]; 3];
+        let mut w_v = [[0.0; 3]; 3];
+        if jacobian {
+            // ∂w = e·∂U + r (k_n e·∂V + ∂n0) with r = ∓μ/k_t after ±slip ([`slider_derivative`])
+            let (r_p, r_n) = (-mo.p.mu / mo.p.kt, mo.p.mu / mo.p.kt);
+            let (m_p, m_n) = (i_p.first_column(), i_n.first_column());
+            let (e_p, e_n) = (at_p.basis(), at_n.basis());
+            for k in 0..3 {
+                for l in 0..3 {
+                    let (t_p, t_n) = (m_p[k] * e_p[l], m_n[k] * e_n[l]);
+                    w_u[k][l] = t_p + t_n;
+                    w_v[k][l] = r_p * t_p + r_n * t_n;
+                }
+            }
+        }
+        PhaseSums {
+            stick,
+            positive: i_pos,
+            negative: i_neg,
+            w_int,
+            w_u,
+            w_v,
+            separates: false,
+        }
+    }
+
     /// Adds one phase of the cycle (with its slider's derivative if `jacobian`).
     #[inline]
     fn add(&mut self, mo: &Motion, ph: &Phase, jacobian: bool) {
@@ -1227,7 +1274,6 @@ fn closed_form(
     }
     let mun = mo.p.mu * mo.n0e;
     let (g, h) = (&mo.g, &mo.h);
-    let mut sums = PhaseSums::default();
     if !(g.amp > 0.0 && h.amp > 0.0 && 2.0 * mun < (g.amp + h.amp) * (1.0 - 1e-9)) {
         // The march of `build` from τ = 0: stuck over the whole cycle iff it starts in stick
         // with the caller's slider and neither slip condition is reached.
@@ -1269,29 +1315,35 @@ fn closed_form(
     if !(t3 < t4 && (t3 + ahead(p.t, stp.t) - t4).abs() < 1e-9) {
         return false;
     }
-    let after_p = PhaseKind::Stick {
-        slider: mo.slider_in(PhaseKind::PositiveSlip, p),
-        origin: SliderOrigin::AfterPositiveSlip(p.t),
-    };
-    let after_n = PhaseKind::Stick {
-        slider: mo.slider_in(PhaseKind::NegativeSlip, n),
-        origin: SliderOrigin::AfterNegativeSlip(n.t),
-    };
-    let phases = [
-        Phase::new(after_p, p, stn.labelled(t1)),
-        Phase::new(PhaseKind::NegativeSlip, stn.labelled(t1), n.labelled(t2)),
-        Phase::new(after_n, n.labelled(t2), stp.labelled(t3)),
-        Phase::new(PhaseKind::PositiveSlip, stp.labelled(t3), p.labelled(t4)),
-    ];
+    let w_p = mo.slider_in(PhaseKind::PositiveSlip, p);
+    let w_n = mo.slider_in(PhaseKind::NegativeSlip, n);
     // the state at τ ≡ 0: the first phase that ends at or after it (as in `harmonics`)
     let zero = p.t + wrap(-p.t);
-    let at_zero = phases
-        .iter()
-        .find(|ph| ph.end >= zero)
-        .map_or(PhaseKind::PositiveSlip, |ph| ph.kind);
-    for ph in &phases {
-        sums.add(mo, ph, jac.is_some());
-    }
+    let at_zero = if t1 >= zero {
+        PhaseKind::Stick {
+            slider: w_p,
+            origin: SliderOrigin::AfterPositiveSlip(p.t),
+        }
+    } else if t2 >= zero {
+        PhaseKind::NegativeSlip
+    } else if t3 >= zero {
+        PhaseKind::Stick {
+            slider: w_n,
+            origin: SliderOrigin::AfterNegativeSlip(n.t),
+        }
+    } else {
+        PhaseKind::PositiveSlip
+    };
+    let integrals = |a: At, ta: f64, b: At, tb: f64| {
+        PhaseIntegrals::between(ta, [a.s, a.c], tb, [b.s, b.c])
+    };
+    let phases = [
+        integrals(p, p.t, stn, t1),
+        integrals(stn, t1, n, t2),
+        integrals(n, t2, stp, t3),
+        integrals(stp, t3, p, t4),
+    ];
+    let sums = PhaseSums::stick_slip(mo, phases, [(w_p, p), (w_n, n)], jac.is_some());
     sums.finish(mo, at_zero, jac, out);
     true
 }
