@@ -1334,9 +1334,8 @@ fn closed_form(
     } else {
         PhaseKind::PositiveSlip
     };
-    let integrals = |a: At, ta: f64, b: At, tb: f64| {
-        PhaseIntegrals::between(ta, [a.s, a.c], tb, [b.s, b.c])
-    };
+    let integrals =
+        |a: At, ta: f64, b: At, tb: f64| PhaseIntegrals::between(ta, [a.s, a.c], tb, [b.s, b.c]);
     let phases = [
         integrals(p, p.t, stn, t1),
         integrals(stn, t1, n, t2),
