@@ -1,8 +1,9 @@
 //! The full robustness corpus of the harmonic balance continuation: 320 generated friction cases
 //! (`tests/corpus`: chains of 1–6 masses with Jenkins elements, tangential–normal pairs that
 //! separate; H ∈ {1, 3, 5, 7, 15}, N_t from 2H + 2 to 4096, excitation 0.01–100 × the slip
-//! force, damping 0.1–5 %, steps 0.005–0.08 rad/s). Prints one line per case and the success
-//! rate, points, Newton iterations and time per curve.
+//! force, damping 0.1–5 %, steps 0.005–0.08 rad/s). Prints one line per case (with its jumps and
+//! the longest stretch of frequency a jump left untraced) and the success rate, points, Newton
+//! iterations and time per curve.
 //!
 //! `cargo bench --bench robustness_corpus` (add `-- N` for the first N cases, `-- only=3,17,188`
 //! for chosen cases, `-- analytic` to evaluate every friction element by the exact
@@ -39,13 +40,14 @@ fn main() {
         let case = corpus::evaluated(corpus::case(i, 4096), evaluation);
         let o = corpus::run(&case);
         println!(
-            "{:<100} {:>5} pts {:>6} its {:>8.3} s  worst residual {:.1e}  jumps {}  {}",
+            "{:<100} {:>5} pts {:>6} its {:>8.3} s  worst residual {:.1e}  jumps {} (largest gap {:.3} rad/s)  {}",
             case.label,
             o.points,
             o.iterations,
             o.seconds,
             o.worst_residual,
             o.jumps,
+            o.largest_gap,
             if o.reached_end { "end" } else { &o.end }
         );
         reached += usize::from(o.reached_end);

@@ -10,7 +10,10 @@ use nlrom::continuation::{trace, ContinuationOptions, PathEnd, PathPoint};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::frf::frequency_response;
 use nlrom::hbm::response::output_response;
-use nlrom::hbm::{FrequencyPath, HbmSystem, LevelPath, LinearModel, ResponseOptions};
+use nlrom::hbm::{
+    FixedFrequencyParameter, FixedFrequencyPath, FrequencyPath, HbmSystem, LinearModel,
+    ResponseOptions,
+};
 use nlrom::nonlinear::{Linearization, ParameterSystem};
 use nlrom::{Error, Result};
 use support::hbm::{chain4, PolynomialSprings};
@@ -229,9 +232,10 @@ fn level_continuation_of_a_linear_system_is_proportional() {
     };
     let system = HbmSystem::new(HarmonicLayout::new(2, 8).unwrap(), &model, &springs).unwrap();
     let omega = 0.77;
-    let level_path = LevelPath {
+    let level_path = FixedFrequencyPath {
         system: &system,
         omega,
+        parameter: FixedFrequencyParameter::Level,
     };
     let path = trace(
         &level_path,

@@ -363,7 +363,7 @@ fn a_sweep_without_a_start_point_starts_further_on() {
 /// The corpus case's elements with k_t, k_n and n0 multiplied by `s`: for the piecewise-linear
 /// Jenkins law with normal load variation this is s × the element's force (the slip condition
 /// |k_t (u − w)| ≤ μ (n0 + k_n v)⁺ is unchanged), built independently of
-/// [`nlrom::hbm::ForceScalePath`].
+/// [`nlrom::hbm::FixedFrequencyParameter::ForceScale`].
 fn scaled_elements(case: &corpus::Case, s: f64) -> nlrom::contact::grounded::DofElements {
     let elements = case
         .force
@@ -398,9 +398,9 @@ fn solve_scaled(case: &corpus::Case, s: f64, omega: f64, x0: &[f64]) -> Vec<f64>
 }
 
 /// The homotopy r(Q, s) = D̄ Q − F̄_e + s F_nl(Q) of the start procedure
-/// ([`nlrom::hbm::ForceScalePath`]) equals the residual and Jacobian of the system whose
-/// elements are scaled by s ([`scaled_elements`]) to 1e-12, and its ∂r/∂s equals the central
-/// difference in s to 1e-9 (the residual is linear in s). Corpus case #259 (a separating pair),
+/// ([`nlrom::hbm::FixedFrequencyParameter::ForceScale`]) equals the residual and Jacobian of the
+/// system whose elements are scaled by s ([`scaled_elements`]) to 1e-12, and its ∂r/∂s equals the
+/// central difference in s to 1e-9 (the residual is linear in s). Corpus case #259 (a separating pair),
 /// at s = 0.37, ω = 2.34 rad/s, at the linear response without the element.
 #[test]
 fn the_force_scale_homotopy_is_the_scaled_force() {
@@ -409,9 +409,10 @@ fn the_force_scale_homotopy_is_the_scaled_force() {
     let omega = 2.34;
     let system =
         nlrom::hbm::HbmSystem::new(case.layout, &case.model, &case.force).expect("valid system");
-    let path = nlrom::hbm::ForceScalePath {
+    let path = nlrom::hbm::FixedFrequencyPath {
         system: &system,
         omega,
+        parameter: nlrom::hbm::FixedFrequencyParameter::ForceScale,
     };
     let dim = path.dim();
     // a state with slip and separation: the linear response without the element

@@ -716,7 +716,8 @@ pub struct WeightedDofs {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct HarmonicBalance {
-    /// Number of harmonics H ≥ 1 (the forcing is on harmonic 1).
+    /// Number of harmonics H ≥ 1 (the forcing is on harmonic 1); 1 when the key is omitted.
+    #[serde(default = "one_harmonic")]
     pub harmonics: usize,
     /// Time samples per period for the AFT, ≥ 2H+2; `None`: see [`HarmonicBalance::samples`].
     #[serde(default)]
@@ -724,6 +725,10 @@ pub struct HarmonicBalance {
     /// The linear solver of the Newton steps and continuation tangents (`linear_solver`).
     #[serde(default)]
     pub linear_solver: LinearSolverKey,
+    /// On a model on matrix rows: solve on the modal coordinates of its m lowest modes
+    /// (`modes`, [`crate::problem::modal_case`]); `None`: on the physical rows.
+    #[serde(default)]
+    pub modes: Option<usize>,
 }
 
 /// `harmonic_balance.linear_solver`: how the Newton steps and tangents are solved
@@ -742,12 +747,18 @@ pub enum LinearSolverKey {
     Structured,
 }
 
+/// The default `harmonic_balance.harmonics`: H = 1.
+fn one_harmonic() -> usize {
+    1
+}
+
 impl Default for HarmonicBalance {
     fn default() -> Self {
         HarmonicBalance {
             harmonics: 1,
             time_samples: None,
             linear_solver: LinearSolverKey::Auto,
+            modes: None,
         }
     }
 }

@@ -571,6 +571,14 @@ impl Case {
         self.require(h >= 1, "harmonic_balance.harmonics", || {
             "needs at least 1 harmonic (the forcing is on harmonic 1)"
         })?;
+        if let Some(m) = hb.modes {
+            self.require(m >= 1, "harmonic_balance.modes", || {
+                "needs at least 1 mode (or omit it to solve on the physical rows)"
+            })?;
+            self.require(self.kind() == CaseKind::Matrix, "harmonic_balance.modes", || {
+                "modal coordinates are built for models on matrix rows ([[element]] or [[strip]] friction); a sector with [[contact]] interfaces or a [damper] is solved on its own coordinates: remove `modes`"
+            })?;
+        }
         let n = hb.samples();
         let default = HarmonicBalance {
             harmonics: h,

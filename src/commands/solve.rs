@@ -35,7 +35,7 @@ use crate::continuation::PathEnd;
 use crate::error::{Error, Result};
 use crate::harmonics::{HarmonicForce, HarmonicLayout};
 use crate::hbm::frf::{frequency_response, land_at};
-use crate::hbm::{HbmSystem, ResponseOptions};
+use crate::hbm::{HbmSystem, OutputResponse, ResponseOptions};
 use crate::interface::{build_interfaces, ContactInterface};
 use crate::mesh::Mesh;
 use crate::model::{self, StructuralModel};
@@ -46,6 +46,7 @@ use crate::output::{
 };
 use crate::problem::matrix_case::{matrix_elements, matrix_setup, strip_points};
 use crate::problem::matrix_rom::reduced_matrix_model;
+use crate::problem::modal_case::modal_setup;
 use crate::problem::rom_store::{create_parent, sector_rom, RomOrigin, RomPolicy};
 use crate::problem::sector::SectorProblem;
 use crate::problem::settings::case_continuation;
@@ -256,6 +257,11 @@ fn solve_matrix(
     Ok((curves, Vec::new()))
 }
 
+/// The response at the output DOFs from the response of the solved coordinates (the modal
+/// coordinates of [`modal_curve`] → the physical output rows), with the response options of the
+/// curve.
+type OutputMap<'a> = dyn Fn(&OutputResponse, &ResponseOptions) -> Result<OutputResponse> + 'a;
+
 /// The curve of one sweep point of a matrix case.
 fn matrix_curve(
     case: &Case,
@@ -263,8 +269,11 @@ fn matrix_curve(
     stability: bool,
     rep: &Reporter,
 ) -> Result<Curve> {
+    if let Some(modes) = case.harmonic_balance.modes {
+        return modal_curve(case, model, modes, stability, rep);
+    }
     let setup = matrix_setup(case, model)?;
-    let elements = matrix_elements(case, model, &setup)?;
+    let elements = matrix_elements(case, model, &setup.nonlinear_rows)?;
     let layout = HarmonicLayout::new(
         case.harmonic_balance.harmonics,
         case.harmonic_balance.samples(),
@@ -295,7 +304,55 @@ fn matrix_curve(
         maps: case.strip.iter().any(|s| s.map.is_some()).then_some(&maps),
         map_hz,
     };
-    trace_curve(case, &system, dofs, &probe, stability, rep)
+    trace_curve(case, &system, dofs, &probe, None, stability, rep)
+}
+
+/// The curve of one sweep point of a matrix case on the modal coordinates of its `modes` lowest
+/// modes ([`modal_setup`]): the friction elements projected on the modes, the response at the
+/// output rows Φ_o Q per harmonic.
+fn modal_curve(
+    case: &Case,
+    model: &StructuralModel,
+    modes: usize,
+    stability: bool,
+    rep: &Reporter,
+) -> Result<Curve> {
+    if let Some(s) = case.strip.iter().position(|s| s.map.is_some()) {
+        return Err(Error::input(format!(
+            "{}: key 'strip[{s}].map': the maps are formed on the physical rows, not with `harmonic_balance.modes`; remove one of the two",
+            case.path.display()
+        )));
+    }
+    let setup = modal_setup(case, model, modes)?;
+    let (first, last) = (setup.frequencies_hz[0], setup.frequencies_hz[modes - 1]);
+    rep.detail(&format!(
+        "harmonic balance on {modes} modal coordinates (modes at {first:.6}–{last:.6} Hz) for {} element DOF of {} free DOF",
+        setup.rows.nonlinear_rows.len(),
+        model.free.n_free()
+    ));
+    let elements = matrix_elements(case, model, &setup.rows.nonlinear_rows)?;
+    let layout = HarmonicLayout::new(
+        case.harmonic_balance.harmonics,
+        case.harmonic_balance.samples(),
+    )?;
+    let linear = setup.modal.linear_model(case.harmonic_balance.harmonics)?;
+    let force = setup.modal.project(elements)?;
+    let system = HbmSystem::new(layout, &linear, &force)?;
+    let dofs = setup
+        .rows
+        .output_case_rows
+        .iter()
+        .map(|&r| ResponseDof::Row(r as u64))
+        .collect();
+    let probe = ContactProbe {
+        sizes: Vec::new(),
+        evaluate: &|_: &[f64], _: &_, _| Ok(Vec::new()),
+        maps: None,
+        map_hz: Vec::new(),
+    };
+    let physical =
+        |modal: &OutputResponse, opts: &ResponseOptions| setup.modal.physical_response(modal, opts);
+    trace_curve(case, &system, dofs, &probe, Some(&physical), stability, rep)
 }
 
 /// The maps of the `[[strip]]` entries that ask for one (`map = N_θ`), at the harmonics `q` with
@@ -416,7 +473,7 @@ fn sector_curve(
             component: o.component,
         })
         .collect();
-    let curve = trace_curve(case, &system, dofs, &probe, stability, rep)?;
+    let curve = trace_curve(case, &system, dofs, &probe, None, stability, rep)?;
     Ok((curve, interfaces))
 }
 
@@ -541,6 +598,7 @@ fn trace_curve<F: HarmonicForce>(
     system: &HbmSystem<'_, F>,
     response_dofs: Vec<ResponseDof>,
     contact: &ContactProbe<'_, F::State>,
+    outputs: Option<&OutputMap<'_>>,
     stability: bool,
     rep: &Reporter,
 ) -> Result<Curve> {
@@ -622,10 +680,18 @@ fn trace_curve<F: HarmonicForce>(
             }
             frf.jumps = traced.jumps.iter().map(|j| j.point).collect();
             for p in &traced.points {
+                let mapped;
+                let at_dofs = match outputs {
+                    Some(map) => {
+                        mapped = map(&p.response, &response)?;
+                        &mapped
+                    }
+                    None => &p.response,
+                };
                 frf.points.push(FrfRecord {
                     omega: p.omega,
-                    harmonics: p.response.harmonics.concat(),
-                    peak: p.response.peak.clone(),
+                    harmonics: at_dofs.harmonics.concat(),
+                    peak: at_dofs.peak.clone(),
                     arc_length: p.arc_length,
                     newton_iterations: p.iterations as u64,
                     residual: p.residual,

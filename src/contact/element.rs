@@ -212,8 +212,16 @@ impl Workspace {
     pub(crate) fn analytic_jacobian(&mut self, rows: usize, cols: usize) -> &mut [f64] {
         // Zeroed by one fill (a memset) once the length is set: clearing and resizing writes the
         // zeros one at a time.
+        let jacobian = self.analytic_jacobian_buffer(rows, cols);
+        jacobian.fill(0.0);
+        jacobian
+    }
+
+    /// The local Jacobian's buffer (rows × cols, row-major) as [`Workspace::analytic_jacobian`]
+    /// but not zeroed: it holds the previous evaluation's values, and the caller writes every
+    /// entry.
+    pub(crate) fn analytic_jacobian_buffer(&mut self, rows: usize, cols: usize) -> &mut [f64] {
         self.jacobian.resize(rows * cols, 0.0);
-        self.jacobian.fill(0.0);
         self.jacobian_cols = cols;
         &mut self.jacobian
     }

@@ -364,6 +364,16 @@ impl Arc {
             sb: ((1.0 - r) * (1.0 + r)).sqrt(),
         }
     }
+
+    /// The level −r: arccos(−r) = π − arccos r, the same sin β (no inverse function).
+    #[inline]
+    fn opposite(self) -> Self {
+        Arc {
+            r: -self.r,
+            b: PI - self.b,
+            sb: self.sb,
+        }
+    }
 }
 
 /// When the point is in contact over a cycle.
@@ -426,6 +436,7 @@ fn ahead(target: f64, from: f64) -> f64 {
 }
 
 impl Motion {
+    #[inline(always)]
     fn new(p: &ContactParams, u: [f64; 3], v: [f64; 3]) -> Self {
         let (kt, kn, mu) = (p.kt, p.kn, p.mu);
         let n0e = p.n0 + kn * v[0];
@@ -483,6 +494,7 @@ impl Motion {
 
     /// The slider position w (m) at the instant `a` in the state `kind`: the stick slider, the
     /// slider a slip drags (w = u ∓ μ n/k_t) or, separated, u.
+    #[inline(always)]
     fn slider_in(&self, kind: PhaseKind, a: At) -> f64 {
         match kind {
             PhaseKind::Stick { slider, .. } => slider,
@@ -987,6 +999,7 @@ fn same_state(a: &PhaseKind, b: &PhaseKind) -> bool {
 /// ∂w/∂(U0, U1, U2, V0, V1, V2, n0) of a stick phase's slider in the form every origin shares,
 /// ∂w = e·∂U + r (k_n e·∂V + ∂n0), returned as (e, r) (r in m/N); `at` is the instant the slider
 /// was set (the start of the stick phase). A carried slider has e = 0 and r = 0.
+#[inline(always)]
 fn slider_derivative(mo: &Motion, origin: SliderOrigin, at: At) -> ([f64; 3], f64) {
     let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
     // w = u(τ) − s μ (n0 + k_n v(τ))/k_t at a fixed τ (or at an extremum of g or h, where the
@@ -1019,32 +1032,33 @@ struct Harmonics {
     normal: [f64; 3],
     energy: f64,
     slider: f64,
-    friction_jacobian: [[f64; 7]; 3],
-    normal_jacobian: [[f64; 7]; 3],
 }
 
+/// ∂(F0, Re F1, Im F1, N0, Re N1, Im N1)/∂(U0, U1, U2, V0, V1, V2, n0) of one point: the local
+/// Jacobian in the element's layout for one tangential direction (rows 0–2 friction, 3–5
+/// normal; ∂N/∂U = 0). The evaluations that fill it write every entry.
+type PointJacobian = [[f64; 7]; 6];
+
 impl Harmonics {
-    /// Complete stick with the slider w (m) kept (eq. 19): f = k_t (u − w) and n = n0e + k_n v1
-    /// at every instant, so F = k_t (U0 − w, U1, U2), N = (n0e, k_n V1, k_n V2), no energy, and
-    /// the Jacobian is k_t on (F, U), k_n on (N, V) and 1 on (N0, n0).
-    fn stuck(mo: &Motion, w: f64) -> Harmonics {
+    /// Complete stick with the slider w (m) kept (eq. 19) into `out`: f = k_t (u − w) and
+    /// n = n0e + k_n v1 at every instant, so F = k_t (U0 − w, U1, U2), N = (n0e, k_n V1, k_n V2),
+    /// no energy, and the Jacobian is k_t on (F, U), k_n on (N, V) and 1 on (N0, n0).
+    fn stuck(mo: &Motion, w: f64, jac: Option<&mut PointJacobian>, out: &mut Harmonics) {
         let (kt, kn) = (mo.p.kt, mo.p.kn);
         let u = mo.u;
-        let friction = [kt * (u[0] - w), kt * u[1], kt * u[2]];
-        let mut fj = [[0.0; 7]; 3];
-        let mut nj = [[0.0; 7]; 3];
-        for k in 0..3 {
-            fj[k][k] = kt;
-            nj[k][3 + k] = kn;
-        }
-        nj[0][6] = 1.0;
-        Harmonics {
-            friction,
-            normal: [mo.n0e, mo.nv.x1, mo.nv.x2],
-            energy: PI * (u[1] * friction[2] - u[2] * friction[1]),
-            slider: w,
-            friction_jacobian: fj,
-            normal_jacobian: nj,
+        out.friction = [kt * (u[0] - w), kt * u[1], kt * u[2]];
+        out.normal = [mo.n0e, mo.nv.x1, mo.nv.x2];
+        out.energy = PI * (u[1] * out.friction[2] - u[2] * out.friction[1]);
+        out.slider = w;
+        if let Some(j) = jac {
+            *j = [
+                [kt, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, kt, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, kt, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, kn, 0.0, 0.0, 1.0],
+                [0.0, 0.0, 0.0, 0.0, kn, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, kn, 0.0],
+            ];
         }
     }
 }
@@ -1076,7 +1090,7 @@ struct PhaseSums {
 
 impl PhaseSums {
     /// Adds one phase of the cycle (with its slider's derivative if `jacobian`).
-    #[inline]
+    #[inline(always)]
     fn add(&mut self, mo: &Motion, ph: &Phase, jacobian: bool) {
         match ph.kind {
             PhaseKind::Separation => self.separates = true,
@@ -1108,9 +1122,15 @@ impl PhaseSums {
         }
     }
 
-    /// The harmonic results from the sums into `out` (its Jacobians only if `jacobian`), with
+    /// The harmonic results from the sums into `out` and, if given, the Jacobian into `jac`, with
     /// `at_zero` the state at τ ≡ 0 (mod 2π) for the end slider state.
-    fn finish(&self, mo: &Motion, at_zero: PhaseKind, jacobian: bool, out: &mut Harmonics) {
+    fn finish(
+        &self,
+        mo: &Motion,
+        at_zero: PhaseKind,
+        mut jac: Option<&mut PointJacobian>,
+        out: &mut Harmonics,
+    ) {
         let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
         let u = mo.u;
         let m_stick = self.stick.projection();
@@ -1130,23 +1150,22 @@ impl PhaseSums {
             PhaseIntegrals([self.w_int[0], self.w_int[1], self.w_int[2], 0.0, 0.0]).first_column();
         let cn = [mo.n0e, mo.nv.x1, mo.nv.x2];
         let Harmonics {
-            friction,
-            normal,
-            friction_jacobian: fj,
-            normal_jacobian: nj,
-            ..
+            friction, normal, ..
         } = out;
         for k in 0..3 {
             friction[k] = kt * (dot(m_stick[k], u) - w_col[k]) + mu * dot(m_slip[k], cn);
             normal[k] = dot(m_contact[k], cn);
-            if jacobian {
+            if let Some(j) = jac.as_deref_mut() {
+                let (friction_rows, normal_rows) = j.split_at_mut(3);
+                let (fj, nj) = (&mut friction_rows[k], &mut normal_rows[k]);
                 for l in 0..3 {
-                    fj[k][l] = kt * (m_stick[k][l] - self.w_u[k][l]);
-                    fj[k][3 + l] = kn * (mu * m_slip[k][l] - kt * self.w_v[k][l]);
-                    nj[k][3 + l] = kn * m_contact[k][l];
+                    fj[l] = kt * (m_stick[k][l] - self.w_u[k][l]);
+                    fj[3 + l] = kn * (mu * m_slip[k][l] - kt * self.w_v[k][l]);
+                    nj[l] = 0.0;
+                    nj[3 + l] = kn * m_contact[k][l];
                 }
-                fj[k][6] = mu * m_slip[k][0] - kt * self.w_v[k][0];
-                nj[k][6] = m_contact[k][0];
+                fj[6] = mu * m_slip[k][0] - kt * self.w_v[k][0];
+                nj[6] = m_contact[k][0];
             }
         }
         out.energy = PI * (u[1] * out.friction[2] - u[2] * out.friction[1]);
@@ -1159,9 +1178,10 @@ impl PhaseSums {
 fn harmonics(
     mo: &Motion,
     slider: f64,
-    jacobian: bool,
+    jac: Option<&mut PointJacobian>,
     mut keep: impl FnMut(&Phase) -> bool,
 ) -> Result<(Harmonics, CycleRegime)> {
+    let jacobian = jac.is_some();
     let mut sums = PhaseSums::default();
     // The state at τ ≡ 0 (mod 2π): the first phase that ends at or after it.
     let mut zero = f64::NAN;
@@ -1178,7 +1198,7 @@ fn harmonics(
     })?;
     let at_zero = at_zero.unwrap_or(PhaseKind::Separation);
     let mut out = Harmonics::default();
-    sums.finish(mo, at_zero, jacobian, &mut out);
+    sums.finish(mo, at_zero, jac, &mut out);
     Ok((out, regime))
 }
 
@@ -1198,7 +1218,13 @@ fn harmonics(
 ///   slip until τ_P + 2π (eqs 8, 21). After the end of a slip the point cannot slip the same way
 ///   again before slipping the other way (g ≤ g(τ_P) = c_P after τ_P), so no other sequence
 ///   exists; the two arccosines depend on the amplitudes only, not on a previous event.
-fn closed_form(mo: &Motion, slider: f64, jacobian: bool, out: &mut Harmonics) -> bool {
+#[inline(always)]
+fn closed_form(
+    mo: &Motion,
+    slider: f64,
+    jac: Option<&mut PointJacobian>,
+    out: &mut Harmonics,
+) -> bool {
     if mo.window != Window::Always || mo.p.kt <= 0.0 {
         return false;
     }
@@ -1222,18 +1248,23 @@ fn closed_form(mo: &Motion, slider: f64, jacobian: bool, out: &mut Harmonics) ->
         if positive || negative {
             return false;
         }
-        *out = Harmonics::stuck(mo, w);
+        Harmonics::stuck(mo, w, jac, out);
         return true;
     }
-    if g.x1 == h.x1 && g.x2 == h.x2 {
-        // no normal motion: one sinusoid, one phase angle
+    // c_N/|H| and c_P/|G|
+    let arc_n = Arc::new((g.amp - 2.0 * mun) / h.amp);
+    let arc_p = if g.x1 == h.x1 && g.x2 == h.x2 {
+        // no normal motion: one sinusoid, one phase angle, and c_P/|G| = −c_N/|H|
         h.alpha.set(g.phase());
-    }
+        arc_n.opposite()
+    } else {
+        Arc::new((2.0 * mun - h.amp) / g.amp)
+    };
     let p = g.maximum();
     let p = p.labelled(wrap(p.t));
-    let stn = h.falling(Arc::new((g.amp - 2.0 * mun) / h.amp));
+    let stn = h.falling(arc_n);
     let n = h.minimum();
-    let stp = g.rising(Arc::new((2.0 * mun - h.amp) / g.amp));
+    let stp = g.rising(arc_p);
     let t1 = p.t + ahead(stn.t, p.t);
     let t2 = t1 + ahead(n.t, stn.t);
     let t3 = t2 + ahead(stp.t, n.t);
@@ -1264,9 +1295,9 @@ fn closed_form(mo: &Motion, slider: f64, jacobian: bool, out: &mut Harmonics) ->
         }
     }
     for ph in &phases {
-        sums.add(mo, ph, jacobian);
+        sums.add(mo, ph, jac.is_some());
     }
-    sums.finish(mo, at_zero, jacobian, out);
+    sums.finish(mo, at_zero, jac, out);
     true
 }
 
@@ -1365,7 +1396,9 @@ fn window_event(mo: &Motion, kind: PhaseKind, start: At) -> Option<(f64, At, Pha
 /// earliest of up to three candidate events a phase) and are integrated by the same
 /// [`PhaseSums`] into `out`. False where the march is needed: no separation, a degenerate
 /// sinusoid (|G| = 0 or |H| = 0, k_t = 0), or more phases than a window holds.
-fn separation_form(mo: &Motion, jacobian: bool, out: &mut Harmonics) -> bool {
+#[inline(always)]
+fn separation_form(mo: &Motion, jac: Option<&mut PointJacobian>, out: &mut Harmonics) -> bool {
+    let jacobian = jac.is_some();
     let Window::Part {
         recontact,
         separation,
@@ -1410,7 +1443,7 @@ fn separation_form(mo: &Motion, jacobian: bool, out: &mut Harmonics) -> bool {
                 }
                 let end = recontact.labelled(recontact.t + TAU);
                 add(Phase::new(PhaseKind::Separation, sp1, end));
-                sums.finish(mo, at_zero, jacobian, out);
+                sums.finish(mo, at_zero, jac, out);
                 return true;
             }
         }
@@ -1443,9 +1476,9 @@ pub fn evaluate(
 ) -> Result<PointResult> {
     check_finite(&u, &v, slider)?;
     let mut cycle = Cycle::empty();
-    let (r, regime) = harmonics(&Motion::new(p, u, v), slider, jacobian, |ph| {
-        cycle.push(*ph)
-    })?;
+    let mut j: PointJacobian = [[0.0; 7]; 6];
+    let jac = jacobian.then_some(&mut j);
+    let (r, regime) = harmonics(&Motion::new(p, u, v), slider, jac, |ph| cycle.push(*ph))?;
     cycle.regime = regime;
     Ok(PointResult {
         friction: r.friction,
@@ -1453,8 +1486,8 @@ pub fn evaluate(
         energy: r.energy,
         slider: r.slider,
         cycle,
-        friction_jacobian: jacobian.then_some(r.friction_jacobian),
-        normal_jacobian: jacobian.then_some(r.normal_jacobian),
+        friction_jacobian: jacobian.then_some([j[0], j[1], j[2]]),
+        normal_jacobian: jacobian.then_some([j[3], j[4], j[5]]),
     })
 }
 
@@ -1511,56 +1544,48 @@ pub(crate) fn evaluate_element(
             "evaluation = \"analytic\" is the exact single-harmonic cycle and needs harmonics = 1 (here H = {harmonics_count}); use evaluation = \"aft\" for H > 1"
         )));
     }
+    if let (1, true, Ok(x), Ok(force)) = (
+        element.tangential,
+        element.normal,
+        <&[f64; 6]>::try_from(x),
+        <&mut [f64; 6]>::try_from(&mut *force),
+    ) {
+        return evaluate_one_direction(&element.params, x, slider, force, jacobian, ws);
+    }
     let nt = element.tangential;
-    let nsig = element.signals();
     let v = if element.normal {
         [x[nt * 3], x[nt * 3 + 1], x[nt * 3 + 2]]
     } else {
         [0.0; 3]
     };
-    let cols = nsig * 3 + 1;
+    let cols = element.signals() * 3 + 1;
+    // every entry is written below (`write_jacobian`): no zeroing
     let jac: &mut [f64] = if jacobian {
-        ws.analytic_jacobian(nsig * 3, cols)
+        ws.analytic_jacobian_buffer(element.signals() * 3, cols)
     } else {
         &mut []
     };
     let mut u_all = [[0.0; 3]; 2];
     let slider_in = *slider;
-    let mut energy = 0.0;
     let mut r = Harmonics::default();
+    let mut energy = 0.0;
     for d in 0..nt {
         let u = [x[d * 3], x[d * 3 + 1], x[d * 3 + 2]];
         check_finite(&u, &v, slider[d])?;
         u_all[d] = u;
-        let mo = Motion::new(&element.params, u, v);
-        let exact = match mo.window {
-            Window::Part { .. } => separation_form(&mo, jacobian, &mut r),
-            _ => closed_form(&mo, slider[d], jacobian, &mut r),
-        };
-        if !exact {
-            r = harmonics(&mo, slider[d], jacobian, |_| true)?.0;
+        let p = &element.params;
+        if !jacobian {
+            point(p, u, v, slider[d], None, &mut r)?;
+        } else {
+            let mut j: PointJacobian = [[0.0; 7]; 6];
+            point(p, u, v, slider[d], Some(&mut j), &mut r)?;
+            write_jacobian(element, d, &j, jac, cols);
         }
         slider[d] = r.slider;
         energy += r.energy;
         force[d * 3..d * 3 + 3].copy_from_slice(&r.friction);
         if element.normal && d == 0 {
             force[nt * 3..nt * 3 + 3].copy_from_slice(&r.normal);
-        }
-        if jacobian {
-            let (fj, nj) = (&r.friction_jacobian, &r.normal_jacobian);
-            for k in 0..3 {
-                let row = &mut jac[(d * 3 + k) * cols..(d * 3 + k + 1) * cols];
-                row[d * 3..d * 3 + 3].copy_from_slice(&fj[k][..3]);
-                if element.normal {
-                    row[nt * 3..nt * 3 + 3].copy_from_slice(&fj[k][3..6]);
-                }
-                row[cols - 1] = fj[k][6];
-                if element.normal && d == 0 {
-                    let row = &mut jac[(nt * 3 + k) * cols..(nt * 3 + k + 1) * cols];
-                    row[nt * 3..nt * 3 + 3].copy_from_slice(&nj[k][3..6]);
-                    row[cols - 1] = nj[k][6];
-                }
-            }
         }
     }
     ws.set_analytic(super::element::AnalyticPeriod {
@@ -1572,6 +1597,107 @@ pub(crate) fn evaluate_element(
         energy,
     });
     Ok(())
+}
+
+/// One point's harmonics into `out` and, if given, its Jacobian into `jac`: the closed forms
+/// where they apply ([`separation_form`], [`closed_form`]), else the event march
+/// ([`harmonics`]).
+#[inline(always)]
+fn point(
+    p: &ContactParams,
+    u: [f64; 3],
+    v: [f64; 3],
+    slider: f64,
+    mut jac: Option<&mut PointJacobian>,
+    out: &mut Harmonics,
+) -> Result<()> {
+    let mo = Motion::new(p, u, v);
+    let exact = match mo.window {
+        Window::Part { .. } => separation_form(&mo, jac.as_deref_mut(), out),
+        _ => closed_form(&mo, slider, jac.as_deref_mut(), out),
+    };
+    if !exact {
+        *out = harmonics(&mo, slider, jac, |_| true)?.0;
+    }
+    Ok(())
+}
+
+/// [`evaluate_element`] for one tangential direction and the normal direction, the layout of
+/// one point: x = (U0, U1, U2, V0, V1, V2) (m), forces (F0, Re F1, Im F1, N0, Re N1, Im N1) (N),
+/// and the point's Jacobian ([`PointJacobian`]) written straight into the workspace's buffer.
+fn evaluate_one_direction(
+    p: &ContactParams,
+    x: &[f64; 6],
+    slider: &mut [f64; 2],
+    force: &mut [f64; 6],
+    jacobian: bool,
+    ws: &mut super::element::Workspace,
+) -> Result<()> {
+    let u = [x[0], x[1], x[2]];
+    let v = [x[3], x[4], x[5]];
+    check_finite(&u, &v, slider[0])?;
+    let mut r = Harmonics::default();
+    if jacobian {
+        let buffer = ws.analytic_jacobian_buffer(6, 7);
+        let (rows, _) = buffer.as_chunks_mut::<7>();
+        let Ok(j) = <&mut PointJacobian>::try_from(rows) else {
+            return Err(Error::Compute(
+                "analytic friction point: the Jacobian buffer is not 6 × 7".into(),
+            ));
+        };
+        point(p, u, v, slider[0], Some(j), &mut r)?;
+    } else {
+        point(p, u, v, slider[0], None, &mut r)?;
+    }
+    let slider_in = *slider;
+    slider[0] = r.slider;
+    *force = [
+        r.friction[0],
+        r.friction[1],
+        r.friction[2],
+        r.normal[0],
+        r.normal[1],
+        r.normal[2],
+    ];
+    ws.set_analytic(super::element::AnalyticPeriod {
+        params: *p,
+        tangential: 1,
+        u: [u, [0.0; 3]],
+        v,
+        slider: slider_in,
+        energy: r.energy,
+    });
+    Ok(())
+}
+
+/// Writes the rows of tangential direction `d` (and, for d = 0, the normal rows) of the local
+/// Jacobian `jac` (row-major, `cols` columns: U of each direction, V if the element has a normal
+/// direction, then n0) from the point's Jacobian `j` ([`PointJacobian`]), every entry of
+/// these rows included (the columns of the other direction and ∂N/∂U are zero), so that `jac`
+/// needs no zeroing (the layouts other than [`evaluate_one_direction`]'s).
+fn write_jacobian(
+    element: &super::element::LocalElement,
+    d: usize,
+    j: &PointJacobian,
+    jac: &mut [f64],
+    cols: usize,
+) {
+    let nt = element.tangential;
+    for k in 0..3 {
+        let row = &mut jac[(d * 3 + k) * cols..(d * 3 + k + 1) * cols];
+        row.fill(0.0);
+        row[d * 3..d * 3 + 3].copy_from_slice(&j[k][..3]);
+        if element.normal {
+            row[nt * 3..nt * 3 + 3].copy_from_slice(&j[k][3..6]);
+        }
+        row[cols - 1] = j[k][6];
+        if element.normal && d == 0 {
+            let row = &mut jac[(nt * 3 + k) * cols..(nt * 3 + k + 1) * cols];
+            row.fill(0.0);
+            row[nt * 3..nt * 3 + 3].copy_from_slice(&j[3 + k][3..6]);
+            row[cols - 1] = j[3 + k][6];
+        }
+    }
 }
 
 #[cfg(test)]
@@ -1597,7 +1723,12 @@ mod tests {
 
     /// The largest differences of two evaluations of a point: forces, normal forces, energy and
     /// end slider over `scale`, and the two Jacobians over `jac_scale`.
-    fn differences(c: &Harmonics, m: &Harmonics, scale: f64, jac_scale: f64) -> (f64, f64) {
+    fn differences(
+        (c, cj): (&Harmonics, &PointJacobian),
+        (m, mj): (&Harmonics, &PointJacobian),
+        scale: f64,
+        jac_scale: f64,
+    ) -> (f64, f64) {
         let pairs = c
             .friction
             .iter()
@@ -1605,11 +1736,7 @@ mod tests {
             .chain(c.normal.iter().zip(&m.normal))
             .chain([(&c.energy, &m.energy), (&c.slider, &m.slider)]);
         let values = pairs.fold(0.0f64, |w, (x, y)| w.max((x - y).abs() / scale));
-        let jac = c
-            .friction_jacobian
-            .iter()
-            .zip(&m.friction_jacobian)
-            .chain(c.normal_jacobian.iter().zip(&m.normal_jacobian));
+        let jac = cj.iter().zip(mj);
         let mut d: f64 = 0.0;
         for (rc, rm) in jac {
             for (x, y) in rc.iter().zip(rm) {
@@ -1640,17 +1767,18 @@ mod tests {
                     for (u0, v0, w) in [(0.0, 0.0, 0.0), (0.3, 0.01, 0.2), (-0.2, -0.02, -0.5)] {
                         let (mo, scale) = grid_point(n0bar, bbar, phi, u0, v0);
                         let mut c = Harmonics::default();
-                        if !closed_form(&mo, w, true, &mut c) {
+                        let (mut cj, mut mj) = ([[0.0; 7]; 6], [[0.0; 7]; 6]);
+                        if !closed_form(&mo, w, Some(&mut cj), &mut c) {
                             marched += 1;
                             continue;
                         }
-                        let (m, regime) = harmonics(&mo, w, true, |_| true).unwrap();
+                        let (m, regime) = harmonics(&mo, w, Some(&mut mj), |_| true).unwrap();
                         match regime {
                             CycleRegime::CompleteStick => stick += 1,
                             CycleRegime::StickSlip => slip += 1,
                             other => panic!("closed form taken in regime {other:?}"),
                         }
-                        let (values, d) = differences(&c, &m, scale, kt + kn);
+                        let (values, d) = differences((&c, &cj), (&m, &mj), scale, kt + kn);
                         worst = worst.max(values);
                         if (mo.n0e - mo.nv.amp).abs() <= 1e-12 * mo.n0e.abs() {
                             grazing += 1;
@@ -1705,13 +1833,14 @@ mod tests {
                         }
                         separating += 1;
                         let mut c = Harmonics::default();
-                        if !separation_form(&mo, true, &mut c) {
+                        let (mut cj, mut mj) = ([[0.0; 7]; 6], [[0.0; 7]; 6]);
+                        if !separation_form(&mo, Some(&mut cj), &mut c) {
                             // only a degenerate sinusoid (b̄ = 1 at φ = 0 or π) is left to the march
                             assert!(mo.g.amp == 0.0 || mo.h.amp == 0.0, "{n0bar} {bbar} {phi}");
                             fallback += 1;
                             continue;
                         }
-                        let (m, regime) = harmonics(&mo, w, true, |_| true).unwrap();
+                        let (m, regime) = harmonics(&mo, w, Some(&mut mj), |_| true).unwrap();
                         assert_eq!(regime, CycleRegime::Separation);
                         if let Window::Part { recontact, .. } = mo.window {
                             entered[match mo.recontact_state(recontact) {
@@ -1720,7 +1849,7 @@ mod tests {
                                 _ => 2,
                             }] += 1;
                         }
-                        let (values, d) = differences(&c, &m, scale, kt + kn);
+                        let (values, d) = differences((&c, &cj), (&m, &mj), scale, kt + kn);
                         worst = worst.max(values);
                         if d > worst_jac {
                             worst_jac = d;

@@ -3,7 +3,7 @@
 
 use super::response::{output_response, OutputResponse, ResponseOptions};
 use super::stability::is_stable;
-use super::system::{ForceScalePath, FrequencyPath, HbmSystem, LevelPath};
+use super::system::{FixedFrequencyParameter, FixedFrequencyPath, FrequencyPath, HbmSystem};
 use crate::continuation::{trace, trace_from, ContinuationOptions, Path, PathEnd, PathPoint};
 use crate::error::{Error, Result};
 use crate::harmonics::HarmonicForce;
@@ -109,7 +109,7 @@ impl JumpCause {
 /// excitation level at the start frequency (from λ₀ = ½, ¼, … 2⁻¹⁰ × the force up to 1; the
 /// λ₀ used is [`Frf::start_level`]); when that fails too, by Newton from the linear solution
 /// with every step taken in full, and last by continuation in a factor on the nonlinear force
-/// from the linear response without it ([`ForceScalePath`]).
+/// from the linear response without it ([`FixedFrequencyParameter::ForceScale`]).
 ///
 /// A path that cannot be followed to the end of the range does not cover it: it turns back and
 /// leaves the range on the start side ([`PathEnd::LeftRange`]: the branch through the start
@@ -491,7 +491,7 @@ const SMALLEST_START_LEVEL: f64 = 1.0 / 1024.0;
 /// Newton from the linear solution (Q = 0: its first step solves the stuck, linearised system)
 /// usually converges. When the excitation is strong enough for friction to slip or contacts to
 /// separate far from that solution, it may not; the start is then reached by continuation in the
-/// excitation level λ at the fixed ω_start ([`LevelPath`], the residual
+/// excitation level λ at the fixed ω_start ([`FixedFrequencyParameter::Level`], the residual
 /// D̄(ω) Q − λ F̄_e + F_c(Q)) from λ₀ up to λ = 1, through any fold in λ. λ₀ = ½, halved down
 /// to 2⁻¹⁰ while the start at λ₀ does not converge, and down to ⅛ while the path turns back far
 /// below λ₀ (by more than half its range: a path from ⅛ may go back to λ < 0); a path that stops
@@ -549,7 +549,7 @@ fn start_point<F: HarmonicForce>(
 }
 
 /// The last start-point method of [`start_point`]: the continuation in the factor s on the
-/// nonlinear force at the fixed ω_start ([`ForceScalePath`]: r = D̄ Q − F̄_e + s F_nl(Q)) from the
+/// nonlinear force at the fixed ω_start ([`FixedFrequencyParameter::ForceScale`]: r = D̄ Q − F̄_e + s F_nl(Q)) from the
 /// linear response without the nonlinear force (s = 0) to s = 1, then Newton on the frequency
 /// path from its end. Under strong excitation (gross slip, separation) that response is near the
 /// solution, and the path in s meets no fold where the one in the excitation level does (the
@@ -559,9 +559,10 @@ fn force_scale_start<F: HarmonicForce>(
     fp: &FrequencyPath<'_, '_, F>,
     opts: &ContinuationOptions,
 ) -> std::result::Result<NewtonSolution<F::State>, String> {
-    let path = ForceScalePath {
+    let path = FixedFrequencyPath {
         system: fp.system,
         omega: opts.start,
+        parameter: FixedFrequencyParameter::ForceScale,
     };
     let sopts = fixed_frequency_options(0.0, opts);
     let traced = trace(&path, &sopts, &mut |_| {}).map_err(|e| e.to_string())?;
@@ -619,9 +620,10 @@ fn level_continuation<F: HarmonicForce>(
     system: &HbmSystem<'_, F>,
     opts: &ContinuationOptions,
 ) -> LevelEnd<F::State> {
-    let lp = LevelPath {
+    let lp = FixedFrequencyPath {
         system,
         omega: opts.start,
+        parameter: FixedFrequencyParameter::Level,
     };
     let mut level = 0.5;
     let mut tried = level;

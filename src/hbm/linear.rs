@@ -11,9 +11,6 @@
 use std::mem::MaybeUninit;
 use std::sync::{Arc, Mutex, OnceLock};
 
-use faer::dyn_stack::{MemStack, StackReq};
-use faer::linalg::lu::partial_pivoting::factor::{lu_in_place, lu_in_place_scratch};
-use faer::linalg::lu::partial_pivoting::solve::{solve_in_place, solve_in_place_scratch};
 use faer::linalg::matmul::matmul;
 use faer::{c64, Accum, Mat, MatMut, MatRef, Par};
 
@@ -720,9 +717,7 @@ impl LinearModel {
         let forcing = &self.forcing[n];
         let f_at = |row: usize| forcing.get(row).copied().unwrap_or(zero);
         let SmallBuffers {
-            ll,
-            forward,
-            inverse,
+            lu,
             stack,
             xw,
             d_nl,
@@ -753,17 +748,9 @@ impl LinearModel {
             return Ok(());
         }
         // the LU of D_LL and [X | w] = D_LL⁻¹ [D_LN | F_L] (`solve_ll`)
-        part.dynamic_into(Part::LL, s, ll);
         let par = faer::get_global_parallelism();
-        let (_, perm) = lu_in_place(
-            ll.as_mut(),
-            forward,
-            inverse,
-            par,
-            MemStack::new(stack),
-            Default::default(),
-        );
-        if !regular_pivots((0..n_l).map(|i| ll[(i, i)].norm())) {
+        lu.refactor(n_l, par, stack, |ll| part.dynamic_into(Part::LL, s, ll));
+        if !regular_pivots((0..n_l).map(|i| lu.pivot(i).norm())) {
             return Err(singular_ll(n, omega));
         }
         let (k, m, c) = part.views(Part::LN);
@@ -773,8 +760,7 @@ impl LinearModel {
             }
             xw[(i, n_n)] = f_at(part.linear[i]);
         }
-        let lu = ll.as_ref();
-        solve_in_place(lu, lu, perm, xw.as_mut(), par, MemStack::new(stack));
+        lu.solve_in_place_with(xw.as_mut(), par, stack);
         // D̄ = D_NN − D_NL X, F̄ = F_N − D_NL w
         part.dynamic_into(Part::NL, s, d_nl);
         product_into(d_nl.as_ref(), xw.as_ref(), nl_xw.as_mut());
@@ -798,7 +784,7 @@ impl LinearModel {
             t[(i, 0)] = ln_q[(i, 0)] - ll_vw[(i, 0)];
             t[(i, 1)] = zero - ll_vw[(i, 1)];
         }
-        solve_in_place(lu, lu, perm, t.as_mut(), par, MemStack::new(stack));
+        lu.solve_in_place_with(t.as_mut(), par, stack);
         product_into(dd_nl.as_ref(), vw.as_ref(), nl_vw.as_mut());
         product_into(d_nl.as_ref(), t.as_ref(), nl_t.as_mut());
         for i in 0..n_n {
@@ -1066,9 +1052,7 @@ fn recovery_of(part: &Partitioned, xw: &Mat<c64>) -> (Mat<c64>, Vec<c64>) {
 /// D'_NL [v | w] and D_NL t.
 #[derive(Debug)]
 pub struct SmallBuffers {
-    ll: Mat<c64>,
-    forward: Vec<usize>,
-    inverse: Vec<usize>,
+    lu: PackedLu<c64>,
     stack: Vec<MaybeUninit<u8>>,
     xw: Mat<c64>,
     d_nl: Mat<c64>,
@@ -1090,9 +1074,7 @@ impl Default for SmallBuffers {
     fn default() -> SmallBuffers {
         let empty = || Mat::zeros(0, 0);
         SmallBuffers {
-            ll: empty(),
-            forward: Vec::new(),
-            inverse: Vec::new(),
+            lu: PackedLu::empty(),
             stack: Vec::new(),
             xw: empty(),
             d_nl: empty(),
@@ -1114,23 +1096,7 @@ impl Default for SmallBuffers {
 impl SmallBuffers {
     /// Sizes the buffers for n_L linear and n_N nonlinear DOFs (kept when they fit).
     fn resize(&mut self, n_l: usize, n_n: usize) {
-        let par = faer::get_global_parallelism();
-        // the LU of D_LL, the solve of [X | w] (n_N + 1 columns) and that of t (2 columns)
-        let scratch = StackReq::any_of(&[
-            lu_in_place_scratch::<usize, c64>(n_l, n_l, par, Default::default()),
-            solve_in_place_scratch::<usize, c64>(n_l, (n_n + 1).max(2), par),
-        ]);
-        // bytes for the scratch at any alignment
-        let bytes = scratch.size_bytes() + scratch.align_bytes();
-        if self.stack.len() < bytes {
-            self.stack.resize(bytes, MaybeUninit::uninit());
-        }
-        if self.forward.len() != n_l {
-            self.forward.resize(n_l, 0);
-            self.inverse.resize(n_l, 0);
-        }
         for (a, rows, cols) in [
-            (&mut self.ll, n_l, n_l),
             (&mut self.xw, n_l, n_n + 1),
             (&mut self.d_nl, n_n, n_l),
             (&mut self.dd_nn, n_n, n_n),

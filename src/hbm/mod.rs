@@ -9,8 +9,9 @@
 //!   index, condensed per frequency (eqs. 15–18), with its ω-derivative;
 //! - [`system`]: [`HbmSystem`] — r(Q, ω) = D̄(ω) Q − F̄_e(ω) + F_nl(Q) (eq. 19) and ∂r/∂Q (eq. 21),
 //!   and the [`ParameterSystem`](crate::nonlinear::ParameterSystem) views [`FrequencyPath`]
-//!   (λ = ω), [`LevelPath`] (λ = excitation level at fixed ω) and [`PreloadPath`] (λ = the
-//!   force's parameter, e.g. the preload n0, at fixed ω);
+//!   (λ = ω), [`FixedFrequencyPath`] (λ = excitation level, or the factor on the nonlinear
+//!   force, at fixed ω) and [`PreloadPath`] (λ = the force's parameter, e.g. the preload n0, at
+//!   fixed ω);
 //! - [`modal`]: [`modal::ModalModel`] and [`modal::ModalForce`] — the linear part given by m
 //!   modes and the contact force projected on them, the m(2H + 1) modal harmonics as unknowns;
 //! - [`response`]: harmonics, amplitude and peak of the output DOFs at a solution;
@@ -33,4 +34,6 @@ pub mod system;
 
 pub use linear::{Condensed, LinearModel, MatrixBlock, Uncondensed};
 pub use response::{OutputResponse, ResponseOptions};
-pub use system::{ForceScalePath, FrequencyPath, HbmSystem, LevelPath, PreloadPath};
+pub use system::{
+    FixedFrequencyParameter, FixedFrequencyPath, FrequencyPath, HbmSystem, PreloadPath,
+};

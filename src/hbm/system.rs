@@ -180,7 +180,7 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
     }
 
     /// Evaluates the homotopy r(Q, s) = D̄(ω) Q − F̄_e + s F_nl(Q) at (Q, s) for the fixed ω (rad/s)
-    /// ([`ForceScalePath`]): `out.residual` = r, `out.jacobian` = D̄(ω) + s ∂F_nl/∂Q,
+    /// ([`FixedFrequencyParameter::ForceScale`]): `out.residual` = r, `out.jacobian` = D̄(ω) + s ∂F_nl/∂Q,
     /// `out.d_parameter` = ∂r/∂s = F_nl(Q). Returns the end-of-period force state.
     pub fn evaluate_force_scaled(
         &self,
@@ -366,7 +366,7 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
     }
 
     /// As [`HbmSystem::evaluate_residual`] with the nonlinear force multiplied by `force_scale`
-    /// (the homotopy of [`ForceScalePath`]).
+    /// (the homotopy of [`FixedFrequencyParameter::ForceScale`]).
     fn residual_force_scaled(
         &self,
         q: &[f64],
@@ -556,7 +556,8 @@ struct Parts<'o> {
     jacobian: Option<&'o mut Jacobian>,
     d_omega: Option<&'o mut [f64]>,
     d_level: Option<&'o mut [f64]>,
-    /// Factor s on the nonlinear force (1 outside the homotopy of [`ForceScalePath`]).
+    /// Factor s on the nonlinear force (1 outside the homotopy of
+    /// [`FixedFrequencyParameter::ForceScale`]).
     force_scale: f64,
     /// ∂r/∂s = F_nl(Q), if wanted.
     d_force: Option<&'o mut [f64]>,
@@ -624,74 +625,34 @@ impl<F: HarmonicForce> ParameterSystem for FrequencyPath<'_, '_, F> {
     }
 }
 
-/// Response to a varying excitation level λ (factor on the case's force) at fixed ω (rad/s).
-pub struct LevelPath<'s, 'a, F: HarmonicForce> {
-    /// The harmonic balance system.
-    pub system: &'s HbmSystem<'a, F>,
-    /// The fixed excitation frequency (rad/s).
-    pub omega: f64,
+/// The factor a [`FixedFrequencyPath`] continues in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FixedFrequencyParameter {
+    /// The excitation level λ (factor on the case's force): r(Q, λ) = D̄(ω) Q − λ F̄_e + F_nl(Q),
+    /// ∂r/∂λ = −F̄_e.
+    Level,
+    /// The factor s on the nonlinear force, the homotopy from the underlying linear system to the
+    /// full one: r(Q, s) = D̄(ω) Q − F̄_e + s F_nl(Q), ∂r/∂s = F_nl(Q), s from 0 (the linear
+    /// response without the nonlinear elements) to 1 (the frequency response's equation at ω).
+    /// A start-point method of [`crate::hbm::frf::frequency_response`] for strong excitation,
+    /// where the response is far from the stuck, linearised solution and close to the one without
+    /// the elements (gross slip, separation), and the continuation in the excitation level meets
+    /// folds.
+    ForceScale,
 }
 
-impl<F: HarmonicForce> ParameterSystem for LevelPath<'_, '_, F> {
-    type State = F::State;
-
-    fn jacobian_blocks(&self) -> Vec<usize> {
-        self.system.jacobian_blocks()
-    }
-
-    fn dim(&self) -> usize {
-        self.system.dim()
-    }
-
-    fn residual_scale(&self) -> f64 {
-        residual_scale(self.system.linear.force_norm())
-    }
-
-    fn initial_state(&self) -> F::State {
-        self.system.force.initial_state()
-    }
-
-    fn evaluate(
-        &self,
-        x: &[f64],
-        level: f64,
-        state: &F::State,
-        out: &mut Linearization,
-    ) -> Result<F::State> {
-        let mut d_level = vec![0.0; x.len()];
-        let end = self
-            .system
-            .evaluate(x, self.omega, level, state, out, Some(&mut d_level))?;
-        out.d_parameter = d_level;
-        Ok(end)
-    }
-
-    fn evaluate_residual(
-        &self,
-        x: &[f64],
-        level: f64,
-        state: &F::State,
-        residual: &mut [f64],
-    ) -> Result<F::State> {
-        self.system
-            .evaluate_residual(x, self.omega, level, state, residual)
-    }
-}
-
-/// The homotopy from the underlying linear system to the full one at a fixed ω (rad/s):
-/// r(Q, s) = D̄(ω) Q − F̄_e + s F_nl(Q), the parameter s from 0 (the linear response without the
-/// nonlinear elements) to 1 (the frequency response's equation at ω). A start-point method of
-/// [`crate::hbm::frf::frequency_response`] for strong excitation, where the response is far from
-/// the stuck, linearised solution and close to the one without the elements (gross slip,
-/// separation), and the continuation in the excitation level meets folds.
-pub struct ForceScalePath<'s, 'a, F: HarmonicForce> {
+/// The harmonic balance system at a fixed frequency ω (rad/s), continued in the excitation level
+/// or in the factor on the nonlinear force ([`FixedFrequencyParameter`]).
+pub struct FixedFrequencyPath<'s, 'a, F: HarmonicForce> {
     /// The harmonic balance system.
     pub system: &'s HbmSystem<'a, F>,
     /// The fixed excitation frequency ω (rad/s).
     pub omega: f64,
+    /// What the path's parameter multiplies.
+    pub parameter: FixedFrequencyParameter,
 }
 
-impl<F: HarmonicForce> ParameterSystem for ForceScalePath<'_, '_, F> {
+impl<F: HarmonicForce> ParameterSystem for FixedFrequencyPath<'_, '_, F> {
     type State = F::State;
 
     fn jacobian_blocks(&self) -> Vec<usize> {
@@ -713,23 +674,43 @@ impl<F: HarmonicForce> ParameterSystem for ForceScalePath<'_, '_, F> {
     fn evaluate(
         &self,
         x: &[f64],
-        scale: f64,
+        parameter: f64,
         state: &F::State,
         out: &mut Linearization,
     ) -> Result<F::State> {
-        self.system
-            .evaluate_force_scaled(x, self.omega, scale, state, out)
+        match self.parameter {
+            FixedFrequencyParameter::Level => {
+                let mut d_level = vec![0.0; x.len()];
+                let end = self.system.evaluate(
+                    x,
+                    self.omega,
+                    parameter,
+                    state,
+                    out,
+                    Some(&mut d_level),
+                )?;
+                out.d_parameter = d_level;
+                Ok(end)
+            }
+            FixedFrequencyParameter::ForceScale => self
+                .system
+                .evaluate_force_scaled(x, self.omega, parameter, state, out),
+        }
     }
 
     fn evaluate_residual(
         &self,
         x: &[f64],
-        scale: f64,
+        parameter: f64,
         state: &F::State,
         residual: &mut [f64],
     ) -> Result<F::State> {
+        let (level, force_scale) = match self.parameter {
+            FixedFrequencyParameter::Level => (parameter, 1.0),
+            FixedFrequencyParameter::ForceScale => (1.0, parameter),
+        };
         self.system
-            .residual_force_scaled(x, self.omega, 1.0, scale, state, residual)
+            .residual_force_scaled(x, self.omega, level, force_scale, state, residual)
     }
 }
 

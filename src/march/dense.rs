@@ -2,7 +2,11 @@
 //! reduced models a few hundred at most): matrix–vector products, inverses and spectral radii.
 //! Factorisations and eigenvalues use faer.
 
+use std::mem::MaybeUninit;
+
 use faer::Mat;
+
+use crate::nonlinear::lu::PackedLu;
 
 /// Vectors from this length on take the VEX-encoded kernel of [`dot`] where the CPU has AVX.
 const VEX_FROM: usize = 64;
@@ -215,41 +219,22 @@ pub fn inverse(a: &[f64], n: usize) -> Option<Vec<f64>> {
 
 /// [`inverse`] by faer.
 fn faer_inverse(a: &[f64], n: usize) -> Option<Vec<f64>> {
-    use faer::linalg::lu::partial_pivoting::{factor, solve};
     use faer::linalg::matmul::matmul;
     if n == 0 {
         return Some(Vec::new());
     }
     let par = par_for(n);
-    let mut lu = to_faer(a, n);
-    let (mut perm, mut perm_inv) = (vec![0usize; n], vec![0usize; n]);
-    let req = factor::lu_in_place_scratch::<usize, f64>(n, n, par, Default::default())
-        .or(solve::solve_in_place_scratch::<usize, f64>(n, n, par));
-    let mut stack = faer::dyn_stack::MemBuffer::new(req);
-    factor::lu_in_place(
-        lu.as_mut(),
-        &mut perm,
-        &mut perm_inv,
-        par,
-        faer::dyn_stack::MemStack::new(&mut stack),
-        Default::default(),
-    );
+    let mut scratch = Vec::new();
+    let mut lu = PackedLu::empty();
+    lu.refactor(n, par, &mut scratch, |m| fill_row_major(m, a));
     if (0..n).any(|i| {
-        let d = lu[(i, i)];
+        let d = lu.pivot(i);
         !d.is_finite() || d == 0.0
     }) {
         return None;
     }
     let mut inv = Mat::<f64>::identity(n, n);
-    let p = faer::perm::PermRef::new_checked(&perm, &perm_inv, n);
-    solve::solve_in_place(
-        lu.as_ref(),
-        lu.as_ref(),
-        p,
-        inv.as_mut(),
-        par,
-        faer::dyn_stack::MemStack::new(&mut stack),
-    );
+    lu.solve_in_place_with(inv.as_mut(), par, &mut scratch);
     // residual check A·A⁻¹ = I (blocked product)
     let mut id = Mat::<f64>::zeros(n, n);
     matmul(
@@ -276,73 +261,58 @@ fn faer_inverse(a: &[f64], n: usize) -> Option<Vec<f64>> {
     (worst <= 1e-8).then_some(out)
 }
 
-/// An LU factorisation (partial pivoting, faer) held in buffers sized once, for a step matrix
-/// factored and used within one step only (the closing step of a period in the adaptive march):
-/// [`ScratchLu::factor`] and [`ScratchLu::solve`] allocate nothing.
+/// Copies row-major `a` into the square `m` (n × n, n² = `a.len()`).
+fn fill_row_major(m: &mut Mat<f64>, a: &[f64]) {
+    let n = m.nrows();
+    for j in 0..n {
+        for i in 0..n {
+            m[(i, j)] = a[i * n + j];
+        }
+    }
+}
+
+/// An LU factorisation (partial pivoting, [`PackedLu`]) held in buffers sized once, for a step
+/// matrix factored and used within one step only (the closing step of a period in the adaptive
+/// march): [`ScratchLu::factor`] and [`ScratchLu::solve`] allocate nothing after the first call.
 pub struct ScratchLu {
-    lu: Mat<f64>,
+    lu: PackedLu<f64>,
     rhs: Mat<f64>,
-    perm: Vec<usize>,
-    perm_inv: Vec<usize>,
-    stack: faer::dyn_stack::MemBuffer,
+    scratch: Vec<MaybeUninit<u8>>,
 }
 
 impl ScratchLu {
-    /// Buffers for n × n matrices.
+    /// Buffers for n × n matrices (sized by factoring and solving with the identity once).
     pub fn new(n: usize) -> Self {
-        use faer::linalg::lu::partial_pivoting::{factor, solve};
-        let par = faer::Par::Seq;
-        let req = factor::lu_in_place_scratch::<usize, f64>(n, n, par, Default::default())
-            .or(solve::solve_in_place_scratch::<usize, f64>(n, 1, par));
-        ScratchLu {
-            lu: Mat::zeros(n, n),
-            rhs: Mat::zeros(n, 1),
-            perm: vec![0; n],
-            perm_inv: vec![0; n],
-            stack: faer::dyn_stack::MemBuffer::new(req),
-        }
+        let mut lu = PackedLu::empty();
+        let mut scratch = Vec::new();
+        lu.refactor(n, faer::Par::Seq, &mut scratch, |m| {
+            *m = Mat::identity(n, n)
+        });
+        let mut rhs = Mat::zeros(n, 1);
+        lu.solve_in_place_with(rhs.as_mut(), faer::Par::Seq, &mut scratch);
+        ScratchLu { lu, rhs, scratch }
     }
 
     /// Factors row-major `a` (n×n); false when a pivot is zero or not finite (singular).
     pub fn factor(&mut self, a: &[f64]) -> bool {
-        use faer::linalg::lu::partial_pivoting::factor;
         let n = self.lu.nrows();
-        for j in 0..n {
-            for i in 0..n {
-                self.lu[(i, j)] = a[i * n + j];
-            }
-        }
-        factor::lu_in_place(
-            self.lu.as_mut(),
-            &mut self.perm,
-            &mut self.perm_inv,
-            faer::Par::Seq,
-            faer::dyn_stack::MemStack::new(&mut self.stack),
-            Default::default(),
-        );
+        self.lu.refactor(n, faer::Par::Seq, &mut self.scratch, |m| {
+            fill_row_major(m, a)
+        });
         release_vector_registers();
         (0..n).all(|i| {
-            let d = self.lu[(i, i)];
+            let d = self.lu.pivot(i);
             d.is_finite() && d != 0.0
         })
     }
 
     /// x = A⁻¹ b with the last factored A.
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) {
-        use faer::linalg::lu::partial_pivoting::solve;
-        let n = self.lu.nrows();
         for (i, &bi) in b.iter().enumerate() {
             self.rhs[(i, 0)] = bi;
         }
-        let perm = faer::perm::PermRef::new_checked(&self.perm, &self.perm_inv, n);
-        solve::solve_in_place(
-            self.lu.as_ref(),
-            self.lu.as_ref(),
-            perm,
-            self.rhs.as_mut(),
-            faer::Par::Seq,
-            faer::dyn_stack::MemStack::new(&mut self.stack),
-        );
+        self.lu
+            .solve_in_place_with(self.rhs.as_mut(), faer::Par::Seq, &mut self.scratch);
         release_vector_registers();
         for (i, xi) in x.iter_mut().enumerate() {
             *xi = self.rhs[(i, 0)];

@@ -9,11 +9,13 @@
 //! strictly lower part as L and the upper part as U), so its solutions equal those of
 //! `PartialPivLu` to the bit.
 
-use faer::dyn_stack::{MemBuffer, MemStack};
+use std::mem::MaybeUninit;
+
+use faer::dyn_stack::{MemStack, StackReq};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::perm::PermRef;
 use faer::traits::ComplexField;
-use faer::{Mat, MatMut, MatRef};
+use faer::{Mat, MatMut, MatRef, Par};
 
 /// P A = L U of a square matrix A, L and U in one matrix.
 #[derive(Clone, Debug)]
@@ -26,6 +28,25 @@ pub struct PackedLu<T> {
     backward: Vec<usize>,
 }
 
+/// Bytes of scratch for faer's LU of an n × n matrix and for its solves with up to `columns`
+/// right-hand sides on `par`, at any alignment.
+fn scratch_bytes<T: ComplexField>(n: usize, columns: usize, par: Par) -> usize {
+    let req = StackReq::any_of(&[
+        factor::lu_in_place_scratch::<usize, T>(n, n, par, Default::default()),
+        solve::solve_in_place_scratch::<usize, T>(n, columns, par),
+    ]);
+    req.size_bytes() + req.align_bytes()
+}
+
+/// `scratch` grown to at least `bytes` (never shrunk, so a buffer reused from one factorisation
+/// to the next is allocated once).
+fn grown(scratch: &mut Vec<MaybeUninit<u8>>, bytes: usize) -> &mut [MaybeUninit<u8>] {
+    if scratch.len() < bytes {
+        scratch.resize(bytes, MaybeUninit::uninit());
+    }
+    scratch.as_mut_slice()
+}
+
 impl<T: ComplexField> PackedLu<T> {
     /// The factors of the square matrix `a` (copied).
     pub fn new(a: MatRef<'_, T>) -> PackedLu<T> {
@@ -33,31 +54,60 @@ impl<T: ComplexField> PackedLu<T> {
     }
 
     /// The factors of the square matrix `a`, written over it (no copy).
-    pub fn in_place(mut a: Mat<T>) -> PackedLu<T> {
+    pub fn in_place(a: Mat<T>) -> PackedLu<T> {
         assert_eq!(a.nrows(), a.ncols(), "an LU of a square matrix");
         let n = a.nrows();
-        let par = faer::get_global_parallelism();
-        let mut forward = vec![0usize; n];
-        let mut backward = vec![0usize; n];
-        let mut scratch = MemBuffer::new(factor::lu_in_place_scratch::<usize, T>(
-            n,
-            n,
-            par,
-            Default::default(),
-        ));
+        let mut lu = PackedLu {
+            lu: a,
+            forward: vec![0usize; n],
+            backward: vec![0usize; n],
+        };
+        lu.factor_held(faer::get_global_parallelism(), &mut Vec::new());
+        lu
+    }
+
+    /// An empty (0 × 0) factorisation whose storage [`PackedLu::refactor`] sizes and reuses.
+    pub fn empty() -> PackedLu<T> {
+        PackedLu {
+            lu: Mat::zeros(0, 0),
+            forward: Vec::new(),
+            backward: Vec::new(),
+        }
+    }
+
+    /// Factors, over the storage of the previous factors, the n × n matrix that `fill` writes
+    /// into it (its entries are those of the previous factors, or zeros when n changed), on
+    /// `par` with the scratch `scratch` (grown when too small). Nothing is allocated when n is
+    /// that of the previous call and `scratch` is large enough: for factorisations repeated
+    /// in a loop. The factors equal [`PackedLu::new`]'s of the same matrix on the same `par`.
+    pub fn refactor(
+        &mut self,
+        n: usize,
+        par: Par,
+        scratch: &mut Vec<MaybeUninit<u8>>,
+        fill: impl FnOnce(&mut Mat<T>),
+    ) {
+        if self.lu.nrows() != n || self.lu.ncols() != n {
+            self.lu = Mat::zeros(n, n);
+            self.forward.resize(n, 0);
+            self.backward.resize(n, 0);
+        }
+        fill(&mut self.lu);
+        self.factor_held(par, scratch);
+    }
+
+    /// faer's LU of the held matrix, over it.
+    fn factor_held(&mut self, par: Par, scratch: &mut Vec<MaybeUninit<u8>>) {
+        let n = self.lu.nrows();
+        let stack = grown(scratch, scratch_bytes::<T>(n, 1, par));
         factor::lu_in_place(
-            a.as_mut(),
-            &mut forward,
-            &mut backward,
+            self.lu.as_mut(),
+            &mut self.forward,
+            &mut self.backward,
             par,
-            MemStack::new(&mut scratch),
+            MemStack::new(stack),
             Default::default(),
         );
-        PackedLu {
-            lu: a,
-            forward,
-            backward,
-        }
     }
 
     /// n, the order of A.
@@ -77,13 +127,19 @@ impl<T: ComplexField> PackedLu<T> {
 
     /// X = A⁻¹ B in place of B (any number of columns).
     pub fn solve_in_place(&self, rhs: MatMut<'_, T>) {
+        self.solve_in_place_with(rhs, faer::get_global_parallelism(), &mut Vec::new());
+    }
+
+    /// [`PackedLu::solve_in_place`] on `par` with the scratch `scratch` (grown when too small;
+    /// nothing allocated when it is large enough).
+    pub fn solve_in_place_with(
+        &self,
+        rhs: MatMut<'_, T>,
+        par: Par,
+        scratch: &mut Vec<MaybeUninit<u8>>,
+    ) {
         let n = self.nrows();
-        let par = faer::get_global_parallelism();
-        let mut scratch = MemBuffer::new(solve::solve_in_place_scratch::<usize, T>(
-            n,
-            rhs.ncols(),
-            par,
-        ));
+        let stack = grown(scratch, scratch_bytes::<T>(n, rhs.ncols(), par));
         let perm = PermRef::new_checked(&self.forward, &self.backward, n);
         solve::solve_in_place(
             self.lu.as_ref(),
@@ -91,7 +147,7 @@ impl<T: ComplexField> PackedLu<T> {
             perm,
             rhs,
             par,
-            MemStack::new(&mut scratch),
+            MemStack::new(stack),
         );
     }
 }
@@ -137,6 +193,34 @@ mod tests {
                 ac.partial_piv_lu().solve(&bc),
                 "order {n}: complex solutions differ"
             );
+        }
+    }
+
+    /// Factors refactored over reused storage (after a matrix of another order, then of the
+    /// same order) and solved with reused scratch equal [`PackedLu::new`]'s to the bit, on the
+    /// calling thread and on the global parallelism.
+    #[test]
+    fn refactored_storage_gives_the_same_factors() {
+        let mut lu = PackedLu::empty();
+        let mut scratch = Vec::new();
+        for (round, n) in [5usize, 40, 40, 7].into_iter().enumerate() {
+            let a = Mat::from_fn(n, n, |i, j| {
+                noise(round * 7919 + i * 100 + j) + if i == j { 0.3 } else { 0.0 }
+            });
+            let b = Mat::from_fn(n, 2, |i, j| noise(31 * i + j + round));
+            for par in [Par::Seq, faer::get_global_parallelism()] {
+                lu.refactor(n, par, &mut scratch, |m| m.copy_from(&a));
+                let mut x = b.clone();
+                lu.solve_in_place_with(x.as_mut(), par, &mut scratch);
+                let fresh = PackedLu::new(a.as_ref());
+                let mut y = b.clone();
+                fresh.solve_in_place(y.as_mut());
+                assert_eq!(x, y, "order {n}, round {round}: solutions differ");
+                assert_eq!(lu.row_order(), fresh.row_order(), "order {n}");
+                for i in 0..n {
+                    assert_eq!(lu.pivot(i), fresh.pivot(i), "order {n}, pivot {i}");
+                }
+            }
         }
     }
 

@@ -36,6 +36,52 @@ use super::face_strip;
 /// densely per frequency).
 pub const MAX_DENSE_DOFS: usize = 4000;
 
+/// The rows a matrix-defined case's harmonic balance refers to, and its excitation.
+#[derive(Clone, Debug)]
+pub struct MatrixRows {
+    /// Free-row indices of the nonlinear DOFs (every row an element reads), ascending: the DOF
+    /// order of the nonlinear force.
+    pub nonlinear_rows: Vec<usize>,
+    /// Free-row indices of the output DOFs.
+    pub output_rows: Vec<usize>,
+    /// Matrix rows (as written in the case, before clamping) of the output DOFs.
+    pub output_case_rows: Vec<usize>,
+    /// The excitation amplitude per free row (N), f = force·cos(ωt) (times `force_scale`).
+    pub force: Vec<f64>,
+}
+
+/// The nonlinear rows, output rows and excitation of `case` on `model` (errors name the key of
+/// a clamped or out-of-range row).
+pub fn matrix_rows(case: &Case, model: &StructuralModel) -> Result<MatrixRows> {
+    let free_of = free_row_map(model);
+    let force = excitation(case, model, &free_of)?;
+    let mut nonlinear_rows = Vec::new();
+    for (name, e) in &case_elements(case, model)? {
+        let mut rows = vec![(format!("{name}.tangential.dofs"), &e.tangential.dofs)];
+        if let Some(nrm) = &e.normal {
+            rows.push((format!("{name}.normal.dofs"), &nrm.dofs));
+        }
+        for (key, dofs) in rows {
+            for &d in dofs {
+                nonlinear_rows.push(free_row(case, &free_of, &key, d)?);
+            }
+        }
+    }
+    nonlinear_rows.sort_unstable();
+    nonlinear_rows.dedup();
+    let output_case_rows = output_rows(case, model)?;
+    let output_rows = output_case_rows
+        .iter()
+        .map(|&d| free_row(case, &free_of, "response.dofs", d))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(MatrixRows {
+        nonlinear_rows,
+        output_rows,
+        output_case_rows,
+        force,
+    })
+}
+
 /// The linear part of a matrix-defined case and the rows it refers to.
 #[derive(Clone, Debug)]
 pub struct MatrixSetup {
@@ -65,31 +111,15 @@ pub fn matrix_setup(case: &Case, model: &StructuralModel) -> Result<MatrixSetup>
             "{name}: the model has {n} free DOF; the harmonic balance of a matrix-defined case is dense and handles up to {MAX_DENSE_DOFS}; on a mesh model, give `[reduction] interface_modes = N` to solve it on its Craig–Bampton model"
         )));
     }
-    let free_of = free_row_map(model);
     let k = model.free.k.to_dense();
     let m = model.free.m.to_dense();
     let c = damping_matrix(case, model, k.as_ref(), m.as_ref())?;
-    let force = excitation(case, model, &free_of)?;
-    let mut nonlinear_rows = Vec::new();
-    let elements = case_elements(case, model)?;
-    for (name, e) in &elements {
-        let mut rows = vec![(format!("{name}.tangential.dofs"), &e.tangential.dofs)];
-        if let Some(nrm) = &e.normal {
-            rows.push((format!("{name}.normal.dofs"), &nrm.dofs));
-        }
-        for (key, dofs) in rows {
-            for &d in dofs {
-                nonlinear_rows.push(free_row(case, &free_of, &key, d)?);
-            }
-        }
-    }
-    nonlinear_rows.sort_unstable();
-    nonlinear_rows.dedup();
-    let output_case_rows = output_rows(case, model)?;
-    let output_rows = output_case_rows
-        .iter()
-        .map(|&d| free_row(case, &free_of, "response.dofs", d))
-        .collect::<Result<Vec<_>>>()?;
+    let MatrixRows {
+        nonlinear_rows,
+        output_rows,
+        output_case_rows,
+        force,
+    } = matrix_rows(case, model)?;
     let linear = LinearModel::from_real(
         k.as_ref(),
         m.as_ref(),
@@ -279,18 +309,18 @@ pub fn damping_matrix(
     })
 }
 
-/// The `[[element]]` friction elements of a matrix case on the condensed (nonlinear) rows of
-/// `setup`: every case row is mapped to its free row, then to its position among
-/// `setup.nonlinear_rows`.
+/// The `[[element]]` friction elements of a matrix case on its nonlinear rows
+/// (`nonlinear_rows`, ascending free-row indices, [`MatrixRows::nonlinear_rows`]): every case
+/// row is mapped to its free row, then to its position among `nonlinear_rows`.
 pub fn matrix_elements(
     case: &Case,
     model: &StructuralModel,
-    setup: &MatrixSetup,
+    nonlinear_rows: &[usize],
 ) -> Result<DofElements> {
     let free_of = free_row_map(model);
     let position = |key: &str, d: usize| -> Result<usize> {
         let r = free_row(case, &free_of, key, d)?;
-        setup.nonlinear_position(r).ok_or_else(|| {
+        nonlinear_rows.binary_search(&r).ok().ok_or_else(|| {
             Error::input(format!(
                 "{}: key '{key}': row {d} is not a nonlinear row of the model",
                 case.path.display()
@@ -321,7 +351,7 @@ pub fn matrix_elements(
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    DofElements::from_case(&elements, setup.nonlinear_rows.len())
+    DofElements::from_case(&elements, nonlinear_rows.len())
 }
 
 /// The nonlinear elements of a matrix case with the names its messages use: the `[[element]]`

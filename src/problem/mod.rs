@@ -6,6 +6,7 @@
 //! |---|---|
 //! | [`rom_store`] | the ROM of a sector case: read from a ROM file whose key matches, else reduced (and cached) |
 //! | [`matrix_case`] | a model on matrix rows: free rows, dense K, M, C, excitation, output rows, `[[element]]` elements |
+//! | [`modal_case`] | a matrix case's harmonic balance on the modal coordinates of its lowest modes (`[harmonic_balance] modes`) |
 //! | [`matrix_rom`] | the Craig–Bampton model of a matrix case on a mesh with `[reduction]` (face strips beyond the dense limit) |
 //! | [`face_strip`] | the integration points of a `[[strip]]` on a mesh face group |
 //! | [`sector`] | the harmonic balance problem of a reduced sector with its contact interfaces |
@@ -28,6 +29,7 @@ pub mod face_strip;
 pub mod march_case;
 pub mod matrix_case;
 pub mod matrix_rom;
+pub mod modal_case;
 pub mod nonsmooth_case;
 pub mod rom_store;
 pub mod sector;

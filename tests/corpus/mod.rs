@@ -39,6 +39,9 @@ pub struct Outcome {
     pub seconds: f64,
     /// Jumps of the sweep (the path left its range on the start side and went on beyond it).
     pub jumps: usize,
+    /// The longest stretch of frequency a jump left untraced, |to − from| (rad/s; 0 without
+    /// jumps).
+    pub largest_gap: f64,
 }
 
 fn jenkins(dofs: Vec<usize>, weights: Vec<f64>, params: ContactParams) -> DofElement {
@@ -215,6 +218,11 @@ pub fn run(case: &Case) -> Outcome {
             worst_residual: frf.points.iter().map(|p| p.residual).fold(0.0, f64::max),
             seconds,
             jumps: frf.jumps.len(),
+            largest_gap: frf
+                .jumps
+                .iter()
+                .map(|j| (j.to - j.from).abs())
+                .fold(0.0, f64::max),
         },
         Err(e) => Outcome {
             reached_end: false,
@@ -224,6 +232,7 @@ pub fn run(case: &Case) -> Outcome {
             worst_residual: f64::NAN,
             seconds,
             jumps: 0,
+            largest_gap: 0.0,
         },
     }
 }

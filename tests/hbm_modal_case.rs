@@ -1,0 +1,396 @@
+//! The harmonic balance of a matrix case on modal coordinates (`[harmonic_balance] modes`,
+//! `nlrom::problem::modal_case`): with every mode the same solutions as on the physical rows,
+//! through a fold with slip and separation; a stuck case against the closed-form linear
+//! response with Rayleigh damping (`nlrom solve` end to end); the sparse eigensolver's modes
+//! against the dense pencil's; bad input.
+
+mod support;
+
+use std::path::Path;
+
+use faer::{c64, Mat};
+use nlrom::case::Case;
+use nlrom::commands::progress::Reporter;
+use nlrom::commands::solve::{solve_case, SolveOptions};
+use nlrom::eigen::symmetric_modes;
+use nlrom::harmonics::HarmonicLayout;
+use nlrom::hbm::frf::frequency_response;
+use nlrom::hbm::response::output_response;
+use nlrom::hbm::{FrequencyPath, HbmSystem, ResponseOptions};
+use nlrom::model;
+use nlrom::nonlinear::{solve_fixed, NewtonOptions, ParameterSystem};
+use nlrom::problem::matrix_case::{matrix_elements, matrix_setup};
+use nlrom::problem::modal_case::modal_setup;
+use nlrom::problem::rom_store::RomPolicy;
+use nlrom::problem::settings::case_continuation;
+use support::hbm::{complex_solve, layout_index};
+
+/// A fixed–free chain of n masses m_i = 1 + 0.1 i (kg) joined by springs k_i = 1 + 0.05 i
+/// (N/m, spring i between mass i − 1 and mass i, spring 0 to ground), in Matrix Market files.
+fn write_chain(dir: &Path, n: usize) {
+    let spring = |i: usize| 1.0 + 0.05 * i as f64;
+    let mut k = Vec::new();
+    for i in 0..n {
+        let diagonal = spring(i) + if i + 1 < n { spring(i + 1) } else { 0.0 };
+        k.push(format!("{} {} {diagonal}", i + 1, i + 1));
+        if i + 1 < n {
+            k.push(format!("{} {} {}", i + 2, i + 1, -spring(i + 1)));
+        }
+    }
+    std::fs::write(
+        dir.join("K.mtx"),
+        format!(
+            "%%MatrixMarket matrix coordinate real symmetric\n{n} {n} {}\n{}\n",
+            k.len(),
+            k.join("\n")
+        ),
+    )
+    .unwrap();
+    let m: Vec<String> = (0..n)
+        .map(|i| format!("{} {} {}", i + 1, i + 1, 1.0 + 0.1 * i as f64))
+        .collect();
+    std::fs::write(
+        dir.join("M.mtx"),
+        format!(
+            "%%MatrixMarket matrix coordinate real symmetric\n{n} {n} {n}\n{}\n",
+            m.join("\n")
+        ),
+    )
+    .unwrap();
+}
+
+/// The chain case with Rayleigh damping [0.01 1/s, 0.02 s], 0.3 N at the last mass, and `extra`
+/// (elements, harmonic balance, continuation).
+fn chain_case(dir: &Path, n: usize, extra: &str) -> nlrom::Result<Case> {
+    let text = format!(
+        "[model]\nstiffness = \"K.mtx\"\nmass = \"M.mtx\"\ndamping = {{ rayleigh = [0.01, 0.02] }}\n\n[excitation]\ndofs = [{}]\nforce = [0.3]\n\n[response]\ndofs = [0, 4, {}]\n{extra}",
+        n - 1,
+        n - 1
+    );
+    Case::from_str(&text, &dir.join("case.toml"))
+}
+
+/// A friction element on row 3 with the normal approach of row 4 (k_t = 0.5, k_n = 1 N/m,
+/// μ = 0.5, n0 = 0.05 N: it slips and separates near resonance) and a Jenkins element on the
+/// last row (k_t = 0.5 N/m, slip force 0.02 N).
+fn elements(n: usize) -> String {
+    format!(
+        "\n[[element]]\nkind = \"friction\"\ntangential = {{ dofs = [3], weights = [1.0] }}\nnormal = {{ dofs = [4], weights = [1.0] }}\nkt = 0.5\nkn = 1.0\nmu = 0.5\nn0 = 0.05\n\n[[element]]\nkind = \"friction\"\ntangential = {{ dofs = [{}], weights = [1.0] }}\nkt = 0.5\nmu = 0.4\nn0 = 0.05\n",
+        n - 1
+    )
+}
+
+/// Largest |a − b| over the outputs' harmonics, relative to the largest |b|.
+fn relative_difference(a: &[Vec<c64>], b: &[Vec<c64>]) -> f64 {
+    let scale = b.iter().flatten().map(|v| v.norm()).fold(0.0_f64, f64::max);
+    a.iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .map(|(x, y)| (x - y).norm())
+        .fold(0.0_f64, f64::max)
+        / scale
+}
+
+/// With every mode (8 of 8), the modal case's solutions are the physical case's: along a curve
+/// of 3 harmonics through the first resonance (both elements slipping, the first separating),
+/// each modal point's contact motion Φ_c q solves the physical harmonic balance (scaled
+/// residual ≤ 1e-10) and gives the same output harmonics as the physical solution there
+/// (≤ 1e-8 of the largest). This checks the case's rows, the excitation's projection, the
+/// Rayleigh ratios ζ_r = α/(2ω_r) + βω_r/2 and the output rows.
+#[test]
+fn every_mode_gives_the_physical_solutions() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = 8;
+    write_chain(dir.path(), n);
+    let extra = format!(
+        "{}\n[harmonic_balance]\nharmonics = 3\ntime_samples = 64\nmodes = {n}\n\n[continuation]\nstart_rad_s = 0.1\nend_rad_s = 0.35\nstep_rad_s = 0.005\n",
+        elements(n)
+    );
+    let case = chain_case(dir.path(), n, &extra).unwrap();
+    let model = model::build(&case, &mut |_| {}).unwrap();
+    let setup = modal_setup(&case, &model, n).unwrap();
+    assert_eq!(setup.rows.nonlinear_rows, vec![3, 4, n - 1]);
+    let layout = HarmonicLayout::new(3, 64).unwrap();
+    let modal_linear = setup.modal.linear_model(3).unwrap();
+    let modal_force = setup
+        .modal
+        .project(matrix_elements(&case, &model, &setup.rows.nonlinear_rows).unwrap())
+        .unwrap();
+    let modal_system = HbmSystem::new(layout, &modal_linear, &modal_force).unwrap();
+    let physical = matrix_setup(&case, &model).unwrap();
+    let physical_elements = matrix_elements(&case, &model, &physical.nonlinear_rows).unwrap();
+    let physical_system = HbmSystem::new(layout, &physical.linear, &physical_elements).unwrap();
+    let path = FrequencyPath {
+        system: &physical_system,
+        level: 1.0,
+    };
+    let mut opts = case_continuation(&case).unwrap();
+    opts.newton.tolerance = 1e-11;
+    let response = ResponseOptions::default();
+    let frf = frequency_response(&modal_system, &opts, &response, &mut |_| {}).unwrap();
+    assert!(frf.points.len() >= 30, "{} points", frf.points.len());
+    let shapes = setup.modal.contact_shapes();
+    let tight = NewtonOptions {
+        tolerance: 1e-11,
+        ..NewtonOptions::default()
+    };
+    let (mut worst, mut worst_residual, mut largest) = (0.0_f64, 0.0_f64, 0.0_f64);
+    for p in &frf.points {
+        let nc = shapes.nrows();
+        let mut exact = vec![0.0; layout.len(nc)];
+        for c in 0..layout.coefficients() {
+            for i in 0..nc {
+                exact[layout_index(&layout, c, i, nc)] = (0..n)
+                    .map(|r| shapes[(i, r)] * p.q[layout_index(&layout, c, r, n)])
+                    .sum::<f64>();
+            }
+        }
+        let mut r = vec![0.0; exact.len()];
+        path.evaluate_residual(&exact, p.omega, &p.state, &mut r)
+            .unwrap();
+        let residual = r.iter().map(|v| v * v).sum::<f64>().sqrt() / path.residual_scale();
+        assert!(
+            residual <= 1e-10,
+            "ω = {}: physical residual {residual:.2e}",
+            p.omega
+        );
+        worst_residual = worst_residual.max(residual);
+        let sol = solve_fixed(&path, &exact, p.omega, &p.state, &tight).unwrap();
+        let want = output_response(&physical_system, &sol.x, p.omega, 1.0, &response).unwrap();
+        let got = setup
+            .modal
+            .physical_response(&p.response, &response)
+            .unwrap();
+        let rel = relative_difference(&got.harmonics, &want.harmonics);
+        assert!(
+            rel <= 1e-8,
+            "ω = {}: relative difference {rel:.2e}",
+            p.omega
+        );
+        worst = worst.max(rel);
+        largest = largest.max(want.amplitude[2]);
+    }
+    // near the resonance the Jenkins element slips: k_t |u| > slip force 0.02 N
+    assert!(0.5 * largest > 0.02 * 2.0, "tip amplitude {largest}");
+    println!(
+        "{} points ({:?}): largest physical residual {worst_residual:.1e}, largest relative difference {worst:.2e}, tip amplitude up to {largest:.3} m",
+        frf.points.len(),
+        frf.end
+    );
+}
+
+/// `nlrom solve` on the modal case end to end, with both elements stuck (slip forces 1e6 N): the
+/// elements are springs k_t, so every point's first harmonic at the output rows equals the
+/// closed-form response x = (K + K_t − ω²M + iω(αM + βK))⁻¹ f with every mode (≤ 1e-9 of the
+/// largest), and with the 4 lowest of the 8 modes differs from it by less than with 2.
+#[test]
+fn a_stuck_modal_case_gives_the_linear_response() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = 8;
+    write_chain(dir.path(), n);
+    let k = nlrom::matrix_io::read_real_matrix(&dir.path().join("K.mtx"))
+        .unwrap()
+        .to_dense();
+    let m = nlrom::matrix_io::read_real_matrix(&dir.path().join("M.mtx"))
+        .unwrap()
+        .to_dense();
+    let stuck = format!(
+        "\n[[element]]\nkind = \"friction\"\ntangential = {{ dofs = [3], weights = [1.0] }}\nkt = 0.5\nmu = 0.5\nn0 = 2e6\n\n[[element]]\nkind = \"friction\"\ntangential = {{ dofs = [{}], weights = [1.0] }}\nkt = 0.5\nmu = 0.5\nn0 = 2e6\n",
+        n - 1
+    );
+    let mut kt = k.clone();
+    kt[(3, 3)] += 0.5;
+    kt[(n - 1, n - 1)] += 0.5;
+    let outputs = [0usize, 4, n - 1];
+    let error_with = |modes: usize| -> f64 {
+        let extra = format!(
+            "{stuck}\n[harmonic_balance]\nharmonics = 1\nmodes = {modes}\n\n[continuation]\nstart_rad_s = 0.1\nend_rad_s = 0.6\nstep_rad_s = 0.02\n"
+        );
+        let case = chain_case(dir.path(), n, &extra).unwrap();
+        let out = solve_case(
+            &case,
+            &SolveOptions::new(RomPolicy::ReadIfMatching),
+            &Reporter::silent(),
+        )
+        .unwrap();
+        let points = &out.results.frfs[0].points;
+        assert!(points.len() >= 20, "{} points", points.len());
+        let mut worst = 0.0_f64;
+        for p in points {
+            let w = p.omega;
+            let d = Mat::from_fn(n, n, |i, j| {
+                c64::new(
+                    kt[(i, j)] - w * w * m[(i, j)],
+                    w * (0.01 * m[(i, j)] + 0.02 * k[(i, j)]),
+                )
+            });
+            let mut f = vec![c64::new(0.0, 0.0); n];
+            f[n - 1] = c64::new(0.3, 0.0);
+            let x = complex_solve(&d, &f);
+            let scale = outputs.iter().map(|&r| x[r].norm()).fold(0.0, f64::max);
+            for (o, &row) in outputs.iter().enumerate() {
+                // harmonics of output o: H + 1 = 2 values, the first harmonic second
+                let got = p.harmonics[o * 2 + 1];
+                worst = worst.max((got - x[row]).norm() / scale);
+            }
+        }
+        worst
+    };
+    let full = error_with(n);
+    assert!(full <= 1e-9, "every mode: relative error {full:.2e}");
+    let (two, four) = (error_with(2), error_with(4));
+    assert!(
+        four < two && two > 1e-6,
+        "2 modes {two:.2e}, 4 modes {four:.2e}"
+    );
+    println!("relative error of the first harmonic: 8 modes {full:.1e}, 4 modes {four:.1e}, 2 modes {two:.1e}");
+}
+
+/// On a chain of 700 masses the modes come from the sparse shift-invert eigensolver: their
+/// frequencies equal the dense pencil's to 1e-9 relative, and the sign-free products
+/// φ_r(3) φ_r(699) of each mode at a contact row and the output row to 1e-9 of the largest.
+#[test]
+fn sparse_modes_equal_the_dense_pencil() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = 700;
+    write_chain(dir.path(), n);
+    let extra = format!(
+        "{}\n[harmonic_balance]\nmodes = 6\n\n[continuation]\nstart_rad_s = 0.01\nend_rad_s = 0.02\nstep_rad_s = 0.001\n",
+        elements(n)
+    );
+    let case = chain_case(dir.path(), n, &extra).unwrap();
+    let model = model::build(&case, &mut |_| {}).unwrap();
+    let setup = modal_setup(&case, &model, 6).unwrap();
+    let k = model.free.k.to_dense();
+    let m = model.free.m.to_dense();
+    let (values, vectors) = symmetric_modes(k.as_ref(), m.as_ref()).unwrap();
+    let shapes = setup.modal.contact_shapes();
+    // contact rows 3, 4, 699 (ascending), the last one also the last output
+    let products: Vec<(f64, f64)> = (0..6)
+        .map(|r| {
+            (
+                shapes[(0, r)] * shapes[(2, r)],
+                vectors[(3, r)] * vectors[(n - 1, r)],
+            )
+        })
+        .collect();
+    let scale = products.iter().map(|p| p.1.abs()).fold(0.0, f64::max);
+    for r in 0..6 {
+        let f_dense = values[r].sqrt() / (2.0 * std::f64::consts::PI);
+        let rel = (setup.frequencies_hz[r] - f_dense).abs() / f_dense;
+        assert!(
+            rel <= 1e-9,
+            "mode {r}: {} vs {f_dense} Hz",
+            setup.frequencies_hz[r]
+        );
+        let (got, want) = products[r];
+        assert!(
+            (got - want).abs() <= 1e-9 * scale,
+            "mode {r}: φ(3)φ(699) {got:e} vs {want:e}"
+        );
+    }
+}
+
+/// Bad input names the key: more modes than free DOF, an external damping matrix, a map with
+/// modal coordinates, `modes = 0`, `modes` on a case that is not a matrix case.
+#[test]
+fn bad_modal_input_names_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = 8;
+    write_chain(dir.path(), n);
+    let solve = |extra: &str| -> String {
+        let case = match chain_case(dir.path(), n, extra) {
+            Ok(c) => c,
+            Err(e) => return e.to_string(),
+        };
+        match solve_case(
+            &case,
+            &SolveOptions::new(RomPolicy::ReadIfMatching),
+            &Reporter::silent(),
+        ) {
+            Ok(_) => "solved".to_string(),
+            Err(e) => e.to_string(),
+        }
+    };
+    let range = "\n[continuation]\nstart_rad_s = 0.1\nend_rad_s = 0.2\nstep_rad_s = 0.05\n";
+    let too_many = solve(&format!(
+        "{}\n[harmonic_balance]\nmodes = 9\n{range}",
+        elements(n)
+    ));
+    assert!(
+        too_many.contains("harmonic_balance.modes") && too_many.contains("1 to 8"),
+        "{too_many}"
+    );
+    let zero = solve(&format!(
+        "{}\n[harmonic_balance]\nmodes = 0\n{range}",
+        elements(n)
+    ));
+    assert!(zero.contains("harmonic_balance.modes"), "{zero}");
+    std::fs::write(
+        dir.path().join("C.mtx"),
+        "%%MatrixMarket matrix coordinate real symmetric\n8 8 1\n1 1 0.1\n",
+    )
+    .unwrap();
+    let text = format!(
+        "[model]\nstiffness = \"K.mtx\"\nmass = \"M.mtx\"\ndamping = {{ matrix = \"C.mtx\" }}\n\n[excitation]\ndofs = [7]\nforce = [0.3]\n{}\n[harmonic_balance]\nmodes = 4\n{range}",
+        elements(n)
+    );
+    let case = Case::from_str(&text, &dir.path().join("c.toml")).unwrap();
+    let matrix = solve_case(
+        &case,
+        &SolveOptions::new(RomPolicy::ReadIfMatching),
+        &Reporter::silent(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        matrix.contains("model.damping.matrix") && matrix.contains("modal"),
+        "{matrix}"
+    );
+    let sector = Case::from_str(
+        "[model]\nmesh = \"sector.msh\"\nmaterial = { young = 2e11, poisson = 0.3, density = 7800.0 }\nclamp = [\"hub\"]\n\n[reduction]\nkeep = [\"tip\"]\ninterface_modes = 4\n\n[[contact]]\nname = \"shroud\"\ncontact = \"a\"\ntarget = \"b\"\nkt = 1e5\nkn = 1e5\nmu = 0.3\nn0 = 10.0\n\n[excitation]\ngroup = \"tip\"\nforce = [1.0, 0.0, 0.0]\n\n[harmonic_balance]\nmodes = 4\n\n[continuation]\nstart_hz = 100.0\nend_hz = 200.0\nstep_hz = 1.0\n",
+        &dir.path().join("s.toml"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        sector.contains("harmonic_balance.modes") && sector.contains("matrix rows"),
+        "{sector}"
+    );
+}
+
+/// A matrix model beyond the dense limit of the physical rows (5 000 free DOF): refused on the
+/// physical rows with the limit named, solved on 4 modal coordinates from the sparse
+/// eigensolver (H = 1, around the second mode at 5.93e-4 rad/s; every point's tip response
+/// finite and non-zero).
+#[test]
+fn modal_coordinates_lift_the_dense_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = 5000;
+    write_chain(dir.path(), n);
+    let range =
+        "\n[continuation]\nstart_rad_s = 0.0005\nend_rad_s = 0.0006\nstep_rad_s = 0.00002\n";
+    let run = |modes: &str| {
+        let case = chain_case(dir.path(), n, &format!("{}{modes}{range}", elements(n))).unwrap();
+        solve_case(
+            &case,
+            &SolveOptions::new(RomPolicy::ReadIfMatching),
+            &Reporter::silent(),
+        )
+    };
+    let dense = run("").unwrap_err().to_string();
+    assert!(dense.contains("4000"), "{dense}");
+    let out = run("\n[harmonic_balance]\nmodes = 4\n").unwrap();
+    let points = &out.results.frfs[0].points;
+    assert!(points.len() >= 5, "{} points", points.len());
+    let tip: Vec<f64> = points.iter().map(|p| p.harmonics[5].norm()).collect();
+    assert!(tip.iter().all(|a| a.is_finite() && *a > 0.0), "{tip:?}");
+    println!(
+        "{} points from {} to {} rad/s, tip amplitude {:.3e} → {:.3e} m",
+        points.len(),
+        points[0].omega,
+        points[points.len() - 1].omega,
+        tip[0],
+        tip[tip.len() - 1]
+    );
+}
