@@ -12,7 +12,7 @@ use std::path::Path;
 use faer::{c64, Mat};
 use nlrom::case::Case;
 use nlrom::commands::progress::Reporter;
-use nlrom::commands::solve::{solve_case, SolveOptions};
+use nlrom::commands::solve::{solve_case, SolveOptions, SolveOutcome};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::frf::frequency_response;
 use nlrom::hbm::response::output_response;
@@ -111,6 +111,15 @@ fn elements(n: usize) -> String {
     format!(
         "\n[[element]]\nkind = \"friction\"\ntangential = {{ dofs = [3], weights = [1.0] }}\nnormal = {{ dofs = [4], weights = [1.0] }}\nkt = 0.5\nkn = 1.0\nmu = 0.5\nn0 = 0.05\n\n[[element]]\nkind = \"friction\"\ntangential = {{ dofs = [{}], weights = [1.0] }}\nkt = 0.5\nmu = 0.4\nn0 = 0.05\n",
         n - 1
+    )
+}
+
+/// `nlrom solve` on `case`, silently.
+fn solve(case: &Case) -> nlrom::Result<SolveOutcome> {
+    solve_case(
+        case,
+        &SolveOptions::new(RomPolicy::ReadIfMatching),
+        &Reporter::silent(),
     )
 }
 
@@ -241,12 +250,7 @@ fn a_stuck_modal_case_gives_the_linear_response() {
             "{stuck}\n[harmonic_balance]\nharmonics = 1\nmodes = {modes}\n\n[continuation]\nstart_rad_s = 0.1\nend_rad_s = 0.6\nstep_rad_s = 0.02\n"
         );
         let case = chain_case(dir.path(), n, &extra).unwrap();
-        let out = solve_case(
-            &case,
-            &SolveOptions::new(RomPolicy::ReadIfMatching),
-            &Reporter::silent(),
-        )
-        .unwrap();
+        let out = solve(&case).unwrap();
         let points = &out.results.frfs[0].points;
         assert!(points.len() >= 20, "{} points", points.len());
         let mut worst = 0.0_f64;
@@ -329,29 +333,25 @@ fn sparse_modes_equal_the_closed_form() {
     }
 }
 
-/// Bad input names the key: more modes than free DOF, an external damping matrix, a map with
-/// modal coordinates, `modes = 0`, `modes` on a case that is not a matrix case.
+/// Bad input names the key: more modes than free DOF, `modes = 0`, an external damping matrix,
+/// `modes` on a case that is not a matrix case.
 #[test]
 fn bad_modal_input_names_the_key() {
     let dir = tempfile::tempdir().unwrap();
     let n = 8;
     write_chain(dir.path(), n);
-    let solve = |extra: &str| -> String {
+    let message = |extra: &str| -> String {
         let case = match chain_case(dir.path(), n, extra) {
             Ok(c) => c,
             Err(e) => return e.to_string(),
         };
-        match solve_case(
-            &case,
-            &SolveOptions::new(RomPolicy::ReadIfMatching),
-            &Reporter::silent(),
-        ) {
+        match solve(&case) {
             Ok(_) => "solved".to_string(),
             Err(e) => e.to_string(),
         }
     };
     let range = "\n[continuation]\nstart_rad_s = 0.1\nend_rad_s = 0.2\nstep_rad_s = 0.05\n";
-    let too_many = solve(&format!(
+    let too_many = message(&format!(
         "{}\n[harmonic_balance]\nmodes = 9\n{range}",
         elements(n)
     ));
@@ -359,7 +359,7 @@ fn bad_modal_input_names_the_key() {
         too_many.contains("harmonic_balance.modes") && too_many.contains("1 to 8"),
         "{too_many}"
     );
-    let zero = solve(&format!(
+    let zero = message(&format!(
         "{}\n[harmonic_balance]\nmodes = 0\n{range}",
         elements(n)
     ));
@@ -374,13 +374,7 @@ fn bad_modal_input_names_the_key() {
         elements(n)
     );
     let case = Case::from_str(&text, &dir.path().join("c.toml")).unwrap();
-    let matrix = solve_case(
-        &case,
-        &SolveOptions::new(RomPolicy::ReadIfMatching),
-        &Reporter::silent(),
-    )
-    .unwrap_err()
-    .to_string();
+    let matrix = solve(&case).unwrap_err().to_string();
     assert!(
         matrix.contains("model.damping.matrix") && matrix.contains("modal"),
         "{matrix}"
@@ -410,11 +404,7 @@ fn modal_coordinates_lift_the_dense_limit() {
         "\n[continuation]\nstart_rad_s = 0.0005\nend_rad_s = 0.0006\nstep_rad_s = 0.00002\n";
     let run = |modes: &str| {
         let case = chain_case(dir.path(), n, &format!("{}{modes}{range}", elements(n))).unwrap();
-        solve_case(
-            &case,
-            &SolveOptions::new(RomPolicy::ReadIfMatching),
-            &Reporter::silent(),
-        )
+        solve(&case)
     };
     let dense = run("").unwrap_err().to_string();
     assert!(dense.contains("4000"), "{dense}");
