@@ -25,6 +25,9 @@
 //! With `NLROM_BENCH_SECTOR_QS=1` it adds the sector where the quasi-static method applies (15 Hz,
 //! standard Newmark and the quasi-static method, [`sector_quasi_static`]; about 70 s of CPU).
 //!
+//! With `NLROM_BENCH_SECTOR_STIFF=10,100` it adds the same sector with k_t and k_n ×10 and
+//! ×100, every scheme ([`sector_stiff`]).
+//!
 //! With `NLROM_BENCH_PASS=1` it first times the products of one step in isolation on the sector's
 //! matrices ([`product_passes`]).
 //!
@@ -223,6 +226,25 @@ fn sector_quasi_static() -> Model {
     sector_model(name, cm, 1, schemes)
 }
 
+/// The reduced sector of `cases/sector8_march.toml` with its contact stiffnesses k_t and k_n
+/// (1e8 N/m) multiplied by `factor` (`NLROM_BENCH_SECTOR_STIFF=factor`), every scheme with the
+/// settings of [`sector`]: where the contact springs set the top mode (k ×10 holds 48 % of its
+/// strain energy, ×100 96 %; `tests/march_sector_stiffness.rs`), so that eq. 8 can lengthen the
+/// step in the states out of stick.
+fn sector_stiff(factor: f64) -> Model {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/sector8_march.toml");
+    let text = std::fs::read_to_string(&path).expect("bundled case");
+    let stiff = format!("{:e}", 1.0e8 * factor);
+    let text = text
+        .replace("kt = 1.0e8", &format!("kt = {stiff}"))
+        .replace("kn = 1.0e8", &format!("kn = {stiff}"));
+    let case = Case::from_str(&text, &path).expect("stiff sector case");
+    let cm = case_march(&case, None, &mut |_| {}).expect("sector march");
+    let name = "sector8 ROM, k = 0, stiffer contact";
+    eprintln!("{name}: k_t = k_n = {stiff} N/m (×{factor})");
+    sector_model(name, cm, 2, schemes())
+}
+
 /// The settings of `model` with `scheme`.
 fn with_scheme(model: &Model, scheme: MarchScheme) -> MarchSettings {
     MarchSettings {
@@ -393,6 +415,15 @@ fn bench(c: &mut Criterion) {
     }
     if std::env::var_os("NLROM_BENCH_SECTOR_QS").is_some() {
         table(&sector_quasi_static());
+    }
+    if let Ok(factors) = std::env::var("NLROM_BENCH_SECTOR_STIFF") {
+        for factor in factors.split(',') {
+            let factor = factor
+                .trim()
+                .parse()
+                .expect("NLROM_BENCH_SECTOR_STIFF: numbers");
+            table(&sector_stiff(factor));
+        }
     }
     for (group, model) in [
         ("damper_200hz_one_period", &damper),

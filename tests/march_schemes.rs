@@ -110,22 +110,24 @@ fn jenkins_energy_per_cycle_and_energy_balance() {
     let mut s = settings(MarchScheme::PiecewiseLinear, omega, 200, 2000);
     s.stop_at_steady = true;
     s.steady_tolerance = 1e-9;
+    s.record_velocities = true;
     let out = march(&sys, &s).unwrap();
     assert!(out.steady_period.is_some());
     let h = &out.history;
+    let local = h.contact_displacements(&sys, omega);
     let np = out.periods.len();
     let (first, last) = (out.periods[np - 2].end_index, out.periods[np - 1].end_index);
     let (mut w_fric, mut w_in, mut w_visc) = (0.0, 0.0, 0.0);
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for i in first..last {
         let dt = h.time[i + 1] - h.time[i];
-        let du = h.local[2 * (i + 1)] - h.local[2 * i];
+        let du = local[2 * (i + 1)] - local[2 * i];
         w_fric += 0.5 * (h.force[2 * i] + h.force[2 * (i + 1)]) * du;
         let p = |j: usize| f * (omega * h.time[j]).cos() * h.v[j];
         w_in += 0.5 * dt * (p(i) + p(i + 1));
         w_visc += 0.5 * dt * c * (h.v[i].powi(2) + h.v[i + 1].powi(2));
-        lo = lo.min(h.local[2 * i]);
-        hi = hi.max(h.local[2 * i]);
+        lo = lo.min(local[2 * i]);
+        hi = hi.max(local[2 * i]);
     }
     let a = 0.5 * (hi - lo);
     let closed = 4.0 * fs * (a - fs / kt);
@@ -230,6 +232,7 @@ fn quasi_static_equals_direct_static_hysteresis() {
     };
     let out = march(&sys, &settings(MarchScheme::QuasiStatic, omega, 2, 4000)).unwrap();
     let h = &out.history;
+    let local = h.contact_displacements(&sys, omega);
     let (first, last) = (out.periods[0].end_index, out.periods[1].end_index);
     let (mut a1, mut b1, mut work) = (0.0, 0.0, 0.0);
     let period = 2.0 * std::f64::consts::PI / omega;
@@ -239,7 +242,7 @@ fn quasi_static_equals_direct_static_hysteresis() {
         let fsn = |j: usize| h.force[2 * j] * (omega * h.time[j]).sin();
         a1 += 0.5 * dt * (fc(i) + fc(i + 1)) * 2.0 / period;
         b1 += 0.5 * dt * (fsn(i) + fsn(i + 1)) * 2.0 / period;
-        work += 0.5 * (h.force[2 * i] + h.force[2 * i + 2]) * (h.local[2 * i + 2] - h.local[2 * i]);
+        work += 0.5 * (h.force[2 * i] + h.force[2 * i + 2]) * (local[2 * i + 2] - local[2 * i]);
     }
     eprintln!("a1 = {a1:.7}, b1 = {b1:.7}, W = {work:.7}");
     assert!((a1 - 0.2523158).abs() < 2e-4, "a1 {a1}");

@@ -46,7 +46,9 @@ fn mode(r: usize, j: usize) -> f64 {
 }
 
 /// The case text of the full model (`modal` false) or the modal model.
-fn case(dir: &Path, modal: bool) -> Case {
+/// The case on the full model (`modal` false) or the modal one; `modes`: the full model solved
+/// on the modal coordinates of its lowest modes (`[harmonic_balance] modes`).
+fn case(dir: &Path, modal: bool, modes: Option<usize>) -> Case {
     let n2 = 2 * N;
     let mut k = Vec::new();
     let mut m = Vec::new();
@@ -123,6 +125,7 @@ map_hz = {map_hz}
 
 [harmonic_balance]
 harmonics = 1
+{modes}
 
 [continuation]
 start_hz = 0.8
@@ -133,6 +136,7 @@ step_hz = 0.01
         normal = weights(1),
         preload = -KN * GAP * length,
         map_hz = list(MAP_HZ.iter().map(|f| f.to_string())),
+        modes = modes.map_or(String::new(), |m| format!("modes = {m}")),
     );
     Case::from_str(
         &text,
@@ -141,8 +145,8 @@ step_hz = 0.01
     .unwrap()
 }
 
-fn solve(dir: &Path, modal: bool) -> ResultsFile {
-    let case = case(dir, modal);
+fn solve(dir: &Path, modal: bool, modes: Option<usize>) -> ResultsFile {
+    let case = case(dir, modal, modes);
     solve_case(
         &case,
         &SolveOptions::new(RomPolicy::ReadIfMatching),
@@ -208,6 +212,29 @@ fn compare_maps(a: &ContactMap, b: &ContactMap) -> (usize, f64) {
     (differ, angle)
 }
 
+/// At each map of `a` and `b` (the same frequencies): the free ends' amplitude in `a`, the
+/// largest difference of `b`'s free ends from it (`modal`: `b` on the closed-form modal model),
+/// and [`compare_maps`] of the two maps.
+fn differences(a: &ResultsFile, b: &ResultsFile, modal: bool) -> Vec<(f64, f64, usize, f64)> {
+    assert_eq!(a.maps.len(), b.maps.len());
+    a.maps
+        .iter()
+        .zip(&b.maps)
+        .map(|(ma, mb)| {
+            assert_eq!(ma.omega, mb.omega);
+            let (ta, tb) = (tips(a, ma.point, false), tips(b, mb.point, modal));
+            let amp = ta.iter().map(|t| t.0.hypot(t.1)).fold(0.0, f64::max);
+            let off = ta
+                .iter()
+                .zip(&tb)
+                .map(|(x, y)| (x.0 - y.0).hypot(x.1 - y.1))
+                .fold(0.0, f64::max);
+            let (differ, angle) = compare_maps(ma, mb);
+            (amp, off, differ, angle)
+        })
+        .collect()
+}
+
 /// With all modes, the modal model's strip with an initial gap gives the full model's response
 /// (1e-6 of the amplitude; measured ≤ 3.8e-13) and maps (no sample off, transition angles within
 /// 1e-6 rad; measured ≤ 7.1e-13) at the chosen frequencies, on each of the three branches inside
@@ -215,23 +242,14 @@ fn compare_maps(a: &ContactMap, b: &ContactMap) -> (usize, f64) {
 #[test]
 fn modal_strip_with_a_gap_equals_the_full_model() {
     let dir = tempfile::tempdir().unwrap();
-    let full = solve(dir.path(), false);
-    let modal = solve(dir.path(), true);
+    let full = solve(dir.path(), false, None);
+    let modal = solve(dir.path(), true, None);
     // one crossing of 1 Hz, three of 1.061 Hz (inside the fold of the normal chain's hardening
     // resonance: large, middle and small amplitude in path order)
     let at: Vec<f64> = full.maps.iter().map(|m| m.omega).collect();
     assert_eq!(at, [1.0, 1.061, 1.061, 1.061].map(|f| 2.0 * PI * f));
-    assert_eq!(modal.maps.len(), full.maps.len());
-    for (a, b) in full.maps.iter().zip(&modal.maps) {
-        assert_eq!(a.omega, b.omega);
-        let (ta, tb) = (tips(&full, a.point, false), tips(&modal, b.point, true));
-        let amp = ta.iter().map(|t| t.0.hypot(t.1)).fold(0.0, f64::max);
-        let off = ta
-            .iter()
-            .zip(&tb)
-            .map(|(x, y)| (x.0 - y.0).hypot(x.1 - y.1))
-            .fold(0.0, f64::max);
-        let (differ, angle) = compare_maps(a, b);
+    let found = differences(&full, &modal, true);
+    for (a, (amp, off, differ, angle)) in full.maps.iter().zip(found) {
         let count = |code: i64| a.state.iter().filter(|&&s| s == code).count();
         eprintln!(
             "{} Hz: free-end amplitude {amp:.4e}, modal − full {:.2e} of it; maps: {differ} samples differ, angles within {angle:.2e} rad; samples stick {} slip- {} slip+ {} separated {}",
@@ -249,5 +267,27 @@ fn modal_strip_with_a_gap_equals_the_full_model() {
             assert!(count(code) > 0, "no sample in state {code}");
         }
         assert!(count(-1) + count(1) > 0, "no slip");
+    }
+}
+
+/// The full model solved on the modal coordinates of all its 2N modes
+/// (`[harmonic_balance] modes`, the modes from its matrices, the maps from the elements' motion
+/// Φ_c Q) gives the full model's response (1e-6 of the amplitude) and maps (no sample off,
+/// transition angles within 1e-6 rad) at the chosen frequencies.
+#[test]
+fn the_full_model_on_all_its_modes_gives_its_maps() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = solve(dir.path(), false, None);
+    let on_modes = solve(dir.path(), false, Some(2 * N));
+    let found = differences(&full, &on_modes, false);
+    for (a, (amp, off, differ, angle)) in full.maps.iter().zip(found) {
+        eprintln!(
+            "{} Hz: free-end amplitude {amp:.4e}, on modes − full {:.2e} of it; maps: {differ} samples differ, angles within {angle:.2e} rad",
+            a.omega / TAU,
+            off / amp
+        );
+        assert!(off <= 1e-6 * amp, "{off:e} of {amp:e}");
+        assert_eq!(differ, 0);
+        assert!(angle < 1e-6, "{angle:e}");
     }
 }

@@ -160,7 +160,7 @@ fn march_extra(cm: &CaseMarch, out: &MarchOutcome) -> Group {
         "contact_displacement",
         Dataset::new(
             &[t, ne, 2],
-            Data::F64(h.local.clone()),
+            Data::F64(h.contact_displacements(sys, cm.settings.omega)),
             "m",
             "(u_t, v): tangential relative displacement and normal approach per element",
         ),

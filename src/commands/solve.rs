@@ -284,20 +284,10 @@ fn matrix_curve(
         .iter()
         .map(|&r| ResponseDof::Row(r as u64))
         .collect();
-    let positions = (0..case.strip.len())
-        .map(|s| Ok(strip_points(case, s, model)?.iter().map(|p| p.0).collect()))
-        .collect::<Result<Vec<Vec<f64>>>>()?;
+    let (positions, map_hz) = strip_map_parts(case, model)?;
     let maps = |q: &[f64], state: &Vec<f64>, at: Option<f64>| {
         strip_maps(case, &positions, &elements, &system.layout(), q, state, at)
     };
-    let mut map_hz: Vec<f64> = case
-        .strip
-        .iter()
-        .filter(|s| s.map.is_some())
-        .flat_map(|s| s.map_hz.iter().flatten().copied())
-        .collect();
-    map_hz.sort_by(f64::total_cmp);
-    map_hz.dedup();
     let probe = ContactProbe {
         sizes: Vec::new(),
         evaluate: &|_: &[f64], _: &_, _| Ok(Vec::new()),
@@ -307,9 +297,26 @@ fn matrix_curve(
     trace_curve(case, &system, dofs, &probe, None, stability, rep)
 }
 
+/// The positions of every `[[strip]]`'s points (per strip) and the frequencies (Hz, ascending,
+/// without repeats) at which the strips with a `map` want one (`map_hz`).
+fn strip_map_parts(case: &Case, model: &StructuralModel) -> Result<(Vec<Vec<f64>>, Vec<f64>)> {
+    let positions = (0..case.strip.len())
+        .map(|s| Ok(strip_points(case, s, model)?.iter().map(|p| p.0).collect()))
+        .collect::<Result<Vec<Vec<f64>>>>()?;
+    let mut map_hz: Vec<f64> = case
+        .strip
+        .iter()
+        .filter(|s| s.map.is_some())
+        .flat_map(|s| s.map_hz.iter().flatten().copied())
+        .collect();
+    map_hz.sort_by(f64::total_cmp);
+    map_hz.dedup();
+    Ok((positions, map_hz))
+}
+
 /// The curve of one sweep point of a matrix case on the modal coordinates of its `modes` lowest
 /// modes ([`modal_setup`]): the friction elements projected on the modes, the response at the
-/// output rows Φ_o Q per harmonic.
+/// output rows Φ_o Q per harmonic, the strips' maps from the elements' motion Φ_c Q.
 fn modal_curve(
     case: &Case,
     model: &StructuralModel,
@@ -317,12 +324,6 @@ fn modal_curve(
     stability: bool,
     rep: &Reporter,
 ) -> Result<Curve> {
-    if let Some(s) = case.strip.iter().position(|s| s.map.is_some()) {
-        return Err(Error::input(format!(
-            "{}: key 'strip[{s}].map': the maps are formed on the physical rows, not with `harmonic_balance.modes`; remove one of the two",
-            case.path.display()
-        )));
-    }
     let setup = modal_setup(case, model, modes)?;
     let (first, last) = (setup.frequencies_hz[0], setup.frequencies_hz[modes - 1]);
     rep.detail(&format!(
@@ -344,11 +345,16 @@ fn modal_curve(
         .iter()
         .map(|&r| ResponseDof::Row(r as u64))
         .collect();
+    let (positions, map_hz) = strip_map_parts(case, model)?;
+    let maps = |q: &[f64], state: &Vec<f64>, at: Option<f64>| {
+        let u = force.to_physical(&layout, q)?;
+        strip_maps(case, &positions, force.inner(), &layout, &u, state, at)
+    };
     let probe = ContactProbe {
         sizes: Vec::new(),
         evaluate: &|_: &[f64], _: &_, _| Ok(Vec::new()),
-        maps: None,
-        map_hz: Vec::new(),
+        maps: case.strip.iter().any(|s| s.map.is_some()).then_some(&maps),
+        map_hz,
     };
     let physical =
         |modal: &OutputResponse, opts: &ResponseOptions| setup.modal.physical_response(modal, opts);

@@ -308,9 +308,9 @@ impl<F> ModalForce<F> {
         )
     }
 
-    /// U = Φ_c Q per coefficient: the physical harmonic vector of the contact DOFs for the
-    /// modal one `q`.
-    fn to_physical(&self, layout: &HarmonicLayout, q: &[f64]) -> Result<Vec<f64>> {
+    /// U = Φ_c Q per coefficient: the physical harmonic vector of the contact DOFs (the real
+    /// layout of the inner force's n_c DOFs) for the modal one `q` (of the m modes).
+    pub fn to_physical(&self, layout: &HarmonicLayout, q: &[f64]) -> Result<Vec<f64>> {
         let (nc, m) = (self.shapes.nrows(), self.shapes.ncols());
         let cc = layout.coefficients();
         if q.len() != layout.len(m) {

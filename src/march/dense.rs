@@ -64,6 +64,86 @@ fn dot_partial_sums(x: &[f64], y: &[f64]) -> f64 {
     ((s[0] + s[4]) + (s[1] + s[5])) + ((s[2] + s[6]) + (s[3] + s[7])) + tail
 }
 
+/// x ← x + Σ_a s_a z_a over the columns z_a = `column(a)` (as long as x), a = 0..s.len(): the
+/// correction x + Z s of a low-rank solve ([`super::lowrank`]). Each x_j takes the products in
+/// the order of the columns, as one pass x ← x + s_a z_a per column would (the same result to
+/// the bit), but four columns per pass over x; from `VEX_FROM` entries on, where the CPU has
+/// AVX, in VEX-encoded instructions (no fused multiply–add: the same bits), as [`dot`].
+pub fn add_scaled_columns<'z>(x: &mut [f64], s: &[f64], column: impl Fn(usize) -> &'z [f64]) {
+    let vex = uses_vex(x.len());
+    let quads = s.len() / 4;
+    for g in 0..quads {
+        let a = 4 * g;
+        let z = [column(a), column(a + 1), column(a + 2), column(a + 3)];
+        let c = [s[a], s[a + 1], s[a + 2], s[a + 3]];
+        #[cfg(target_arch = "x86_64")]
+        if vex {
+            // SAFETY: the CPU has AVX, detected by `uses_vex`.
+            unsafe { four_columns_avx(x, c, z) };
+            continue;
+        }
+        four_columns(x, c, z);
+    }
+    for (a, &c) in s.iter().enumerate().skip(4 * quads) {
+        let z = column(a);
+        #[cfg(target_arch = "x86_64")]
+        if vex {
+            // SAFETY: the CPU has AVX, detected by `uses_vex`.
+            unsafe { one_column_avx(x, c, z) };
+            continue;
+        }
+        one_column(x, c, z);
+    }
+}
+
+/// Whether vectors of `len` entries take the VEX-encoded kernels (x86-64 with AVX, from
+/// `VEX_FROM` entries on).
+fn uses_vex(len: usize) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if len >= VEX_FROM {
+        return std::arch::is_x86_feature_detected!("avx");
+    }
+    let _ = len;
+    false
+}
+
+/// x_j ← (((x_j + c₀ z₀ⱼ) + c₁ z₁ⱼ) + c₂ z₂ⱼ) + c₃ z₃ⱼ.
+#[inline(always)]
+fn four_columns(x: &mut [f64], c: [f64; 4], z: [&[f64]; 4]) {
+    let columns = z[0].iter().zip(z[1]).zip(z[2]).zip(z[3]);
+    for (xj, (((a, b), d), e)) in x.iter_mut().zip(columns) {
+        *xj = (((*xj + c[0] * a) + c[1] * b) + c[2] * d) + c[3] * e;
+    }
+}
+
+/// x_j ← x_j + c z_j.
+#[inline(always)]
+fn one_column(x: &mut [f64], c: f64, z: &[f64]) {
+    for (xj, zj) in x.iter_mut().zip(z) {
+        *xj += c * zj;
+    }
+}
+
+/// [`four_columns`] in VEX-encoded instructions.
+///
+/// # Safety
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn four_columns_avx(x: &mut [f64], c: [f64; 4], z: [&[f64]; 4]) {
+    four_columns(x, c, z)
+}
+
+/// [`one_column`] in VEX-encoded instructions.
+///
+/// # Safety
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn one_column_avx(x: &mut [f64], c: f64, z: &[f64]) {
+    one_column(x, c, z)
+}
+
 /// Clears the upper halves of the vector registers (`vzeroupper`) where the CPU has AVX, after a
 /// faer kernel ran on this thread: its AVX-512 kernels return with them in use (the ZMM_Hi256
 /// component of XINUSE set, read by `xgetbv` after the capacitance inverses of

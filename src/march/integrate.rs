@@ -46,6 +46,9 @@ pub struct MarchSettings {
     pub stop_at_steady: bool,
     /// Harmonics 0..=H of the last period reported per DOF.
     pub harmonics: usize,
+    /// Record the velocities q̇ of every step in [`MarchHistory::v`] (n values per step; off, the
+    /// record of a step holds t, q, the elements' forces and states and the iterations).
+    pub record_velocities: bool,
 }
 
 impl Default for MarchSettings {
@@ -62,6 +65,7 @@ impl Default for MarchSettings {
             steady_tolerance: 1e-6,
             stop_at_steady: false,
             harmonics: 1,
+            record_velocities: false,
         }
     }
 }
@@ -131,17 +135,20 @@ impl MarchSettings {
     }
 }
 
-/// Every accepted step (index 0 is the initial state at t = 0).
+/// Every accepted step (index 0 is the initial state at t = 0). What the result and the
+/// steady-state check need: q (the harmonics of the last period, the response written by
+/// `nlrom march`), the contact forces and states; the velocities only when asked for
+/// ([`MarchSettings::record_velocities`]: the periodicity check compares the velocity at a
+/// period's end, which the march keeps), the elements' relative displacements on demand from q
+/// ([`MarchHistory::contact_displacements`]).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MarchHistory {
     /// Time (s), \[T\].
     pub time: Vec<f64>,
     /// Displacements, [T × n] row-major.
     pub q: Vec<f64>,
-    /// Velocities, [T × n].
+    /// Velocities, [T × n] with [`MarchSettings::record_velocities`], else empty.
     pub v: Vec<f64>,
-    /// Per element (u_t, v) relative displacements (m), [T × E × 2].
-    pub local: Vec<f64>,
     /// Per element (f_t, f_n) (N), [T × E × 2].
     pub force: Vec<f64>,
     /// Per element state code (0 separated, 1 stick, 2 slip+, 3 slip−), [T × E].
@@ -161,29 +168,48 @@ impl MarchHistory {
         self.time.is_empty()
     }
 
-    /// Room for `steps` more instants of `n` DOF and `ne` elements.
-    fn reserve(&mut self, steps: usize, n: usize, ne: usize) {
+    /// Room for `steps` more instants of `n` DOF and `ne` elements (the velocities with
+    /// `velocities`).
+    fn reserve(&mut self, steps: usize, n: usize, ne: usize, velocities: bool) {
         self.time.reserve(steps);
         self.q.reserve(steps * n);
-        self.v.reserve(steps * n);
-        self.local.reserve(steps * ne * 2);
+        if velocities {
+            self.v.reserve(steps * n);
+        }
         self.force.reserve(steps * ne * 2);
         self.state.reserve(steps * ne);
         self.iterations.reserve(steps);
     }
 
-    /// Records the instant `t` (the prescribed parts of the elements from `exc`).
-    fn push(&mut self, sys: &MarchSystem, t: f64, now: &Snapshot, exc: ExcitationAt, it: u32) {
+    /// Records the instant `t` (its velocities with `velocities`).
+    fn push(&mut self, t: f64, now: &Snapshot, it: u32, velocities: bool) {
         self.time.push(t);
         self.q.extend_from_slice(&now.kin.q);
-        self.v.extend_from_slice(&now.kin.v);
-        for (i, (e, smp)) in sys.elements.iter().zip(&now.samples).enumerate() {
-            let l = e.local_with(&now.kin.q, exc.pt[i], exc.pn[i]);
-            self.local.extend_from_slice(&[l.ut, l.v]);
+        if velocities {
+            self.v.extend_from_slice(&now.kin.v);
+        }
+        for smp in &now.samples {
             self.force.extend_from_slice(&[smp.f_t, smp.f_n]);
             self.state.push(smp.state.code());
         }
         self.iterations.push(it);
+    }
+
+    /// Per element the relative displacements (u_t, v) (m) at every recorded instant,
+    /// [T × E × 2]: u_t = g_tᵀ q + p_t(t), v = g_nᵀ q + p_n(t) (Gastaldi & Berruti 2018, eq. 2;
+    /// [`super::element::Element::local`]) from the recorded q of `sys` driven at `omega`
+    /// (rad/s).
+    pub fn contact_displacements(&self, sys: &MarchSystem, omega: f64) -> Vec<f64> {
+        let n = sys.n;
+        let mut out = Vec::with_capacity(self.len() * sys.elements.len() * 2);
+        for (k, &t) in self.time.iter().enumerate() {
+            let q = &self.q[k * n..(k + 1) * n];
+            for e in &sys.elements {
+                let l = e.local(q, omega, t);
+                out.extend_from_slice(&[l.ut, l.v]);
+            }
+        }
+        out
     }
 }
 
@@ -371,9 +397,10 @@ impl<'a> Marcher<'a> {
             }
             m.table.len()
         };
+        let velocities = settings.record_velocities;
         m.history
-            .reserve(settings.periods * steps_per_period + 1, n, ne);
-        m.history.push(sys, 0.0, &m.cur, m.excitation.view(), 0);
+            .reserve(settings.periods * steps_per_period + 1, n, ne, velocities);
+        m.history.push(0.0, &m.cur, 0, velocities);
         m.prev_q = m.cur.kin.q.clone();
         m.prev_v = m.cur.kin.v.clone();
         Ok(m)
@@ -415,7 +442,7 @@ impl<'a> Marcher<'a> {
                 self.step_range = (self.step_range.0.min(dt), self.step_range.1.max(dt));
                 std::mem::swap(&mut self.cur, &mut self.next);
                 self.t = t1;
-                self.history.push(sys, t1, &self.cur, exc, its);
+                self.history.push(t1, &self.cur, its, s.record_velocities);
             }
         } else {
             while t_end - self.t > 1e-9 * period {
@@ -461,11 +488,10 @@ impl<'a> Marcher<'a> {
                 std::mem::swap(&mut self.cur, &mut self.next);
                 self.t = t1;
                 self.history.push(
-                    sys,
                     t1,
                     &self.cur,
-                    self.excitation.view(),
                     its.min(u32::MAX as u64) as u32,
+                    s.record_velocities,
                 );
             }
         }
@@ -478,6 +504,7 @@ impl<'a> Marcher<'a> {
             first_index,
             end_index,
             (&self.prev_q, &self.prev_v),
+            &self.cur.kin.v,
             p > 0,
         );
         self.prev_q.copy_from_slice(&self.cur.kin.q);

@@ -442,6 +442,57 @@ impl LowRank {
         scratch: &mut Vec<f64>,
         delta: impl Fn(usize, bool) -> f64,
     ) {
+        let n = self.n;
+        let parts = Parts {
+            capacitance_inverse: &self.capacitance_inverse,
+            v: &self.v,
+            owner: &self.owner,
+            normal: &self.normal,
+        };
+        parts.add_correction(x, scratch, delta, |a| &self.z[a * n..(a + 1) * n]);
+    }
+
+    /// The factors without Z, for a cache of many states: the columns of Z are A_stick⁻¹ g_t or
+    /// A_stick⁻¹ g_n of their elements whatever the state, held once in a [`ColumnTable`].
+    pub fn compact(&self) -> CompactLowRank {
+        CompactLowRank {
+            capacitance_inverse: self.capacitance_inverse.clone(),
+            v: self.v.clone(),
+            owner: self.owner.clone(),
+            normal: self.normal.clone(),
+        }
+    }
+
+    /// Memory of the factors (f64 entries).
+    pub fn len(&self) -> usize {
+        self.z.len() + self.capacitance_inverse.len()
+    }
+
+    /// Whether the factors are empty (the all-stick state).
+    pub fn is_empty(&self) -> bool {
+        self.v.is_empty()
+    }
+}
+
+/// The parts of a state's factors that the correction reads besides Z: B = (I + VᵀZ)⁻¹ (r × r,
+/// row-major), the sparse columns of V and each column's element and direction.
+struct Parts<'a> {
+    capacitance_inverse: &'a [f64],
+    v: &'a [Sparse],
+    owner: &'a [usize],
+    normal: &'a [bool],
+}
+
+impl Parts<'_> {
+    /// x ← x + Z B (δ − Vᵀ x) with δ_a = `delta(owner, normal)` and z_a = `column(a)` of column
+    /// a (the Woodbury correction, module documentation); `scratch` holds 2r entries.
+    fn add_correction<'z>(
+        &self,
+        x: &mut [f64],
+        scratch: &mut Vec<f64>,
+        delta: impl Fn(usize, bool) -> f64,
+        column: impl Fn(usize) -> &'z [f64],
+    ) {
         let r = self.v.len();
         if r == 0 {
             return;
@@ -449,20 +500,112 @@ impl LowRank {
         scratch.clear();
         scratch.resize(2 * r, 0.0);
         let (w, s) = scratch.split_at_mut(r);
-        for (a, (wi, v)) in w.iter_mut().zip(&self.v).enumerate() {
+        for (a, (wi, v)) in w.iter_mut().zip(self.v).enumerate() {
             *wi = delta(self.owner[a], self.normal[a]) - sparse_dot(v, x);
         }
-        dense::matvec(&self.capacitance_inverse, w, s);
-        for (za, &sa) in self.z.chunks_exact(self.n).zip(s.iter()) {
-            for (xj, zj) in x.iter_mut().zip(za) {
-                *xj += sa * zj;
+        dense::matvec(self.capacitance_inverse, w, s);
+        dense::add_scaled_columns(x, s, column);
+    }
+}
+
+/// A_stick⁻¹ g_t and A_stick⁻¹ g_n (when the element applies its normal force) of every element
+/// (n each): the columns of Z of every state ([`LowRank::compact`]), the same values as
+/// [`LowRank`]'s ([`solve_sparse`] on the same weights).
+#[derive(Clone, Debug)]
+pub struct ColumnTable {
+    n: usize,
+    /// Per element: the index of its tangential column (its normal one, if any, next).
+    first: Vec<usize>,
+    /// The columns, column-major (column c is `z[c n..(c + 1) n]`).
+    z: Vec<f64>,
+}
+
+impl ColumnTable {
+    /// The columns of `elements` given A_stick⁻¹ (n × n, row-major).
+    pub fn new(stick_inverse: &[f64], n: usize, elements: &[Element]) -> Self {
+        let mut first = Vec::with_capacity(elements.len());
+        let mut z = Vec::new();
+        for e in elements {
+            first.push(z.len() / n.max(1));
+            let normal = e.normal.as_ref().filter(|_| e.applies_normal);
+            for d in std::iter::once(&e.tangential).chain(normal) {
+                let at = z.len();
+                z.resize(at + n, 0.0);
+                solve_sparse(stick_inverse, n, &d.weights, &mut z[at..]);
             }
+        }
+        ColumnTable { n, first, z }
+    }
+
+    /// The column of element `owner` (its normal direction when `normal`).
+    fn column(&self, owner: usize, normal: bool) -> &[f64] {
+        let c = self.first[owner] + usize::from(normal);
+        &self.z[c * self.n..(c + 1) * self.n]
+    }
+
+    /// Memory of the columns (f64 entries).
+    pub fn len(&self) -> usize {
+        self.z.len()
+    }
+
+    /// Whether there are no columns (no elements).
+    pub fn is_empty(&self) -> bool {
+        self.z.is_empty()
+    }
+}
+
+/// The factors of one state with Z read from a [`ColumnTable`] ([`LowRank::compact`]): O(r²)
+/// entries instead of O(n r), the same solutions to the last bit.
+#[derive(Clone, Debug)]
+pub struct CompactLowRank {
+    capacitance_inverse: Vec<f64>,
+    v: Vec<Sparse>,
+    owner: Vec<usize>,
+    normal: Vec<bool>,
+}
+
+impl CompactLowRank {
+    fn parts(&self) -> Parts<'_> {
+        Parts {
+            capacitance_inverse: &self.capacitance_inverse,
+            v: &self.v,
+            owner: &self.owner,
+            normal: &self.normal,
         }
     }
 
-    /// Memory of the factors (f64 entries).
+    /// [`LowRank::solve_with`] with the columns of `table`.
+    pub fn solve_with(
+        &self,
+        stick_inverse: &[f64],
+        table: &ColumnTable,
+        b: &[f64],
+        x: &mut [f64],
+        scratch: &mut Vec<f64>,
+    ) {
+        dense::matvec(stick_inverse, b, x);
+        let column = |a: usize| table.column(self.owner[a], self.normal[a]);
+        self.parts().add_correction(x, scratch, |_, _| 0.0, column);
+    }
+
+    /// [`LowRank::solve_shifted`] with the columns of `table`.
+    pub fn solve_shifted(
+        &self,
+        table: &ColumnTable,
+        y0: &[f64],
+        delta: impl Fn(usize, bool) -> f64,
+        x: &mut [f64],
+        scratch: &mut Vec<f64>,
+    ) {
+        x.copy_from_slice(y0);
+        let column = |a: usize| table.column(self.owner[a], self.normal[a]);
+        self.parts().add_correction(x, scratch, delta, column);
+    }
+
+    /// Memory of the factors (f64 entries; the sparse columns of V not counted, as in
+    /// [`LowRank::len`]).
     pub fn len(&self) -> usize {
-        self.z.len() + self.capacitance_inverse.len()
+        self.capacitance_inverse.len()
     }
 
     /// Whether the factors are empty (the all-stick state).

@@ -49,8 +49,9 @@ impl Extremes {
 }
 
 /// The summary of the period recorded at history indices `first..=last` (`first` is the previous
-/// period's end; `extremes` the scratch of its amplitude). `prev_end` is (q, q̇) at `first`;
-/// `compare` is false for the first period.
+/// period's end; `extremes` the scratch of its amplitude). `prev_end` is (q, q̇) at `first`,
+/// `end_v` q̇ at `last` (the history records q̇ only when asked); `compare` is false for the
+/// first period.
 #[allow(clippy::too_many_arguments)]
 pub fn summarize(
     h: &MarchHistory,
@@ -60,6 +61,7 @@ pub fn summarize(
     first: usize,
     last: usize,
     prev_end: (&[f64], &[f64]),
+    end_v: &[f64],
     compare: bool,
 ) -> PeriodSummary {
     let n = sys.n;
@@ -72,9 +74,8 @@ pub fn summarize(
     };
     let periodicity_error = compare.then(|| {
         let q = &h.q[last * n..(last + 1) * n];
-        let v = &h.v[last * n..(last + 1) * n];
         let dq = max_difference(q, prev_end.0);
-        let dv = max_difference(v, prev_end.1);
+        let dv = max_difference(end_v, prev_end.1);
         (dq / amp).max(dv / (omega * amp))
     });
     let state_changes = (first + 1..=last)

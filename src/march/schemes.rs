@@ -19,7 +19,7 @@ use std::collections::HashMap;
 
 use super::dense;
 use super::law::{ContactState, LawSample};
-use super::lowrank::{self, LowRank};
+use super::lowrank::{self, ColumnTable, CompactLowRank, LowRank};
 use super::signal::Harmonic;
 use super::system::MarchSystem;
 use crate::error::{Error, Result};
@@ -248,8 +248,9 @@ enum Held {
 enum StepFactor {
     /// Its inverse (n × n).
     Full(Vec<f64>),
-    /// A low-rank change of the all-stick step matrix ([`LowRank`]), when the rank is below n.
-    LowRank(Box<LowRank>),
+    /// A low-rank change of the all-stick step matrix ([`LowRank`]), when the rank is below n,
+    /// its Z read from the step size's [`ColumnTable`].
+    LowRank(Box<CompactLowRank>),
 }
 
 impl StepFactor {
@@ -386,6 +387,8 @@ struct StepSize {
     working: Option<LowRank>,
     /// The premultiplied all-stick operators (fixed-step piecewise-linear Newmark).
     premultiplied: Option<Premultiplied>,
+    /// A_stick⁻¹ g of every element direction: the Z of the cached low-rank factors.
+    columns: Option<ColumnTable>,
 }
 
 impl StepSize {
@@ -397,7 +400,8 @@ impl StepSize {
             .sum::<usize>();
         let working = self.working.as_ref().map_or(0, LowRank::len);
         let premultiplied = self.premultiplied.as_ref().map_or(0, Premultiplied::len);
-        (matrices + self.held + working + premultiplied) * std::mem::size_of::<f64>()
+        let columns = self.columns.as_ref().map_or(0, ColumnTable::len);
+        (matrices + self.held + working + premultiplied + columns) * std::mem::size_of::<f64>()
     }
 
     fn new(bits: u64) -> Self {
@@ -412,6 +416,7 @@ impl StepSize {
             last: None,
             working: None,
             premultiplied: None,
+            columns: None,
         }
     }
 
@@ -578,9 +583,13 @@ impl Cache {
         };
         match factor {
             StepFactor::Full(inv) => dense::matvec(inv, b, x),
-            StepFactor::LowRank(l) => {
-                l.solve_with(size.stick.as_ref().expect("stick held"), b, x, scratch)
-            }
+            StepFactor::LowRank(l) => l.solve_with(
+                size.stick.as_ref().expect("stick held"),
+                size.columns.as_ref().expect("columns held"),
+                b,
+                x,
+                scratch,
+            ),
         }
         Ok(())
     }
@@ -716,14 +725,19 @@ impl Cache {
                 _ => stick,
             }
         };
-        let factor = match held {
+        match held {
             Held::Cached(f) => match &size.factors[f].1 {
-                StepFactor::LowRank(l) => l.as_ref(),
+                StepFactor::LowRank(l) => {
+                    let table = size.columns.as_ref().expect("columns held");
+                    l.solve_shifted(table, ws_y0, delta, x, scratch);
+                }
                 StepFactor::Full(_) => return Ok(false),
             },
-            Held::Working => size.working.as_ref().expect("working factor held"),
-        };
-        factor.solve_shifted(ws_y0, delta, x, scratch);
+            Held::Working => {
+                let w = size.working.as_ref().expect("working factor held");
+                w.solve_shifted(ws_y0, delta, x, scratch);
+            }
+        }
         Ok(true)
     }
 
@@ -764,7 +778,10 @@ impl Cache {
                         self.factorisations += made + 1;
                         return Ok(Held::Working);
                     }
-                    factor = Some(StepFactor::LowRank(Box::new(w.clone())));
+                    if size.columns.is_none() {
+                        size.columns = Some(ColumnTable::new(inv, n, &sys.elements));
+                    }
+                    factor = Some(StepFactor::LowRank(Box::new(w.compact())));
                 }
             }
         }
