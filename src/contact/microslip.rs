@@ -1055,16 +1055,28 @@ impl Harmonics {
         out.energy = PI * (u[1] * out.friction[2] - u[2] * out.friction[1]);
         out.slider = w;
         if let Some(j) = jac {
+            let [n0, n1, n2] = contact_rows(kn);
             *j = [
                 [kt, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, kt, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, kt, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, kn, 0.0, 0.0, 1.0],
-                [0.0, 0.0, 0.0, 0.0, kn, 0.0, 0.0],
-                [0.0, 0.0, 0.0, 0.0, 0.0, kn, 0.0],
+                n0,
+                n1,
+                n2,
             ];
         }
     }
+}
+
+/// The normal rows of a point's Jacobian ([`PointJacobian`]) in contact over the whole cycle:
+/// n = n0e + k_n v1 at every instant, so ∂N = k_n ∂V and ∂N0/∂n0 = 1 (k_n in N/m).
+#[inline]
+fn contact_rows(kn: f64) -> [[f64; 7]; 3] {
+    [
+        [0.0, 0.0, 0.0, kn, 0.0, 0.0, 1.0],
+        [0.0, 0.0, 0.0, 0.0, kn, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0, 0.0, kn, 0.0],
+    ]
 }
 
 /// The phase integrals of a cycle summed per kind, with what the stick sliders add: the
@@ -1182,15 +1194,6 @@ impl PhaseSums {
         let mut slip = self.positive;
         slip.add(&self.negative, -1.0);
         let m_slip = slip.projection();
-        // In contact all period M_contact is the identity (the projection of e over a period).
-        let m_contact = if self.separates {
-            let mut contact = self.stick;
-            contact.add(&self.positive, 1.0);
-            contact.add(&self.negative, 1.0);
-            contact.projection()
-        } else {
-            [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-        };
         let w_col =
             PhaseIntegrals([self.w_int[0], self.w_int[1], self.w_int[2], 0.0, 0.0]).first_column();
         let cn = [mo.n0e, mo.nv.x1, mo.nv.x2];
@@ -1199,18 +1202,37 @@ impl PhaseSums {
         } = out;
         for k in 0..3 {
             friction[k] = kt * (dot(m_stick[k], u) - w_col[k]) + mu * dot(m_slip[k], cn);
-            normal[k] = dot(m_contact[k], cn);
             if let Some(j) = jac.as_deref_mut() {
-                let (friction_rows, normal_rows) = j.split_at_mut(3);
-                let (fj, nj) = (&mut friction_rows[k], &mut normal_rows[k]);
+                let fj = &mut j[k];
                 for l in 0..3 {
                     fj[l] = kt * (m_stick[k][l] - self.w_u[k][l]);
                     fj[3 + l] = kn * (mu * m_slip[k][l] - kt * self.w_v[k][l]);
-                    nj[l] = 0.0;
-                    nj[3 + l] = kn * m_contact[k][l];
                 }
                 fj[6] = mu * m_slip[k][0] - kt * self.w_v[k][0];
-                nj[6] = m_contact[k][0];
+            }
+        }
+        if self.separates {
+            let mut contact = self.stick;
+            contact.add(&self.positive, 1.0);
+            contact.add(&self.negative, 1.0);
+            let m_contact = contact.projection();
+            for k in 0..3 {
+                normal[k] = dot(m_contact[k], cn);
+                if let Some(j) = jac.as_deref_mut() {
+                    let nj = &mut j[3 + k];
+                    nj[..3].fill(0.0);
+                    for l in 0..3 {
+                        nj[3 + l] = kn * m_contact[k][l];
+                    }
+                    nj[6] = m_contact[k][0];
+                }
+            }
+        } else {
+            // In contact all period M_contact is the identity (the projection of e over a
+            // period): the normal force and its rows as in complete stick.
+            *normal = cn;
+            if let Some(j) = jac {
+                [j[3], j[4], j[5]] = contact_rows(kn);
             }
         }
         out.energy = PI * (u[1] * out.friction[2] - u[2] * out.friction[1]);
