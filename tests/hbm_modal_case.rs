@@ -2,17 +2,17 @@
 //! `nlrom::problem::modal_case`): with every mode the same solutions as on the physical rows,
 //! through a fold with slip and separation; a stuck case against the closed-form linear
 //! response with Rayleigh damping (`nlrom solve` end to end); the sparse eigensolver's modes
-//! against the dense pencil's; bad input.
+//! against the closed form; beyond the dense limit; bad input.
 
 mod support;
 
+use std::f64::consts::PI;
 use std::path::Path;
 
 use faer::{c64, Mat};
 use nlrom::case::Case;
 use nlrom::commands::progress::Reporter;
-use nlrom::commands::solve::{solve_case, SolveOptions};
-use nlrom::eigen::symmetric_modes;
+use nlrom::commands::solve::{solve_case, SolveOptions, SolveOutcome};
 use nlrom::harmonics::HarmonicLayout;
 use nlrom::hbm::frf::frequency_response;
 use nlrom::hbm::response::output_response;
@@ -59,6 +59,40 @@ fn write_chain(dir: &Path, n: usize) {
     .unwrap();
 }
 
+/// A fixed–free chain of n unit masses joined by unit springs, in Matrix Market files.
+fn write_uniform_chain(dir: &Path, n: usize) {
+    let mut k = Vec::new();
+    for i in 0..n {
+        k.push(format!(
+            "{} {} {}",
+            i + 1,
+            i + 1,
+            if i + 1 < n { 2.0 } else { 1.0 }
+        ));
+        if i + 1 < n {
+            k.push(format!("{} {} -1.0", i + 2, i + 1));
+        }
+    }
+    std::fs::write(
+        dir.join("K.mtx"),
+        format!(
+            "%%MatrixMarket matrix coordinate real symmetric\n{n} {n} {}\n{}\n",
+            k.len(),
+            k.join("\n")
+        ),
+    )
+    .unwrap();
+    let m: Vec<String> = (0..n).map(|i| format!("{} {} 1.0", i + 1, i + 1)).collect();
+    std::fs::write(
+        dir.join("M.mtx"),
+        format!(
+            "%%MatrixMarket matrix coordinate real symmetric\n{n} {n} {n}\n{}\n",
+            m.join("\n")
+        ),
+    )
+    .unwrap();
+}
+
 /// The chain case with Rayleigh damping [0.01 1/s, 0.02 s], 0.3 N at the last mass, and `extra`
 /// (elements, harmonic balance, continuation).
 fn chain_case(dir: &Path, n: usize, extra: &str) -> nlrom::Result<Case> {
@@ -77,6 +111,15 @@ fn elements(n: usize) -> String {
     format!(
         "\n[[element]]\nkind = \"friction\"\ntangential = {{ dofs = [3], weights = [1.0] }}\nnormal = {{ dofs = [4], weights = [1.0] }}\nkt = 0.5\nkn = 1.0\nmu = 0.5\nn0 = 0.05\n\n[[element]]\nkind = \"friction\"\ntangential = {{ dofs = [{}], weights = [1.0] }}\nkt = 0.5\nmu = 0.4\nn0 = 0.05\n",
         n - 1
+    )
+}
+
+/// `nlrom solve` on `case`, silently.
+fn solve(case: &Case) -> nlrom::Result<SolveOutcome> {
+    solve_case(
+        case,
+        &SolveOptions::new(RomPolicy::ReadIfMatching),
+        &Reporter::silent(),
     )
 }
 
@@ -207,12 +250,7 @@ fn a_stuck_modal_case_gives_the_linear_response() {
             "{stuck}\n[harmonic_balance]\nharmonics = 1\nmodes = {modes}\n\n[continuation]\nstart_rad_s = 0.1\nend_rad_s = 0.6\nstep_rad_s = 0.02\n"
         );
         let case = chain_case(dir.path(), n, &extra).unwrap();
-        let out = solve_case(
-            &case,
-            &SolveOptions::new(RomPolicy::ReadIfMatching),
-            &Reporter::silent(),
-        )
-        .unwrap();
+        let out = solve(&case).unwrap();
         let points = &out.results.frfs[0].points;
         assert!(points.len() >= 20, "{} points", points.len());
         let mut worst = 0.0_f64;
@@ -246,14 +284,16 @@ fn a_stuck_modal_case_gives_the_linear_response() {
     println!("relative error of the first harmonic: 8 modes {full:.1e}, 4 modes {four:.1e}, 2 modes {two:.1e}");
 }
 
-/// On a chain of 700 masses the modes come from the sparse shift-invert eigensolver: their
-/// frequencies equal the dense pencil's to 1e-9 relative, and the sign-free products
-/// φ_r(3) φ_r(699) of each mode at a contact row and the output row to 1e-9 of the largest.
+/// On a uniform fixed–free chain of 3000 unit masses and unit springs the modes come from the
+/// sparse shift-invert eigensolver; they equal the closed form ω_r = 2 sin((2r − 1)π/(2(2N+1)))
+/// rad/s, φ_r(j) = 2/√(2N+1) sin((2r − 1)πj/(2N+1)) at node j = row + 1: frequencies to 1e-9
+/// relative, and the sign-free products φ_r(4) φ_r(N) of each mode at a contact row and the last
+/// row to 1e-9 of the largest.
 #[test]
-fn sparse_modes_equal_the_dense_pencil() {
+fn sparse_modes_equal_the_closed_form() {
     let dir = tempfile::tempdir().unwrap();
-    let n = 700;
-    write_chain(dir.path(), n);
+    let n = 3000;
+    write_uniform_chain(dir.path(), n);
     let extra = format!(
         "{}\n[harmonic_balance]\nmodes = 6\n\n[continuation]\nstart_rad_s = 0.01\nend_rad_s = 0.02\nstep_rad_s = 0.001\n",
         elements(n)
@@ -261,59 +301,57 @@ fn sparse_modes_equal_the_dense_pencil() {
     let case = chain_case(dir.path(), n, &extra).unwrap();
     let model = model::build(&case, &mut |_| {}).unwrap();
     let setup = modal_setup(&case, &model, 6).unwrap();
-    let k = model.free.k.to_dense();
-    let m = model.free.m.to_dense();
-    let (values, vectors) = symmetric_modes(k.as_ref(), m.as_ref()).unwrap();
     let shapes = setup.modal.contact_shapes();
-    // contact rows 3, 4, 699 (ascending), the last one also the last output
-    let products: Vec<(f64, f64)> = (0..6)
+    let denominator = (2 * n + 1) as f64;
+    let phi = |r: usize, j: usize| {
+        2.0 / denominator.sqrt() * ((2 * r - 1) as f64 * PI * j as f64 / denominator).sin()
+    };
+    // contact rows 3, 4, n − 1 (ascending): nodes 4, 5, n
+    let products: Vec<(f64, f64)> = (1..=6)
         .map(|r| {
             (
-                shapes[(0, r)] * shapes[(2, r)],
-                vectors[(3, r)] * vectors[(n - 1, r)],
+                shapes[(0, r - 1)] * shapes[(2, r - 1)],
+                phi(r, 4) * phi(r, n),
             )
         })
         .collect();
     let scale = products.iter().map(|p| p.1.abs()).fold(0.0, f64::max);
-    for r in 0..6 {
-        let f_dense = values[r].sqrt() / (2.0 * std::f64::consts::PI);
-        let rel = (setup.frequencies_hz[r] - f_dense).abs() / f_dense;
+    for r in 1..=6 {
+        let omega = 2.0 * ((2 * r - 1) as f64 * PI / (2.0 * denominator)).sin();
+        let f_exact = omega / (2.0 * PI);
+        let rel = (setup.frequencies_hz[r - 1] - f_exact).abs() / f_exact;
         assert!(
             rel <= 1e-9,
-            "mode {r}: {} vs {f_dense} Hz",
-            setup.frequencies_hz[r]
+            "mode {r}: {} vs {f_exact} Hz",
+            setup.frequencies_hz[r - 1]
         );
-        let (got, want) = products[r];
+        let (got, want) = products[r - 1];
         assert!(
             (got - want).abs() <= 1e-9 * scale,
-            "mode {r}: φ(3)φ(699) {got:e} vs {want:e}"
+            "mode {r}: φ(4)φ(N) {got:e} vs {want:e}"
         );
     }
 }
 
-/// Bad input names the key: more modes than free DOF, an external damping matrix, a map with
-/// modal coordinates, `modes = 0`, `modes` on a case that is not a matrix case.
+/// Bad input names the key: more modes than free DOF, `modes = 0`, an external damping matrix,
+/// `modes` on a case that is not a matrix case.
 #[test]
 fn bad_modal_input_names_the_key() {
     let dir = tempfile::tempdir().unwrap();
     let n = 8;
     write_chain(dir.path(), n);
-    let solve = |extra: &str| -> String {
+    let message = |extra: &str| -> String {
         let case = match chain_case(dir.path(), n, extra) {
             Ok(c) => c,
             Err(e) => return e.to_string(),
         };
-        match solve_case(
-            &case,
-            &SolveOptions::new(RomPolicy::ReadIfMatching),
-            &Reporter::silent(),
-        ) {
+        match solve(&case) {
             Ok(_) => "solved".to_string(),
             Err(e) => e.to_string(),
         }
     };
     let range = "\n[continuation]\nstart_rad_s = 0.1\nend_rad_s = 0.2\nstep_rad_s = 0.05\n";
-    let too_many = solve(&format!(
+    let too_many = message(&format!(
         "{}\n[harmonic_balance]\nmodes = 9\n{range}",
         elements(n)
     ));
@@ -321,7 +359,7 @@ fn bad_modal_input_names_the_key() {
         too_many.contains("harmonic_balance.modes") && too_many.contains("1 to 8"),
         "{too_many}"
     );
-    let zero = solve(&format!(
+    let zero = message(&format!(
         "{}\n[harmonic_balance]\nmodes = 0\n{range}",
         elements(n)
     ));
@@ -336,13 +374,7 @@ fn bad_modal_input_names_the_key() {
         elements(n)
     );
     let case = Case::from_str(&text, &dir.path().join("c.toml")).unwrap();
-    let matrix = solve_case(
-        &case,
-        &SolveOptions::new(RomPolicy::ReadIfMatching),
-        &Reporter::silent(),
-    )
-    .unwrap_err()
-    .to_string();
+    let matrix = solve(&case).unwrap_err().to_string();
     assert!(
         matrix.contains("model.damping.matrix") && matrix.contains("modal"),
         "{matrix}"
@@ -372,11 +404,7 @@ fn modal_coordinates_lift_the_dense_limit() {
         "\n[continuation]\nstart_rad_s = 0.0005\nend_rad_s = 0.0006\nstep_rad_s = 0.00002\n";
     let run = |modes: &str| {
         let case = chain_case(dir.path(), n, &format!("{}{modes}{range}", elements(n))).unwrap();
-        solve_case(
-            &case,
-            &SolveOptions::new(RomPolicy::ReadIfMatching),
-            &Reporter::silent(),
-        )
+        solve(&case)
     };
     let dense = run("").unwrap_err().to_string();
     assert!(dense.contains("4000"), "{dense}");

@@ -212,6 +212,29 @@ fn compare_maps(a: &ContactMap, b: &ContactMap) -> (usize, f64) {
     (differ, angle)
 }
 
+/// At each map of `a` and `b` (the same frequencies): the free ends' amplitude in `a`, the
+/// largest difference of `b`'s free ends from it (`modal`: `b` on the closed-form modal model),
+/// and [`compare_maps`] of the two maps.
+fn differences(a: &ResultsFile, b: &ResultsFile, modal: bool) -> Vec<(f64, f64, usize, f64)> {
+    assert_eq!(a.maps.len(), b.maps.len());
+    a.maps
+        .iter()
+        .zip(&b.maps)
+        .map(|(ma, mb)| {
+            assert_eq!(ma.omega, mb.omega);
+            let (ta, tb) = (tips(a, ma.point, false), tips(b, mb.point, modal));
+            let amp = ta.iter().map(|t| t.0.hypot(t.1)).fold(0.0, f64::max);
+            let off = ta
+                .iter()
+                .zip(&tb)
+                .map(|(x, y)| (x.0 - y.0).hypot(x.1 - y.1))
+                .fold(0.0, f64::max);
+            let (differ, angle) = compare_maps(ma, mb);
+            (amp, off, differ, angle)
+        })
+        .collect()
+}
+
 /// With all modes, the modal model's strip with an initial gap gives the full model's response
 /// (1e-6 of the amplitude; measured ≤ 3.8e-13) and maps (no sample off, transition angles within
 /// 1e-6 rad; measured ≤ 7.1e-13) at the chosen frequencies, on each of the three branches inside
@@ -225,17 +248,8 @@ fn modal_strip_with_a_gap_equals_the_full_model() {
     // resonance: large, middle and small amplitude in path order)
     let at: Vec<f64> = full.maps.iter().map(|m| m.omega).collect();
     assert_eq!(at, [1.0, 1.061, 1.061, 1.061].map(|f| 2.0 * PI * f));
-    assert_eq!(modal.maps.len(), full.maps.len());
-    for (a, b) in full.maps.iter().zip(&modal.maps) {
-        assert_eq!(a.omega, b.omega);
-        let (ta, tb) = (tips(&full, a.point, false), tips(&modal, b.point, true));
-        let amp = ta.iter().map(|t| t.0.hypot(t.1)).fold(0.0, f64::max);
-        let off = ta
-            .iter()
-            .zip(&tb)
-            .map(|(x, y)| (x.0 - y.0).hypot(x.1 - y.1))
-            .fold(0.0, f64::max);
-        let (differ, angle) = compare_maps(a, b);
+    let found = differences(&full, &modal, true);
+    for (a, (amp, off, differ, angle)) in full.maps.iter().zip(found) {
         let count = |code: i64| a.state.iter().filter(|&&s| s == code).count();
         eprintln!(
             "{} Hz: free-end amplitude {amp:.4e}, modal − full {:.2e} of it; maps: {differ} samples differ, angles within {angle:.2e} rad; samples stick {} slip- {} slip+ {} separated {}",
@@ -265,17 +279,8 @@ fn the_full_model_on_all_its_modes_gives_its_maps() {
     let dir = tempfile::tempdir().unwrap();
     let full = solve(dir.path(), false, None);
     let on_modes = solve(dir.path(), false, Some(2 * N));
-    assert_eq!(on_modes.maps.len(), full.maps.len());
-    for (a, b) in full.maps.iter().zip(&on_modes.maps) {
-        assert_eq!(a.omega, b.omega);
-        let (ta, tb) = (tips(&full, a.point, false), tips(&on_modes, b.point, false));
-        let amp = ta.iter().map(|t| t.0.hypot(t.1)).fold(0.0, f64::max);
-        let off = ta
-            .iter()
-            .zip(&tb)
-            .map(|(x, y)| (x.0 - y.0).hypot(x.1 - y.1))
-            .fold(0.0, f64::max);
-        let (differ, angle) = compare_maps(a, b);
+    let found = differences(&full, &on_modes, false);
+    for (a, (amp, off, differ, angle)) in full.maps.iter().zip(found) {
         eprintln!(
             "{} Hz: free-end amplitude {amp:.4e}, on modes − full {:.2e} of it; maps: {differ} samples differ, angles within {angle:.2e} rad",
             a.omega / TAU,

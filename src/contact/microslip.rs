@@ -494,7 +494,6 @@ impl Motion {
 
     /// The slider position w (m) at the instant `a` in the state `kind`: the stick slider, the
     /// slider a slip drags (w = u ∓ μ n/k_t) or, separated, u.
-    #[inline(always)]
     fn slider_in(&self, kind: PhaseKind, a: At) -> f64 {
         match kind {
             PhaseKind::Stick { slider, .. } => slider,
@@ -815,8 +814,14 @@ impl PhaseIntegrals {
     #[inline]
     fn of(ph: &Phase) -> Self {
         let [sa, ca, sb, cb] = ph.sc;
+        PhaseIntegrals::between(ph.start, [sa, ca], ph.end, [sb, cb])
+    }
+
+    /// The five numbers of the phase [a, b] (rad) from sin and cos of its ends, `[sin, cos]`.
+    #[inline]
+    fn between(a: f64, [sa, ca]: [f64; 2], b: f64, [sb, cb]: [f64; 2]) -> Self {
         PhaseIntegrals([
-            ph.end - ph.start,
+            b - a,
             sb - sa,
             cb - ca,
             sb * cb - sa * ca,
@@ -999,7 +1004,6 @@ fn same_state(a: &PhaseKind, b: &PhaseKind) -> bool {
 /// ∂w/∂(U0, U1, U2, V0, V1, V2, n0) of a stick phase's slider in the form every origin shares,
 /// ∂w = e·∂U + r (k_n e·∂V + ∂n0), returned as (e, r) (r in m/N); `at` is the instant the slider
 /// was set (the start of the stick phase). A carried slider has e = 0 and r = 0.
-#[inline(always)]
 fn slider_derivative(mo: &Motion, origin: SliderOrigin, at: At) -> ([f64; 3], f64) {
     let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
     // w = u(τ) − s μ (n0 + k_n v(τ))/k_t at a fixed τ (or at an extremum of g or h, where the
@@ -1051,16 +1055,28 @@ impl Harmonics {
         out.energy = PI * (u[1] * out.friction[2] - u[2] * out.friction[1]);
         out.slider = w;
         if let Some(j) = jac {
+            let [n0, n1, n2] = contact_rows(kn);
             *j = [
                 [kt, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, kt, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, kt, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, kn, 0.0, 0.0, 1.0],
-                [0.0, 0.0, 0.0, 0.0, kn, 0.0, 0.0],
-                [0.0, 0.0, 0.0, 0.0, 0.0, kn, 0.0],
+                n0,
+                n1,
+                n2,
             ];
         }
     }
+}
+
+/// The normal rows of a point's Jacobian ([`PointJacobian`]) in contact over the whole cycle:
+/// n = n0e + k_n v1 at every instant, so ∂N = k_n ∂V and ∂N0/∂n0 = 1 (k_n in N/m).
+#[inline]
+fn contact_rows(kn: f64) -> [[f64; 7]; 3] {
+    [
+        [0.0, 0.0, 0.0, kn, 0.0, 0.0, 1.0],
+        [0.0, 0.0, 0.0, 0.0, kn, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0, 0.0, kn, 0.0],
+    ]
 }
 
 /// The phase integrals of a cycle summed per kind, with what the stick sliders add: the
@@ -1089,8 +1105,49 @@ struct PhaseSums {
 }
 
 impl PhaseSums {
+    /// The sums of the four phases of a stick–slip cycle in contact ([`closed_form`]): the
+    /// integrals of stick after positive slip, negative slip, stick after negative slip and
+    /// positive slip, in this order, and the two sticks' sliders w (m) with the instants the
+    /// slips left them, written out as [`PhaseSums::add`] would sum them phase by phase (the
+    /// same operations in the same order, without the dispatch on each phase's state).
+    #[inline]
+    fn stick_slip(
+        mo: &Motion,
+        [i_p, i_neg, i_n, i_pos]: [PhaseIntegrals; 4],
+        [(w_p, at_p), (w_n, at_n)]: [(f64, At); 2],
+        jacobian: bool,
+    ) -> PhaseSums {
+        let (a, b) = (&i_p.0, &i_n.0);
+        let stick = PhaseIntegrals(std::array::from_fn(|k| a[k] + b[k]));
+        let w_int = std::array::from_fn(|k| w_p * a[k] + w_n * b[k]);
+        let mut w_u = [[0.0; 3]; 3];
+        let mut w_v = [[0.0; 3]; 3];
+        if jacobian {
+            // ∂w = e·∂U + r (k_n e·∂V + ∂n0) with r = ∓μ/k_t after ±slip ([`slider_derivative`])
+            let (r_p, r_n) = (-mo.p.mu / mo.p.kt, mo.p.mu / mo.p.kt);
+            let (m_p, m_n) = (i_p.first_column(), i_n.first_column());
+            let (e_p, e_n) = (at_p.basis(), at_n.basis());
+            for k in 0..3 {
+                for l in 0..3 {
+                    let (t_p, t_n) = (m_p[k] * e_p[l], m_n[k] * e_n[l]);
+                    w_u[k][l] = t_p + t_n;
+                    w_v[k][l] = r_p * t_p + r_n * t_n;
+                }
+            }
+        }
+        PhaseSums {
+            stick,
+            positive: i_pos,
+            negative: i_neg,
+            w_int,
+            w_u,
+            w_v,
+            separates: false,
+        }
+    }
+
     /// Adds one phase of the cycle (with its slider's derivative if `jacobian`).
-    #[inline(always)]
+    #[inline]
     fn add(&mut self, mo: &Motion, ph: &Phase, jacobian: bool) {
         match ph.kind {
             PhaseKind::Separation => self.separates = true,
@@ -1137,15 +1194,6 @@ impl PhaseSums {
         let mut slip = self.positive;
         slip.add(&self.negative, -1.0);
         let m_slip = slip.projection();
-        // In contact all period M_contact is the identity (the projection of e over a period).
-        let m_contact = if self.separates {
-            let mut contact = self.stick;
-            contact.add(&self.positive, 1.0);
-            contact.add(&self.negative, 1.0);
-            contact.projection()
-        } else {
-            [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-        };
         let w_col =
             PhaseIntegrals([self.w_int[0], self.w_int[1], self.w_int[2], 0.0, 0.0]).first_column();
         let cn = [mo.n0e, mo.nv.x1, mo.nv.x2];
@@ -1154,18 +1202,37 @@ impl PhaseSums {
         } = out;
         for k in 0..3 {
             friction[k] = kt * (dot(m_stick[k], u) - w_col[k]) + mu * dot(m_slip[k], cn);
-            normal[k] = dot(m_contact[k], cn);
             if let Some(j) = jac.as_deref_mut() {
-                let (friction_rows, normal_rows) = j.split_at_mut(3);
-                let (fj, nj) = (&mut friction_rows[k], &mut normal_rows[k]);
+                let fj = &mut j[k];
                 for l in 0..3 {
                     fj[l] = kt * (m_stick[k][l] - self.w_u[k][l]);
                     fj[3 + l] = kn * (mu * m_slip[k][l] - kt * self.w_v[k][l]);
-                    nj[l] = 0.0;
-                    nj[3 + l] = kn * m_contact[k][l];
                 }
                 fj[6] = mu * m_slip[k][0] - kt * self.w_v[k][0];
-                nj[6] = m_contact[k][0];
+            }
+        }
+        if self.separates {
+            let mut contact = self.stick;
+            contact.add(&self.positive, 1.0);
+            contact.add(&self.negative, 1.0);
+            let m_contact = contact.projection();
+            for k in 0..3 {
+                normal[k] = dot(m_contact[k], cn);
+                if let Some(j) = jac.as_deref_mut() {
+                    let nj = &mut j[3 + k];
+                    nj[..3].fill(0.0);
+                    for l in 0..3 {
+                        nj[3 + l] = kn * m_contact[k][l];
+                    }
+                    nj[6] = m_contact[k][0];
+                }
+            }
+        } else {
+            // In contact all period M_contact is the identity (the projection of e over a
+            // period): the normal force and its rows as in complete stick.
+            *normal = cn;
+            if let Some(j) = jac {
+                [j[3], j[4], j[5]] = contact_rows(kn);
             }
         }
         out.energy = PI * (u[1] * out.friction[2] - u[2] * out.friction[1]);
@@ -1218,7 +1285,6 @@ fn harmonics(
 ///   slip until τ_P + 2π (eqs 8, 21). After the end of a slip the point cannot slip the same way
 ///   again before slipping the other way (g ≤ g(τ_P) = c_P after τ_P), so no other sequence
 ///   exists; the two arccosines depend on the amplitudes only, not on a previous event.
-#[inline(always)]
 fn closed_form(
     mo: &Motion,
     slider: f64,
@@ -1230,7 +1296,6 @@ fn closed_form(
     }
     let mun = mo.p.mu * mo.n0e;
     let (g, h) = (&mo.g, &mo.h);
-    let mut sums = PhaseSums::default();
     if !(g.amp > 0.0 && h.amp > 0.0 && 2.0 * mun < (g.amp + h.amp) * (1.0 - 1e-9)) {
         // The march of `build` from τ = 0: stuck over the whole cycle iff it starts in stick
         // with the caller's slider and neither slip condition is reached.
@@ -1272,31 +1337,34 @@ fn closed_form(
     if !(t3 < t4 && (t3 + ahead(p.t, stp.t) - t4).abs() < 1e-9) {
         return false;
     }
-    let after_p = PhaseKind::Stick {
-        slider: mo.slider_in(PhaseKind::PositiveSlip, p),
-        origin: SliderOrigin::AfterPositiveSlip(p.t),
-    };
-    let after_n = PhaseKind::Stick {
-        slider: mo.slider_in(PhaseKind::NegativeSlip, n),
-        origin: SliderOrigin::AfterNegativeSlip(n.t),
-    };
-    let phases = [
-        Phase::new(after_p, p, stn.labelled(t1)),
-        Phase::new(PhaseKind::NegativeSlip, stn.labelled(t1), n.labelled(t2)),
-        Phase::new(after_n, n.labelled(t2), stp.labelled(t3)),
-        Phase::new(PhaseKind::PositiveSlip, stp.labelled(t3), p.labelled(t4)),
-    ];
+    let w_p = mo.slider_in(PhaseKind::PositiveSlip, p);
+    let w_n = mo.slider_in(PhaseKind::NegativeSlip, n);
     // the state at τ ≡ 0: the first phase that ends at or after it (as in `harmonics`)
     let zero = p.t + wrap(-p.t);
-    let mut at_zero = PhaseKind::PositiveSlip;
-    for ph in phases.iter().rev() {
-        if ph.end >= zero {
-            at_zero = ph.kind;
+    let at_zero = if t1 >= zero {
+        PhaseKind::Stick {
+            slider: w_p,
+            origin: SliderOrigin::AfterPositiveSlip(p.t),
         }
-    }
-    for ph in &phases {
-        sums.add(mo, ph, jac.is_some());
-    }
+    } else if t2 >= zero {
+        PhaseKind::NegativeSlip
+    } else if t3 >= zero {
+        PhaseKind::Stick {
+            slider: w_n,
+            origin: SliderOrigin::AfterNegativeSlip(n.t),
+        }
+    } else {
+        PhaseKind::PositiveSlip
+    };
+    let integrals =
+        |a: At, ta: f64, b: At, tb: f64| PhaseIntegrals::between(ta, [a.s, a.c], tb, [b.s, b.c]);
+    let phases = [
+        integrals(p, p.t, stn, t1),
+        integrals(stn, t1, n, t2),
+        integrals(n, t2, stp, t3),
+        integrals(stp, t3, p, t4),
+    ];
+    let sums = PhaseSums::stick_slip(mo, phases, [(w_p, p), (w_n, n)], jac.is_some());
     sums.finish(mo, at_zero, jac, out);
     true
 }
@@ -1396,7 +1464,6 @@ fn window_event(mo: &Motion, kind: PhaseKind, start: At) -> Option<(f64, At, Pha
 /// earliest of up to three candidate events a phase) and are integrated by the same
 /// [`PhaseSums`] into `out`. False where the march is needed: no separation, a degenerate
 /// sinusoid (|G| = 0 or |H| = 0, k_t = 0), or more phases than a window holds.
-#[inline(always)]
 fn separation_form(mo: &Motion, jac: Option<&mut PointJacobian>, out: &mut Harmonics) -> bool {
     let jacobian = jac.is_some();
     let Window::Part {

@@ -22,9 +22,10 @@ use crate::model::StructuralModel;
 
 use super::matrix_case::{matrix_rows, MatrixRows};
 
-/// Up to this many free rows the modes come from the dense pencil (every mode, O(n³)); above
-/// it from the sparse shift-invert eigensolver (the m lowest), unless m exceeds half the rows.
-const DENSE_MODES_UP_TO: usize = 600;
+/// Up to this many free rows the modes come from the dense pencil (every mode, O(n³): about a
+/// second at 2000 rows); above it from the sparse shift-invert eigensolver (the m lowest),
+/// unless m exceeds half the rows.
+const DENSE_MODES_UP_TO: usize = 2000;
 
 /// A matrix case's linear part on its lowest modes, and the rows it refers to.
 #[derive(Clone, Debug)]

@@ -4,14 +4,16 @@
 //! meshed with NX × NY × NZ hexahedra (`tests/support/face_bar.rs`), forced at the tip near its
 //! first axial resonance at H = 1 with the exact cycle.
 //!
-//!     cargo run --release --example strip_face_rom -- NX NY NZ MODES [--full]
+//!     cargo run --release --example strip_face_rom -- NX NY NZ MODES [--full] [--modal=M1,M2,…]
 //!
 //! e.g. `-- 100 1 12 20` (7878 DOF). Prints the model and ROM sizes, the wall and CPU time of the
 //! whole solve (model assembly, reduction and continuation; CPU time of the process over all its
 //! threads, `/proc/self/stat`), the peak resident memory (`VmHWM`, `/proc/self/status`) and the
 //! resonance peak of the tip's first harmonic. `--full` solves the unreduced case first (up to
 //! 4000 free DOF) and prints the largest difference of the tip's harmonics at the map
-//! frequencies relative to their amplitude.
+//! frequencies relative to their amplitude. `--modal=M1,M2,…` solves the Craig–Bampton model
+//! again on the modal coordinates of its M lowest modes (`[harmonic_balance] modes = M`) and
+//! prints the same difference from the Craig–Bampton solution on its coordinates.
 use std::f64::consts::TAU;
 use std::time::Instant;
 
@@ -28,14 +30,15 @@ use face_bar::{agreement, case_text, HexBar};
 /// The map frequencies (Hz), where the reduced and the unreduced response are compared.
 const MAP_HZ: [f64; 4] = [1300.0, 1330.0, 1345.0, 1360.0];
 
-/// The case on `mesh`: the face strip of `tests/strip_face_rom.rs`, the exact cycle at H = 1,
-/// maps at [`MAP_HZ`], then `reduction`.
-fn bar_case(mesh: &std::path::Path, reduction: &str) -> String {
+/// The case on `mesh`: the face strip of `tests/strip_face_rom.rs`, the exact cycle at H = 1
+/// (on `modes` modal coordinates when given), maps at [`MAP_HZ`], then `reduction`.
+fn bar_case(mesh: &std::path::Path, reduction: &str, modes: Option<usize>) -> String {
     let hz: Vec<String> = MAP_HZ.iter().map(|f| format!("{f:.1}")).collect();
     let strip = "face = \"pads\"\ndirection = [1.0, 0.0, 0.0]\nkt = 1.2e9\nmu = 0.3\npreload = 1000.0\nevaluation = \"analytic\"\nmap = 90\n";
     let tables = format!(
-        "map_hz = [{}]\n\n[harmonic_balance]\nharmonics = 1\n\n[continuation]\nstart_hz = 1250.0\nend_hz = 1420.0\nstep_hz = 5.0\nmax_step_hz = 10.0\n{reduction}",
-        hz.join(", ")
+        "map_hz = [{}]\n\n[harmonic_balance]\nharmonics = 1\n{}\n[continuation]\nstart_hz = 1250.0\nend_hz = 1420.0\nstep_hz = 5.0\nmax_step_hz = 10.0\n{reduction}",
+        hz.join(", "),
+        modes.map_or(String::new(), |m| format!("modes = {m}\n"))
     );
     case_text(mesh, strip, &tables)
 }
@@ -90,16 +93,41 @@ fn solve(text: &str, dir: &std::path::Path) -> Result<ResultsFile, Box<dyn std::
     Ok(out.results)
 }
 
+/// The largest difference of the response harmonics of `a` and `b` at their maps' points (the
+/// same frequencies, in the same order), relative to the largest harmonic of `b` there.
+fn response_difference(a: &ResultsFile, b: &ResultsFile) -> f64 {
+    let mut worst = 0.0f64;
+    for (ma, mb) in a.maps.iter().zip(&b.maps) {
+        let ha = &a.frfs[0].points[ma.point].harmonics;
+        let hb = &b.frfs[0].points[mb.point].harmonics;
+        let amp = hb.iter().map(|h| h.norm()).fold(0.0, f64::max);
+        let off = ha
+            .iter()
+            .zip(hb)
+            .map(|(x, y)| (x - y).norm())
+            .fold(0.0, f64::max);
+        worst = worst.max(off / amp);
+    }
+    worst
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let full = args.iter().any(|a| a == "--full");
+    let modal: Vec<usize> = match args.iter().find_map(|a| a.strip_prefix("--modal=")) {
+        Some(list) => list
+            .split(',')
+            .map(|m| m.trim().parse())
+            .collect::<Result<_, _>>()?,
+        None => Vec::new(),
+    };
     let nums: Vec<usize> = args
         .iter()
-        .filter(|a| *a != "--full")
+        .filter(|a| !a.starts_with("--"))
         .map(|a| a.parse())
         .collect::<Result<_, _>>()?;
     let [nx, ny, nz, modes] = nums[..] else {
-        return Err("usage: strip_face_rom NX NY NZ MODES [--full]".into());
+        return Err("usage: strip_face_rom NX NY NZ MODES [--full] [--modal=M1,M2,…]".into());
     };
     let bar = HexBar {
         length: 1.25,
@@ -121,15 +149,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     let reference = if full {
         println!("unreduced:");
-        Some(solve(&bar_case(&mesh, ""), dir.path())?)
+        Some(solve(&bar_case(&mesh, "", None), dir.path())?)
     } else {
         None
     };
     println!("Craig–Bampton, {modes} fixed-interface modes:");
-    let rom = solve(
-        &bar_case(&mesh, &format!("[reduction]\ninterface_modes = {modes}\n")),
-        dir.path(),
-    )?;
+    let reduction = format!("[reduction]\ninterface_modes = {modes}\n");
+    let rom = solve(&bar_case(&mesh, &reduction, None), dir.path())?;
+    for &m in &modal {
+        println!("the same on its {m} lowest modes:");
+        let on_modes = solve(&bar_case(&mesh, &reduction, Some(m)), dir.path())?;
+        println!(
+            "  on {m} modes − on the Craig–Bampton coordinates at the map frequencies: {:.2e} of the tip amplitude",
+            response_difference(&on_modes, &rom)
+        );
+    }
     if let Some(reference) = reference {
         let agree = agreement(&rom, &reference, 1, 1e-4);
         println!(
