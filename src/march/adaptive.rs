@@ -98,6 +98,51 @@ struct Column {
     normal: bool,
 }
 
+/// The index of the column `c` among all the elements' columns: 2 e for element e's tangential
+/// direction, 2 e + 1 for its normal one (the order in which a state's test lists its columns).
+fn column_index(c: Column) -> usize {
+    2 * c.element + usize::from(c.normal)
+}
+
+/// uᵀ G⁻¹ u' of every pair of the columns of `sys` ([`column_index`]; row-major 2E × 2E, for
+/// indices p ≥ q summed with u of p outside and u' of q inside, as a state's test sums its
+/// entries), with G⁻¹ = (ρ M − K − K_c(stick))⁻¹ = Φ diag(1/(ρ − λ_j)) Φᵀ from the full-stick
+/// eigenvalues `stick` and eigenvectors `modes` (row-major n × n).
+fn column_forms(sys: &MarchSystem, stick: &[f64], modes: &[f64], rho: f64) -> Vec<f64> {
+    let n = sys.n;
+    let mut scaled = modes.to_vec();
+    let mut transposed = vec![0.0; n * n];
+    for i in 0..n {
+        for j in 0..n {
+            scaled[i * n + j] /= rho - stick[j];
+            transposed[j * n + i] = modes[i * n + j];
+        }
+    }
+    let g = dense::product(&scaled, &transposed, n);
+    let m = 2 * sys.elements.len();
+    let column = |p: usize| Column {
+        element: p / 2,
+        normal: p % 2 == 1,
+    };
+    let mut w = vec![0.0; m * m];
+    for p in 0..m {
+        let up = column_weights(sys, column(p));
+        for q in 0..=p {
+            let uq = column_weights(sys, column(q));
+            let mut x = 0.0;
+            for &(i, wi) in up {
+                let row = &g[i * n..(i + 1) * n];
+                for &(j, wj) in uq {
+                    x += wi * wj * row[j];
+                }
+            }
+            w[p * m + q] = x;
+            w[q * m + p] = x;
+        }
+    }
+    w
+}
+
 /// The sparse weights of the column `c` of `sys`.
 fn column_weights(sys: &MarchSystem, c: Column) -> &[(usize, f64)] {
     let e = &sys.elements[c.element];
@@ -108,9 +153,10 @@ fn column_weights(sys: &MarchSystem, c: Column) -> &[(usize, f64)] {
 }
 
 /// The rung tests of one model ([module documentation](self)): the eigenvalues and eigenvectors
-/// of the full-stick pencil (K + K_c(stick), M), and (ρ_Δτ M − K − K_c(stick))⁻¹ of each rung
-/// tested, formed from them (rung 0's threshold lies 1e-6 above the largest eigenvalue, where an
-/// LU of the matrix loses the digits the test needs).
+/// of the full-stick pencil (K + K_c(stick), M), and for each rung tested the products uᵀG⁻¹u'
+/// of every pair of the elements' directions with G⁻¹ = (ρ_Δτ M − K − K_c(stick))⁻¹ formed from
+/// them (rung 0's threshold lies 1e-6 above the largest eigenvalue, where an LU of the matrix
+/// loses the digits the test needs), from which each state's test gathers its r × r matrix.
 pub struct RungCheck {
     /// Eigenvalues λ_j of the full-stick pencil, ascending (rad²/s²).
     stick: Vec<f64>,
@@ -118,8 +164,9 @@ pub struct RungCheck {
     modes: Vec<f64>,
     /// (g_t·φ₁, g_n·φ₁) of each element, φ₁ the dominant full-stick eigenvector (φ₁ᵀMφ₁ = 1).
     top: Vec<(f64, f64)>,
-    /// (ρ M − K − K_c(stick))⁻¹ per threshold ρ (bits).
-    inverses: HashMap<u64, Vec<f64>>,
+    /// uᵀ (ρ M − K − K_c(stick))⁻¹ u' of every pair of columns per threshold ρ (bits)
+    /// ([`column_forms`]).
+    forms: HashMap<u64, Vec<f64>>,
     columns: Vec<Column>,
     /// C⁻¹ − Uᵀ G⁻¹ U (row-major).
     s: Vec<f64>,
@@ -148,7 +195,7 @@ impl RungCheck {
             stick,
             modes,
             top,
-            inverses: HashMap::new(),
+            forms: HashMap::new(),
             columns: Vec::new(),
             s: Vec::new(),
             tests: 0,
@@ -181,20 +228,12 @@ impl RungCheck {
     fn allows(&mut self, sys: &MarchSystem, states: &[ContactState], ratio: f64, dt: f64) -> bool {
         let rho = (2.0 * std::f64::consts::PI * ratio / dt).powi(2) * (1.0 + THRESHOLD_MARGIN);
         let above = self.stick.iter().filter(|&&l| l > rho).count();
-        let n = sys.n;
+        let m = 2 * sys.elements.len();
         let (stick, modes) = (&self.stick, &self.modes);
-        // G⁻¹ = Φ diag(1/(ρ − λ_j)) Φᵀ
-        let g = self.inverses.entry(rho.to_bits()).or_insert_with(|| {
-            let mut scaled = modes.clone();
-            let mut transposed = vec![0.0; n * n];
-            for i in 0..n {
-                for j in 0..n {
-                    scaled[i * n + j] /= rho - stick[j];
-                    transposed[j * n + i] = modes[i * n + j];
-                }
-            }
-            dense::product(&scaled, &transposed, n)
-        });
+        let w = self
+            .forms
+            .entry(rho.to_bits())
+            .or_insert_with(|| column_forms(sys, stick, modes, rho));
         self.tests += 1;
         // the columns and C⁻¹ (1 × 1 or 2 × 2 blocks per element) with neg(C⁻¹)
         self.columns.clear();
@@ -240,16 +279,9 @@ impl RungCheck {
         self.s.clear();
         self.s.resize(r * r, 0.0);
         for a in 0..r {
-            let ua = column_weights(sys, self.columns[a]);
+            let pa = column_index(self.columns[a]);
             for b in 0..=a {
-                let ub = column_weights(sys, self.columns[b]);
-                let mut x = 0.0;
-                for &(i, wi) in ua {
-                    let row = &g[i * n..(i + 1) * n];
-                    for &(j, wj) in ub {
-                        x += wi * wj * row[j];
-                    }
-                }
+                let x = w[pa * m + column_index(self.columns[b])];
                 self.s[a * r + b] = -x;
                 self.s[b * r + a] = -x;
             }
