@@ -23,6 +23,7 @@ use nlrom::problem::matrix_case::{matrix_elements, matrix_setup};
 use nlrom::problem::modal_case::modal_setup;
 use nlrom::problem::rom_store::RomPolicy;
 use nlrom::problem::settings::case_continuation;
+use support::cli::{nlrom, root, stderr};
 use support::hbm::{complex_solve, layout_index};
 
 /// A fixed–free chain of n masses m_i = 1 + 0.1 i (kg) joined by springs k_i = 1 + 0.05 i
@@ -421,4 +422,39 @@ fn modal_coordinates_lift_the_dense_limit() {
         tip[0],
         tip[tip.len() - 1]
     );
+}
+
+/// `nlrom solve` warns, naming the key, when the highest mode of a truncated basis lies below
+/// twice H × the highest swept frequency (the bundled 3-DOF chain, H = 7 up to 2.2 rad/s, with
+/// 2 of its 3 modes: highest mode 0.198 Hz), and not with every mode.
+#[test]
+fn a_basis_below_the_swept_harmonics_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(root().join("cases/chain3_jenkins.toml")).unwrap();
+    let chain = root().join("cases/chain3");
+    let text = text.replace("\"chain3/", &format!("\"{}/", chain.display()));
+    for (modes, warned) in [(2, true), (3, false)] {
+        let case = dir.path().join(format!("chain{modes}.toml"));
+        std::fs::write(
+            &case,
+            text.replace(
+                "time_samples = 1024",
+                &format!("time_samples = 1024\nmodes = {modes}"),
+            ),
+        )
+        .unwrap();
+        let out = nlrom(&[
+            "solve",
+            case.to_str().unwrap(),
+            "-o",
+            dir.path().join("r.h5").to_str().unwrap(),
+        ]);
+        let err = stderr(&out);
+        assert!(out.status.success(), "{err}");
+        assert_eq!(
+            err.contains("warning: harmonic_balance.modes"),
+            warned,
+            "{modes} modes: {err}"
+        );
+    }
 }

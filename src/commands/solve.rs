@@ -331,6 +331,14 @@ fn modal_curve(
         setup.rows.nonlinear_rows.len(),
         model.free.n_free()
     ));
+    let range = case_continuation(case)?;
+    let highest_swept =
+        range.start.max(range.end) * case.harmonic_balance.harmonics as f64 / (2.0 * PI);
+    if modes < model.free.n_free() && last < 2.0 * highest_swept {
+        rep.warn(&format!(
+            "harmonic_balance.modes = {modes}: the highest mode ({last:.6} Hz) is below twice the highest harmonic swept ({highest_swept:.6} Hz = H × the highest frequency); the truncated basis may miss the response there: check by raising `modes`"
+        ));
+    }
     let elements = matrix_elements(case, model, &setup.rows.nonlinear_rows)?;
     let layout = HarmonicLayout::new(
         case.harmonic_balance.harmonics,
