@@ -17,7 +17,7 @@ use std::path::Path;
 use nlrom::case::Case;
 use nlrom::commands::progress::Reporter;
 use nlrom::commands::solve::{solve_case, SolveOptions};
-use nlrom::output::ResultsFile;
+use nlrom::output::{ContactMap, ResultsFile};
 use nlrom::problem::rom_store::RomPolicy;
 
 /// The bar's dimensions (m) and element counts.
@@ -168,6 +168,42 @@ pub struct Agreement {
     pub mixed: bool,
 }
 
+/// The tip amplitude of `b` at map `mb`'s point (the largest of its response harmonics) and the
+/// largest difference of `a`'s harmonics at map `ma`'s point from them.
+pub fn harmonics_difference(
+    a: &ResultsFile,
+    b: &ResultsFile,
+    ma: &ContactMap,
+    mb: &ContactMap,
+) -> (f64, f64) {
+    assert_eq!(ma.omega, mb.omega);
+    let ha = &a.frfs[0].points[ma.point].harmonics;
+    let hb = &b.frfs[0].points[mb.point].harmonics;
+    assert_eq!(ha.len(), hb.len());
+    let amp = hb.iter().map(|h| h.norm()).fold(0.0, f64::max);
+    let off = ha
+        .iter()
+        .zip(hb)
+        .map(|(x, y)| (x - y).norm())
+        .fold(0.0, f64::max);
+    (amp, off)
+}
+
+/// The largest difference of the response harmonics of `a` and `b` at their maps' points (the
+/// same frequencies, in the same order) relative to the tip amplitude there, without comparing
+/// the maps (which may differ in their transitions, e.g. on a truncated modal basis).
+pub fn response_difference(a: &ResultsFile, b: &ResultsFile) -> f64 {
+    assert_eq!(a.maps.len(), b.maps.len());
+    a.maps
+        .iter()
+        .zip(&b.maps)
+        .map(|(ma, mb)| {
+            let (amp, off) = harmonics_difference(a, b, ma, mb);
+            off / amp
+        })
+        .fold(0.0, f64::max)
+}
+
 /// The agreement of `a` and `b` at their maps, where each strip point e of `b` stands for the
 /// points `per`·e .. `per`·(e + 1) of `a`; prints one line per map.
 pub fn agreement(a: &ResultsFile, b: &ResultsFile, per: usize, near: f64) -> Agreement {
@@ -178,16 +214,7 @@ pub fn agreement(a: &ResultsFile, b: &ResultsFile, per: usize, near: f64) -> Agr
     };
     let mut out = Agreement::default();
     for (ma, mb) in a.maps.iter().zip(&b.maps) {
-        assert_eq!(ma.omega, mb.omega);
-        let ha = &a.frfs[0].points[ma.point].harmonics;
-        let hb = &b.frfs[0].points[mb.point].harmonics;
-        assert_eq!(ha.len(), hb.len());
-        let amp = hb.iter().map(|h| h.norm()).fold(0.0, f64::max);
-        let off = ha
-            .iter()
-            .zip(hb)
-            .map(|(x, y)| (x - y).norm())
-            .fold(0.0, f64::max);
+        let (amp, off) = harmonics_difference(a, b, ma, mb);
         let n = ma.phase.len();
         assert_eq!(ma.position.len(), per * mb.position.len());
         let (mut differ, mut angle) = (0usize, 0.0f64);

@@ -25,7 +25,7 @@ use nlrom::problem::rom_store::RomPolicy;
 
 #[path = "../../tests/support/face_bar.rs"]
 mod face_bar;
-use face_bar::{agreement, case_text, HexBar};
+use face_bar::{agreement, case_text, response_difference, HexBar};
 
 /// The map frequencies (Hz), where the reduced and the unreduced response are compared.
 const MAP_HZ: [f64; 4] = [1300.0, 1330.0, 1345.0, 1360.0];
@@ -91,24 +91,6 @@ fn solve(text: &str, dir: &std::path::Path) -> Result<ResultsFile, Box<dyn std::
         peak_rss_mb()
     );
     Ok(out.results)
-}
-
-/// The largest difference of the response harmonics of `a` and `b` at their maps' points (the
-/// same frequencies, in the same order), relative to the largest harmonic of `b` there.
-fn response_difference(a: &ResultsFile, b: &ResultsFile) -> f64 {
-    let mut worst = 0.0f64;
-    for (ma, mb) in a.maps.iter().zip(&b.maps) {
-        let ha = &a.frfs[0].points[ma.point].harmonics;
-        let hb = &b.frfs[0].points[mb.point].harmonics;
-        let amp = hb.iter().map(|h| h.norm()).fold(0.0, f64::max);
-        let off = ha
-            .iter()
-            .zip(hb)
-            .map(|(x, y)| (x - y).norm())
-            .fold(0.0, f64::max);
-        worst = worst.max(off / amp);
-    }
-    worst
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
