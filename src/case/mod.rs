@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
+use crate::harmonics::HarmonicLayout;
 use crate::mesh::Mesh;
 use crate::vec3::norm;
 
@@ -769,6 +770,11 @@ impl HarmonicBalance {
     pub fn samples(&self) -> usize {
         self.time_samples
             .unwrap_or_else(|| (4 * (self.harmonics + 1)).next_power_of_two())
+    }
+
+    /// The harmonic layout of H = `harmonics` with [`HarmonicBalance::samples`] AFT samples.
+    pub fn layout(&self) -> Result<HarmonicLayout> {
+        HarmonicLayout::new(self.harmonics, self.samples())
     }
 }
 

@@ -274,16 +274,8 @@ fn matrix_curve(
     }
     let setup = matrix_setup(case, model)?;
     let elements = matrix_elements(case, model, &setup.nonlinear_rows)?;
-    let layout = HarmonicLayout::new(
-        case.harmonic_balance.harmonics,
-        case.harmonic_balance.samples(),
-    )?;
-    let system = HbmSystem::new(layout, &setup.linear, &elements)?;
-    let dofs = setup
-        .output_case_rows
-        .iter()
-        .map(|&r| ResponseDof::Row(r as u64))
-        .collect();
+    let system = HbmSystem::new(case.harmonic_balance.layout()?, &setup.linear, &elements)?;
+    let dofs = row_dofs(&setup.output_case_rows);
     let (positions, map_hz) = strip_map_parts(case, model)?;
     let maps = |q: &[f64], state: &Vec<f64>, at: Option<f64>| {
         strip_maps(case, &positions, &elements, &system.layout(), q, state, at)
@@ -295,6 +287,11 @@ fn matrix_curve(
         map_hz,
     };
     trace_curve(case, &system, dofs, &probe, None, stability, rep)
+}
+
+/// The response DOFs of the matrix rows `rows` (as written in the case).
+fn row_dofs(rows: &[usize]) -> Vec<ResponseDof> {
+    rows.iter().map(|&r| ResponseDof::Row(r as u64)).collect()
 }
 
 /// The positions of every `[[strip]]`'s points (per strip) and the frequencies (Hz, ascending,
@@ -340,19 +337,11 @@ fn modal_curve(
         ));
     }
     let elements = matrix_elements(case, model, &setup.rows.nonlinear_rows)?;
-    let layout = HarmonicLayout::new(
-        case.harmonic_balance.harmonics,
-        case.harmonic_balance.samples(),
-    )?;
+    let layout = case.harmonic_balance.layout()?;
     let linear = setup.modal.linear_model(case.harmonic_balance.harmonics)?;
     let force = setup.modal.project(elements)?;
     let system = HbmSystem::new(layout, &linear, &force)?;
-    let dofs = setup
-        .rows
-        .output_case_rows
-        .iter()
-        .map(|&r| ResponseDof::Row(r as u64))
-        .collect();
+    let dofs = row_dofs(&setup.rows.output_case_rows);
     let (positions, map_hz) = strip_map_parts(case, model)?;
     let maps = |q: &[f64], state: &Vec<f64>, at: Option<f64>| {
         let u = force.to_physical(&layout, q)?;

@@ -84,7 +84,7 @@ impl SectorProblem {
     ) -> Result<SectorProblem> {
         let dofs = SectorDofs::new(case, mesh)?;
         let harmonics = case.harmonic_balance.harmonics;
-        let layout = HarmonicLayout::new(harmonics, case.harmonic_balance.samples())?;
+        let layout = case.harmonic_balance.layout()?;
         let (engine_order, k_n) = match &rom.cyclic {
             Some(g) => {
                 let m = dofs.engine_order.ok_or_else(|| {
