@@ -1154,26 +1154,41 @@ impl PhaseSums {
             PhaseKind::PositiveSlip => self.positive.add(&PhaseIntegrals::of(ph), 1.0),
             PhaseKind::NegativeSlip => self.negative.add(&PhaseIntegrals::of(ph), 1.0),
             PhaseKind::Stick { slider: w, origin } => {
-                let i = PhaseIntegrals::of(ph);
-                self.stick.add(&i, 1.0);
-                for (a, b) in self.w_int.iter_mut().zip(&i.0[..3]) {
-                    *a += w * b;
-                }
-                if jacobian && origin != SliderOrigin::Carried {
-                    let at = At {
-                        t: ph.start,
-                        s: ph.sc[0],
-                        c: ph.sc[1],
-                    };
-                    let (e, r) = slider_derivative(mo, origin, at);
-                    let m0 = i.first_column();
-                    for (k, &mk) in m0.iter().enumerate() {
-                        for (l, &el) in e.iter().enumerate() {
-                            let t = mk * el;
-                            self.w_u[k][l] += t;
-                            self.w_v[k][l] += r * t;
-                        }
-                    }
+                let at = At {
+                    t: ph.start,
+                    s: ph.sc[0],
+                    c: ph.sc[1],
+                };
+                let jacobian = jacobian && origin != SliderOrigin::Carried;
+                self.add_stick(mo, &PhaseIntegrals::of(ph), w, origin, at, jacobian);
+            }
+        }
+    }
+
+    /// Adds the integrals `i` of stick phases with the slider w (m) set at `at` as `origin`
+    /// says and, if `jacobian`, the slider's derivative ([`slider_derivative`]).
+    #[inline]
+    fn add_stick(
+        &mut self,
+        mo: &Motion,
+        i: &PhaseIntegrals,
+        w: f64,
+        origin: SliderOrigin,
+        at: At,
+        jacobian: bool,
+    ) {
+        self.stick.add(i, 1.0);
+        for (a, b) in self.w_int.iter_mut().zip(&i.0[..3]) {
+            *a += w * b;
+        }
+        if jacobian {
+            let (e, r) = slider_derivative(mo, origin, at);
+            let m0 = i.first_column();
+            for (k, &mk) in m0.iter().enumerate() {
+                for (l, &el) in e.iter().enumerate() {
+                    let t = mk * el;
+                    self.w_u[k][l] += t;
+                    self.w_v[k][l] += r * t;
                 }
             }
         }
@@ -1591,23 +1606,8 @@ impl PhaseSums {
             if !present[i] {
                 continue;
             }
-            let ints = &integrals[i];
             let (w, at, origin) = window_stick(mo, state, recontact);
-            sums.stick.add(ints, 1.0);
-            for (a, b) in sums.w_int.iter_mut().zip(&ints.0[..3]) {
-                *a += w * b;
-            }
-            if jacobian {
-                let (e, r) = slider_derivative(mo, origin, at);
-                let m0 = ints.first_column();
-                for (k, &mk) in m0.iter().enumerate() {
-                    for (l, &el) in e.iter().enumerate() {
-                        let t = mk * el;
-                        sums.w_u[k][l] += t;
-                        sums.w_v[k][l] += r * t;
-                    }
-                }
-            }
+            sums.add_stick(mo, &integrals[i], w, origin, at, jacobian);
         }
         sums
     }
