@@ -1431,16 +1431,16 @@ enum WindowState {
 /// * positive slip ends at the maximum of g (eq. 8, θ_P of eq. 21), negative slip at the
 ///   minimum of h (eq. 9, θ_N of eq. 22);
 /// * the stick after positive slip, whose level c_P is the maximum of g, can only end where h
-///   falls through c_N = |G| − 2μ n0e (eqs 12, 24: one arccosine), the stick after negative slip
-///   only where g rises through c_P = 2μ n0e − |H| (eqs 11, 23); the levels depend on the
-///   amplitudes only, as in [`closed_form`];
+///   falls through c_N (eqs 12, 24: one arccosine), the stick after negative slip only where g
+///   rises through c_P (eqs 11, 23), the levels from the slider the slip left;
 /// * the stick after a re-contact at τ_Sp2 with w = u(τ_Sp2) has c_P = g(τ_Sp2) and
 ///   c_N = h(τ_Sp2) (n(τ_Sp2) = 0): it ends where g takes its re-contact value again rising
 ///   (θ_SpP, eq. 27) or h falling (θ_SpN, eq. 28), the mirrors of τ_Sp2 about the minimum of g
 ///   and the maximum of h ([`Wave::mirror`]), whichever comes first (g's on a tie, as in the
 ///   march).
 ///
-/// The tangency tests are those of the event march ([`Motion::next_event`]).
+/// The levels and their tangency tests are those of the event march ([`Motion::next_event`]), so
+/// both take the same decisions.
 fn window_event(mo: &Motion, state: WindowState, start: At) -> Option<(At, WindowState)> {
     let (g, h) = (&mo.g, &mo.h);
     let mun = mo.p.mu * mo.n0e;
@@ -1448,11 +1448,13 @@ fn window_event(mo: &Motion, state: WindowState, start: At) -> Option<(At, Windo
         WindowState::PositiveSlip => Some((g.maximum(), WindowState::AfterPositiveSlip)),
         WindowState::NegativeSlip => Some((h.minimum(), WindowState::AfterNegativeSlip)),
         WindowState::AfterPositiveSlip => {
-            let r = (g.amp - 2.0 * mun) / h.amp;
+            let w = mo.slider_in(PhaseKind::PositiveSlip, g.maximum());
+            let r = (-mun - mo.p.kt * (mo.u[0] - w)) / h.amp;
             (r > -1.0 + TANGENCY).then(|| (h.crossing(r, false), WindowState::NegativeSlip))
         }
         WindowState::AfterNegativeSlip => {
-            let r = (2.0 * mun - h.amp) / g.amp;
+            let w = mo.slider_in(PhaseKind::NegativeSlip, h.minimum());
+            let r = (mun - mo.p.kt * (mo.u[0] - w)) / g.amp;
             (r < 1.0 - TANGENCY).then(|| (g.crossing(r, true), WindowState::PositiveSlip))
         }
         WindowState::AfterRecontact => {
@@ -1500,7 +1502,9 @@ fn separation_form(mo: &Motion, jac: Option<&mut PointJacobian>, out: &mut Harmo
     // the state at τ ≡ 0: the first phase that ends at or after it (as in `harmonics`)
     let zero = recontact.t + wrap(-recontact.t);
     let mut integrals = [PhaseIntegrals::default(); 5];
-    let mut present = [false; 5];
+    // the stick states in the order of their phases (each has at most one in a window)
+    let mut sticks = [WindowState::AfterRecontact; 3];
+    let mut stick_count = 0;
     let mut at_zero = None;
     let mut add = |state: WindowState, a: At, b: At| {
         let i = state as usize;
@@ -1508,7 +1512,11 @@ fn separation_form(mo: &Motion, jac: Option<&mut PointJacobian>, out: &mut Harmo
             &PhaseIntegrals::between(a.t, [a.s, a.c], b.t, [b.s, b.c]),
             1.0,
         );
-        present[i] = true;
+        let stick = !matches!(state, WindowState::PositiveSlip | WindowState::NegativeSlip);
+        if stick && stick_count < sticks.len() && !sticks[..stick_count].contains(&state) {
+            sticks[stick_count] = state;
+            stick_count += 1;
+        }
         if at_zero.is_none() && b.t >= zero {
             at_zero = Some(state);
         }
@@ -1542,7 +1550,8 @@ fn separation_form(mo: &Motion, jac: Option<&mut PointJacobian>, out: &mut Harmo
     if !closed {
         return false;
     }
-    let sums = PhaseSums::window(mo, recontact, &integrals, present, jac.is_some());
+    let sticks = &sticks[..stick_count];
+    let sums = PhaseSums::window(mo, recontact, &integrals, sticks, jac.is_some());
     let at_zero = match at_zero {
         None => PhaseKind::Separation,
         Some(WindowState::PositiveSlip) => PhaseKind::PositiveSlip,
@@ -1581,14 +1590,15 @@ fn window_stick(mo: &Motion, state: WindowState, recontact: At) -> (f64, At, Sli
 
 impl PhaseSums {
     /// The sums of a cycle with separation ([`separation_form`]) from the phase integrals summed
-    /// per state (`integrals`, indexed by [`WindowState`]; `present` marks the states with a
-    /// phase): the sticks' sliders and their derivatives ([`slider_derivative`]) enter once per
-    /// stick state, as [`PhaseSums::add`] would sum them phase by phase.
+    /// per state (`integrals`, indexed by [`WindowState`]) and the stick states in the order of
+    /// their phases (`sticks`): each stick's slider and its derivative enter once
+    /// ([`PhaseSums::add_stick`]), in the order and with the operations of [`PhaseSums::add`]
+    /// phase by phase.
     fn window(
         mo: &Motion,
         recontact: At,
         integrals: &[PhaseIntegrals; 5],
-        present: [bool; 5],
+        sticks: &[WindowState],
         jacobian: bool,
     ) -> PhaseSums {
         let mut sums = PhaseSums {
@@ -1597,17 +1607,9 @@ impl PhaseSums {
             separates: true,
             ..PhaseSums::default()
         };
-        for state in [
-            WindowState::AfterPositiveSlip,
-            WindowState::AfterNegativeSlip,
-            WindowState::AfterRecontact,
-        ] {
-            let i = state as usize;
-            if !present[i] {
-                continue;
-            }
+        for &state in sticks {
             let (w, at, origin) = window_stick(mo, state, recontact);
-            sums.add_stick(mo, &integrals[i], w, origin, at, jacobian);
+            sums.add_stick(mo, &integrals[state as usize], w, origin, at, jacobian);
         }
         sums
     }
