@@ -325,23 +325,39 @@ impl Wave {
     /// The rising crossing of A·r, τ = −α − β with β = arccos r.
     #[inline]
     fn rising(&self, arc: Arc) -> At {
-        let (r, b, sb) = (arc.r, arc.b, arc.sb);
+        let [s, c] = self.rising_sc(arc);
         At {
-            t: -self.phase() - b,
-            s: -(self.sa * r + self.ca * sb),
-            c: self.ca * r - self.sa * sb,
+            t: -self.phase() - arc.b,
+            s,
+            c,
         }
+    }
+
+    /// [sin τ, cos τ] of the rising crossing τ = −α − β of A·r (β = arccos r) by the addition
+    /// theorems, without α.
+    #[inline]
+    fn rising_sc(&self, arc: Arc) -> [f64; 2] {
+        let (r, sb) = (arc.r, arc.sb);
+        [-(self.sa * r + self.ca * sb), self.ca * r - self.sa * sb]
     }
 
     /// The falling crossing of A·r, τ = −α + β with β = arccos r.
     #[inline]
     fn falling(&self, arc: Arc) -> At {
-        let (r, b, sb) = (arc.r, arc.b, arc.sb);
+        let [s, c] = self.falling_sc(arc);
         At {
-            t: b - self.phase(),
-            s: sb * self.ca - r * self.sa,
-            c: r * self.ca + sb * self.sa,
+            t: arc.b - self.phase(),
+            s,
+            c,
         }
+    }
+
+    /// [sin τ, cos τ] of the falling crossing τ = −α + β of A·r (β = arccos r) by the addition
+    /// theorems, without α.
+    #[inline]
+    fn falling_sc(&self, arc: Arc) -> [f64; 2] {
+        let (r, sb) = (arc.r, arc.sb);
+        [sb * self.ca - r * self.sa, r * self.ca + sb * self.sa]
     }
 }
 
@@ -819,9 +835,16 @@ impl PhaseIntegrals {
 
     /// The five numbers of the phase [a, b] (rad) from sin and cos of its ends, `[sin, cos]`.
     #[inline]
-    fn between(a: f64, [sa, ca]: [f64; 2], b: f64, [sb, cb]: [f64; 2]) -> Self {
+    fn between(a: f64, start: [f64; 2], b: f64, end: [f64; 2]) -> Self {
+        PhaseIntegrals::over(b - a, start, end)
+    }
+
+    /// The five numbers of a phase of length `len` = b − a (rad) from sin and cos of its ends,
+    /// `[sin, cos]`.
+    #[inline]
+    fn over(len: f64, [sa, ca]: [f64; 2], [sb, cb]: [f64; 2]) -> Self {
         PhaseIntegrals([
-            b - a,
+            len,
             sb - sa,
             cb - ca,
             sb * cb - sa * ca,
@@ -1107,14 +1130,14 @@ struct PhaseSums {
 impl PhaseSums {
     /// The sums of the four phases of a stick–slip cycle in contact ([`closed_form`]): the
     /// integrals of stick after positive slip, negative slip, stick after negative slip and
-    /// positive slip, in this order, and the two sticks' sliders w (m) with the instants the
-    /// slips left them, written out as [`PhaseSums::add`] would sum them phase by phase (the
-    /// same operations in the same order, without the dispatch on each phase's state).
+    /// positive slip, in this order, and the two sticks' sliders w (m) with `[sin, cos]` of the
+    /// instants the slips left them, written out as [`PhaseSums::add`] would sum them phase by
+    /// phase (the same operations, without the dispatch on each phase's state).
     #[inline]
     fn stick_slip(
         mo: &Motion,
         [i_p, i_neg, i_n, i_pos]: [PhaseIntegrals; 4],
-        [(w_p, at_p), (w_n, at_n)]: [(f64, At); 2],
+        [(w_p, [s_p, c_p]), (w_n, [s_n, c_n])]: [(f64, [f64; 2]); 2],
         jacobian: bool,
     ) -> PhaseSums {
         let (a, b) = (&i_p.0, &i_n.0);
@@ -1124,9 +1147,10 @@ impl PhaseSums {
         let mut w_v = [[0.0; 3]; 3];
         if jacobian {
             // ∂w = e·∂U + r (k_n e·∂V + ∂n0) with r = ∓μ/k_t after ±slip ([`slider_derivative`])
-            let (r_p, r_n) = (-mo.p.mu / mo.p.kt, mo.p.mu / mo.p.kt);
+            let r_n = mo.p.mu / mo.p.kt;
+            let r_p = -r_n;
             let (m_p, m_n) = (i_p.first_column(), i_n.first_column());
-            let (e_p, e_n) = (at_p.basis(), at_n.basis());
+            let (e_p, e_n) = ([1.0, c_p, -s_p], [1.0, c_n, -s_n]);
             for k in 0..3 {
                 for l in 0..3 {
                     let (t_p, t_n) = (m_p[k] * e_p[l], m_n[k] * e_n[l]);
@@ -1185,9 +1209,16 @@ impl PhaseSums {
         &self,
         mo: &Motion,
         at_zero: PhaseKind,
-        mut jac: Option<&mut PointJacobian>,
+        jac: Option<&mut PointJacobian>,
         out: &mut Harmonics,
     ) {
+        self.forces(mo, jac, out);
+        out.slider = mo.slider_in(at_zero, At::ZERO);
+    }
+
+    /// [`PhaseSums::finish`] without the end slider state: the forces, the energy and, if given,
+    /// the Jacobian.
+    fn forces(&self, mo: &Motion, mut jac: Option<&mut PointJacobian>, out: &mut Harmonics) {
         let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
         let u = mo.u;
         let m_stick = self.stick.projection();
@@ -1236,7 +1267,6 @@ impl PhaseSums {
             }
         }
         out.energy = PI * (u[1] * out.friction[2] - u[2] * out.friction[1]);
-        out.slider = mo.slider_in(at_zero, At::ZERO);
     }
 }
 
@@ -1316,57 +1346,98 @@ fn closed_form(
         Harmonics::stuck(mo, w, jac, out);
         return true;
     }
-    // c_N/|H| and c_P/|G|
+    // c_N/|H| and c_P/|G|; at constant load one sinusoid, c_P/|G| = −c_N/|H| and δ = 0
     let arc_n = Arc::new((g.amp - 2.0 * mun) / h.amp);
-    let arc_p = if g.x1 == h.x1 && g.x2 == h.x2 {
-        // no normal motion: one sinusoid, one phase angle, and c_P/|G| = −c_N/|H|
-        h.alpha.set(g.phase());
+    let constant_load = g.x1 == h.x1 && g.x2 == h.x2;
+    let arc_p = if constant_load {
         arc_n.opposite()
     } else {
         Arc::new((2.0 * mun - h.amp) / g.amp)
     };
-    let p = g.maximum();
-    let p = p.labelled(wrap(p.t));
-    let stn = h.falling(arc_n);
-    let n = h.minimum();
-    let stp = g.rising(arc_p);
-    let t1 = p.t + ahead(stn.t, p.t);
-    let t2 = t1 + ahead(n.t, stn.t);
-    let t3 = t2 + ahead(stp.t, n.t);
-    let t4 = p.t + TAU;
-    if !(t3 < t4 && (t3 + ahead(p.t, stp.t) - t4).abs() < 1e-9) {
+    let Some(lengths) = stick_slip_lengths(g, h, arc_n, arc_p, constant_load) else {
         return false;
-    }
-    let w_p = mo.slider_in(PhaseKind::PositiveSlip, p);
-    let w_n = mo.slider_in(PhaseKind::NegativeSlip, n);
-    // the state at τ ≡ 0: the first phase that ends at or after it (as in `harmonics`)
-    let zero = p.t + wrap(-p.t);
-    let at_zero = if t1 >= zero {
-        PhaseKind::Stick {
-            slider: w_p,
-            origin: SliderOrigin::AfterPositiveSlip(p.t),
-        }
-    } else if t2 >= zero {
-        PhaseKind::NegativeSlip
-    } else if t3 >= zero {
-        PhaseKind::Stick {
-            slider: w_n,
-            origin: SliderOrigin::AfterNegativeSlip(n.t),
-        }
-    } else {
-        PhaseKind::PositiveSlip
     };
-    let integrals =
-        |a: At, ta: f64, b: At, tb: f64| PhaseIntegrals::between(ta, [a.s, a.c], tb, [b.s, b.c]);
+    // [sin, cos] of the ends τ_P, τ_StN, τ_N, τ_StP
+    let ends = [
+        [-g.sa, g.ca],
+        h.falling_sc(arc_n),
+        [h.sa, -h.ca],
+        g.rising_sc(arc_p),
+    ];
+    let Some(zero) = phase_of_zero(&ends, &lengths) else {
+        return false;
+    };
+    let [p, stn, n, stp] = ends;
+    let mu_kt = mo.p.mu / mo.p.kt;
+    // u and n at an instant need its sine and cosine only, not its label
+    let at = |[s, c]: [f64; 2]| At { t: f64::NAN, s, c };
+    let w_p = mo.u_at(at(p)) - mu_kt * mo.n_at(at(p));
+    let w_n = mo.u_at(at(n)) + mu_kt * mo.n_at(at(n));
     let phases = [
-        integrals(p, p.t, stn, t1),
-        integrals(stn, t1, n, t2),
-        integrals(n, t2, stp, t3),
-        integrals(stp, t3, p, t4),
+        PhaseIntegrals::over(lengths[0], p, stn),
+        PhaseIntegrals::over(lengths[1], stn, n),
+        PhaseIntegrals::over(lengths[2], n, stp),
+        PhaseIntegrals::over(lengths[3], stp, p),
     ];
     let sums = PhaseSums::stick_slip(mo, phases, [(w_p, p), (w_n, n)], jac.is_some());
-    sums.finish(mo, at_zero, jac, out);
+    sums.forces(mo, jac, out);
+    // the slider state at τ ≡ 0: the stick's slider, or the one the slip drags
+    let z = At::ZERO;
+    out.slider = match zero {
+        0 => w_p,
+        1 => mo.u_at(z) + mu_kt * mo.n_at(z),
+        2 => w_n,
+        _ => mo.u_at(z) - mu_kt * mo.n_at(z),
+    };
     true
+}
+
+/// The lengths (rad) of the four phases of a stick–slip cycle in contact ([`closed_form`]) from
+/// the levels' arccosines β_N = arccos(c_N/|H|) (`arc_n`), β_P = arccos(c_P/|G|) (`arc_p`) and
+/// the relative phase δ = α_H − α_G of h and g: stick after positive slip τ_StN − τ_P =
+/// β_N − δ, negative slip τ_N − τ_StN = π − β_N, stick after negative slip τ_StP − τ_N =
+/// δ − β_P − π, positive slip τ_P − τ_StP = β_P (each mod 2π; an angle less than [`BEHIND`]
+/// below a whole period is 0, as in the event march). δ is one inverse function of the cross and
+/// dot products of the phases' unit vectors (cos δ = cos α_G cos α_H + sin α_G sin α_H), none at
+/// constant load, where δ = 0 and β_P = π − β_N make both sticks β_N long. `None` where the
+/// lengths do not add up to one period (to 1e-9): the sequence is not the four phases.
+fn stick_slip_lengths(
+    g: &Wave,
+    h: &Wave,
+    arc_n: Arc,
+    arc_p: Arc,
+    constant_load: bool,
+) -> Option<[f64; 4]> {
+    let (stick_p, stick_n) = if constant_load {
+        (arc_n.b, arc_n.b)
+    } else {
+        let delta = angle(g.ca * h.ca + g.sa * h.sa, g.ca * h.sa - g.sa * h.ca);
+        (
+            ahead(arc_n.b - delta, 0.0),
+            ahead(delta - arc_p.b - PI, 0.0),
+        )
+    };
+    let lengths = [stick_p, PI - arc_n.b, stick_n, arc_p.b];
+    let three = lengths[0] + lengths[1] + lengths[2];
+    (three < TAU && (three + lengths[3] - TAU).abs() < 1e-9).then_some(lengths)
+}
+
+/// Which of the four phases of a stick–slip cycle ([`closed_form`]: `ends` [sin, cos] of the
+/// phase starts τ_P, τ_StN, τ_N, τ_StP, the phase i running from ends\[i\] over `lengths`\[i\])
+/// holds τ ≡ 0 (mod 2π), by the signs of the ends' sines (no angle): a phase of length ≤ π holds
+/// it iff it runs from the lower half-plane (sin ≤ 0) to the upper one (sin ≥ 0) through
+/// cos > 0 (cos a + cos b ≥ 0), a longer one iff its complement does not (sin b < 0 and
+/// sin a > 0). The first phase that holds it (at a boundary both neighbours give the same slider
+/// state); `None` if none does by rounding at a boundary (the caller then marches).
+fn phase_of_zero(ends: &[[f64; 2]; 4], lengths: &[f64; 4]) -> Option<usize> {
+    (0..4).find(|&i| {
+        let ([sa, ca], [sb, cb]) = (ends[i], ends[(i + 1) % 4]);
+        if lengths[i] <= PI {
+            sa <= 0.0 && sb >= 0.0 && ca + cb >= 0.0
+        } else {
+            !(sb < 0.0 && sa > 0.0)
+        }
+    })
 }
 
 /// Most contact phases of a cycle with separation in [`separation_form`]: the contact window is
