@@ -1128,48 +1128,6 @@ struct PhaseSums {
 }
 
 impl PhaseSums {
-    /// The sums of the four phases of a stick–slip cycle in contact ([`closed_form`]): the
-    /// integrals of stick after positive slip, negative slip, stick after negative slip and
-    /// positive slip, in this order, and the two sticks' sliders w (m) with `[sin, cos]` of the
-    /// instants the slips left them, written out as [`PhaseSums::add`] would sum them phase by
-    /// phase (the same operations, without the dispatch on each phase's state).
-    #[inline]
-    fn stick_slip(
-        mo: &Motion,
-        [i_p, i_neg, i_n, i_pos]: [PhaseIntegrals; 4],
-        [(w_p, [s_p, c_p]), (w_n, [s_n, c_n])]: [(f64, [f64; 2]); 2],
-        jacobian: bool,
-    ) -> PhaseSums {
-        let (a, b) = (&i_p.0, &i_n.0);
-        let stick = PhaseIntegrals(std::array::from_fn(|k| a[k] + b[k]));
-        let w_int = std::array::from_fn(|k| w_p * a[k] + w_n * b[k]);
-        let mut w_u = [[0.0; 3]; 3];
-        let mut w_v = [[0.0; 3]; 3];
-        if jacobian {
-            // ∂w = e·∂U + r (k_n e·∂V + ∂n0) with r = ∓μ/k_t after ±slip ([`slider_derivative`])
-            let r_n = mo.p.mu / mo.p.kt;
-            let r_p = -r_n;
-            let (m_p, m_n) = (i_p.first_column(), i_n.first_column());
-            let (e_p, e_n) = ([1.0, c_p, -s_p], [1.0, c_n, -s_n]);
-            for k in 0..3 {
-                for l in 0..3 {
-                    let (t_p, t_n) = (m_p[k] * e_p[l], m_n[k] * e_n[l]);
-                    w_u[k][l] = t_p + t_n;
-                    w_v[k][l] = r_p * t_p + r_n * t_n;
-                }
-            }
-        }
-        PhaseSums {
-            stick,
-            positive: i_pos,
-            negative: i_neg,
-            w_int,
-            w_u,
-            w_v,
-            separates: false,
-        }
-    }
-
     /// Adds one phase of the cycle (with its slider's derivative if `jacobian`).
     #[inline]
     fn add(&mut self, mo: &Motion, ph: &Phase, jacobian: bool) {
@@ -1209,16 +1167,9 @@ impl PhaseSums {
         &self,
         mo: &Motion,
         at_zero: PhaseKind,
-        jac: Option<&mut PointJacobian>,
+        mut jac: Option<&mut PointJacobian>,
         out: &mut Harmonics,
     ) {
-        self.forces(mo, jac, out);
-        out.slider = mo.slider_in(at_zero, At::ZERO);
-    }
-
-    /// [`PhaseSums::finish`] without the end slider state: the forces, the energy and, if given,
-    /// the Jacobian.
-    fn forces(&self, mo: &Motion, mut jac: Option<&mut PointJacobian>, out: &mut Harmonics) {
         let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
         let u = mo.u;
         let m_stick = self.stick.projection();
@@ -1267,6 +1218,7 @@ impl PhaseSums {
             }
         }
         out.energy = PI * (u[1] * out.friction[2] - u[2] * out.friction[1]);
+        out.slider = mo.slider_in(at_zero, At::ZERO);
     }
 }
 
@@ -1368,28 +1320,86 @@ fn closed_form(
         return false;
     };
     let [p, stn, n, stp] = ends;
-    let mu_kt = mo.p.mu / mo.p.kt;
-    // u and n at an instant need its sine and cosine only, not its label
-    let at = |[s, c]: [f64; 2]| At { t: f64::NAN, s, c };
-    let w_p = mo.u_at(at(p)) - mu_kt * mo.n_at(at(p));
-    let w_n = mo.u_at(at(n)) + mu_kt * mo.n_at(at(n));
     let phases = [
         PhaseIntegrals::over(lengths[0], p, stn),
         PhaseIntegrals::over(lengths[1], stn, n),
         PhaseIntegrals::over(lengths[2], n, stp),
         PhaseIntegrals::over(lengths[3], stp, p),
     ];
-    let sums = PhaseSums::stick_slip(mo, phases, [(w_p, p), (w_n, n)], jac.is_some());
-    sums.forces(mo, jac, out);
-    // the slider state at τ ≡ 0: the stick's slider, or the one the slip drags
-    let z = At::ZERO;
-    out.slider = match zero {
-        0 => w_p,
-        1 => mo.u_at(z) + mu_kt * mo.n_at(z),
-        2 => w_n,
-        _ => mo.u_at(z) - mu_kt * mo.n_at(z),
+    stick_slip_forces(mo, phases, [p, n], jac, out);
+    // the slider state at τ ≡ 0: the stick's slider w = u(τ) ∓ μ n(τ)/k_t set where the slip
+    // before it ended, or the one the slip drags
+    let (at, sign) = match zero {
+        0 => (p, -1.0),
+        1 => ([0.0, 1.0], 1.0),
+        2 => (n, 1.0),
+        _ => ([0.0, 1.0], -1.0),
     };
+    let at = At {
+        t: f64::NAN,
+        s: at[0],
+        c: at[1],
+    };
+    out.slider = mo.u_at(at) + sign * mo.p.mu / mo.p.kt * mo.n_at(at);
     true
+}
+
+/// The friction and normal forces, the energy and, if given, the Jacobian of a stick–slip cycle
+/// in contact ([`closed_form`]) into `out` and `jac`, from the integrals of its four phases
+/// (stick after positive slip, negative slip, stick after negative slip, positive slip) and
+/// `[sin, cos]` of the instants τ_P, τ_N where the slips end.
+///
+/// With M(·) the projection of a sum of phases ([`PhaseIntegrals::projection`]), m_P, m_N the
+/// first columns of the two sticks' projections and e_P = e(τ_P), e_N = e(τ_N), the sticks'
+/// sliders w_P = e_P·U − (μ/k_t) e_P·N and w_N = e_N·U + (μ/k_t) e_N·N (N = (n0e, k_n V1,
+/// k_n V2), N) make the force of [`PhaseSums::finish`], F = k_t (M_stick U − w_P m_P − w_N m_N)
+/// + μ M_slip N, linear in U and N:
+/// F = k_t A U + μ B N with A = M_stick − m_P ⊗ e_P − m_N ⊗ e_N and
+/// B = M_slip + m_P ⊗ e_P − m_N ⊗ e_N (3 × 3, dimensionless). The phase ends depend on ratios of
+/// the amplitudes only and the force is continuous at them, so ∂F/∂U = k_t A (N/m),
+/// ∂F/∂V = μ k_n B (N/m) and ∂F/∂n0 = μ B_·0 (the derivatives of [`slider_derivative`] summed,
+/// Cigeroglu, An & Menq 2007, eq. 29). A_·0 = 0: M_stick's first column is m_P + m_N, F does not
+/// depend on U0. In contact all period N and its rows are those of complete stick.
+fn stick_slip_forces(
+    mo: &Motion,
+    [i_p, i_neg, i_n, i_pos]: [PhaseIntegrals; 4],
+    [[s_p, c_p], [s_n, c_n]]: [[f64; 2]; 2],
+    jac: Option<&mut PointJacobian>,
+    out: &mut Harmonics,
+) {
+    let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
+    let mut stick = i_p;
+    stick.add(&i_n, 1.0);
+    let mut slip = i_pos;
+    slip.add(&i_neg, -1.0);
+    let (m_stick, m_slip) = (stick.projection(), slip.projection());
+    let (m_p, m_n) = (i_p.first_column(), i_n.first_column());
+    let (e_p, e_n) = ([1.0, c_p, -s_p], [1.0, c_n, -s_n]);
+    // k_t A and μ B, row by row
+    let mut ka = [[0.0; 3]; 3];
+    let mut mb = [[0.0; 3]; 3];
+    for k in 0..3 {
+        for l in 0..3 {
+            let (t_p, t_n) = (m_p[k] * e_p[l], m_n[k] * e_n[l]);
+            if l > 0 {
+                ka[k][l] = kt * (m_stick[k][l] - t_p - t_n);
+            }
+            mb[k][l] = mu * (m_slip[k][l] + t_p - t_n);
+        }
+    }
+    let (u, cn) = (mo.u, [mo.n0e, mo.nv.x1, mo.nv.x2]);
+    for k in 0..3 {
+        out.friction[k] = dot(ka[k], u) + dot(mb[k], cn);
+    }
+    out.normal = cn;
+    out.energy = PI * (u[1] * out.friction[2] - u[2] * out.friction[1]);
+    if let Some(j) = jac {
+        for k in 0..3 {
+            let [a, b] = [ka[k], mb[k]];
+            j[k] = [a[0], a[1], a[2], kn * b[0], kn * b[1], kn * b[2], b[0]];
+        }
+        [j[3], j[4], j[5]] = contact_rows(kn);
+    }
 }
 
 /// The lengths (rad) of the four phases of a stick–slip cycle in contact ([`closed_form`]) from
@@ -1589,8 +1599,13 @@ fn separation_form(mo: &Motion, jac: Option<&mut PointJacobian>, out: &mut Harmo
     false
 }
 
+/// An error unless the motion and the slider state are finite: one test of Σ x·0, which is 0 for
+/// finite x and NaN as soon as one x is infinite or NaN.
 fn check_finite(u: &[f64; 3], v: &[f64; 3], slider: f64) -> Result<()> {
-    if u.iter().chain(v).chain([&slider]).all(|x| x.is_finite()) {
+    let zero = (u[0] * 0.0 + u[1] * 0.0 + u[2] * 0.0)
+        + (v[0] * 0.0 + v[1] * 0.0 + v[2] * 0.0)
+        + slider * 0.0;
+    if zero == 0.0 {
         Ok(())
     } else {
         Err(Error::Compute(format!(
@@ -1690,6 +1705,8 @@ pub(crate) fn evaluate_element(
     ) {
         return evaluate_one_direction(&element.params, x, slider, force, jacobian, ws);
     }
+    // a valid layout above (the 1-D law, one direction); the others are checked here
+    element.check()?;
     let nt = element.tangential;
     let v = if element.normal {
         [x[nt * 3], x[nt * 3 + 1], x[nt * 3 + 2]]
