@@ -426,7 +426,7 @@ struct Motion {
 }
 
 /// x reduced to [0, 2π) (cheaply for the few periods the construction spans).
-#[inline]
+#[inline(always)]
 fn wrap(x: f64) -> f64 {
     if (0.0..TAU).contains(&x) {
         x
@@ -441,7 +441,7 @@ fn wrap(x: f64) -> f64 {
 
 /// How far ahead of `from` the angle `target` (mod 2π) lies, in [0, 2π); an angle less than
 /// [`BEHIND`] behind counts as 0.
-#[inline]
+#[inline(always)]
 fn ahead(target: f64, from: f64) -> f64 {
     let d = wrap(target - from);
     if d > TAU - BEHIND {
@@ -835,16 +835,9 @@ impl PhaseIntegrals {
 
     /// The five numbers of the phase [a, b] (rad) from sin and cos of its ends, `[sin, cos]`.
     #[inline]
-    fn between(a: f64, start: [f64; 2], b: f64, end: [f64; 2]) -> Self {
-        PhaseIntegrals::over(b - a, start, end)
-    }
-
-    /// The five numbers of a phase of length `len` = b − a (rad) from sin and cos of its ends,
-    /// `[sin, cos]`.
-    #[inline]
-    fn over(len: f64, [sa, ca]: [f64; 2], [sb, cb]: [f64; 2]) -> Self {
+    fn between(a: f64, [sa, ca]: [f64; 2], b: f64, [sb, cb]: [f64; 2]) -> Self {
         PhaseIntegrals([
-            len,
+            b - a,
             sb - sa,
             cb - ca,
             sb * cb - sa * ca,
@@ -1320,13 +1313,23 @@ fn closed_form(
         return false;
     };
     let [p, stn, n, stp] = ends;
-    let phases = [
-        PhaseIntegrals::over(lengths[0], p, stn),
-        PhaseIntegrals::over(lengths[1], stn, n),
-        PhaseIntegrals::over(lengths[2], n, stp),
-        PhaseIntegrals::over(lengths[3], stp, p),
+    // (sin, cos, sin cos, sin²) at each end: a phase's integrals are their differences
+    // ([`PhaseIntegrals`]); the sticks [τ_P, τ_StN] and [τ_N, τ_StP] sum to
+    // (τ_StN − τ_N) − (τ_P − τ_StP), the slips [τ_StP, τ_P] − [τ_StN, τ_N] to their sum
+    let x = |[s, c]: [f64; 2]| [s, c, s * c, s * s];
+    let (xp, xstn, xn, xstp) = (x(p), x(stn), x(n), x(stp));
+    let d_n: [f64; 4] = std::array::from_fn(|k| xstn[k] - xn[k]);
+    let d_p: [f64; 4] = std::array::from_fn(|k| xp[k] - xstp[k]);
+    let [l_p, l_neg, l_n, l_pos] = lengths;
+    let [dn0, dn1, dn2, dn3] = d_n;
+    let [dp0, dp1, dp2, dp3] = d_p;
+    let sums = [
+        PhaseIntegrals([l_p + l_n, dn0 - dp0, dn1 - dp1, dn2 - dp2, dn3 - dp3]),
+        PhaseIntegrals([l_pos - l_neg, dn0 + dp0, dn1 + dp1, dn2 + dp2, dn3 + dp3]),
+        PhaseIntegrals([l_p, xstn[0] - xp[0], xstn[1] - xp[1], 0.0, 0.0]),
+        PhaseIntegrals([l_n, xstp[0] - xn[0], xstp[1] - xn[1], 0.0, 0.0]),
     ];
-    stick_slip_forces(mo, phases, [p, n], jac, out);
+    stick_slip_forces(mo, sums, [p, n], jac, out);
     // the slider state at τ ≡ 0: the stick's slider w = u(τ) ∓ μ n(τ)/k_t set where the slip
     // before it ended, or the one the slip drags
     let (at, sign) = match zero {
@@ -1345,8 +1348,9 @@ fn closed_form(
 }
 
 /// The friction and normal forces, the energy and, if given, the Jacobian of a stick–slip cycle
-/// in contact ([`closed_form`]) into `out` and `jac`, from the integrals of its four phases
-/// (stick after positive slip, negative slip, stick after negative slip, positive slip) and
+/// in contact ([`closed_form`]) into `out` and `jac`, from the integrals of its phases
+/// ([`PhaseIntegrals`]: the two sticks' sum, positive minus negative slip, the stick after
+/// positive slip and the stick after negative slip, of the last two the first three numbers) and
 /// `[sin, cos]` of the instants τ_P, τ_N where the slips end.
 ///
 /// With M(·) the projection of a sum of phases ([`PhaseIntegrals::projection`]), m_P, m_N the
@@ -1360,18 +1364,15 @@ fn closed_form(
 /// ∂F/∂V = μ k_n B (N/m) and ∂F/∂n0 = μ B_·0 (the derivatives of [`slider_derivative`] summed,
 /// Cigeroglu, An & Menq 2007, eq. 29). A_·0 = 0: M_stick's first column is m_P + m_N, F does not
 /// depend on U0. In contact all period N and its rows are those of complete stick.
+#[inline(always)]
 fn stick_slip_forces(
     mo: &Motion,
-    [i_p, i_neg, i_n, i_pos]: [PhaseIntegrals; 4],
+    [stick, slip, i_p, i_n]: [PhaseIntegrals; 4],
     [[s_p, c_p], [s_n, c_n]]: [[f64; 2]; 2],
     jac: Option<&mut PointJacobian>,
     out: &mut Harmonics,
 ) {
     let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
-    let mut stick = i_p;
-    stick.add(&i_n, 1.0);
-    let mut slip = i_pos;
-    slip.add(&i_neg, -1.0);
     let (m_stick, m_slip) = (stick.projection(), slip.projection());
     let (m_p, m_n) = (i_p.first_column(), i_n.first_column());
     let (e_p, e_n) = ([1.0, c_p, -s_p], [1.0, c_n, -s_n]);
@@ -1411,6 +1412,7 @@ fn stick_slip_forces(
 /// dot products of the phases' unit vectors (cos δ = cos α_G cos α_H + sin α_G sin α_H), none at
 /// constant load, where δ = 0 and β_P = π − β_N make both sticks β_N long. `None` where the
 /// lengths do not add up to one period (to 1e-9): the sequence is not the four phases.
+#[inline(always)]
 fn stick_slip_lengths(
     g: &Wave,
     h: &Wave,
@@ -1439,15 +1441,27 @@ fn stick_slip_lengths(
 /// cos > 0 (cos a + cos b ≥ 0), a longer one iff its complement does not (sin b < 0 and
 /// sin a > 0). The first phase that holds it (at a boundary both neighbours give the same slider
 /// state); `None` if none does by rounding at a boundary (the caller then marches).
+#[inline(always)]
 fn phase_of_zero(ends: &[[f64; 2]; 4], lengths: &[f64; 4]) -> Option<usize> {
-    (0..4).find(|&i| {
-        let ([sa, ca], [sb, cb]) = (ends[i], ends[(i + 1) % 4]);
+    let holds = |i: usize, j: usize| {
+        let ([sa, ca], [sb, cb]) = (ends[i], ends[j]);
         if lengths[i] <= PI {
             sa <= 0.0 && sb >= 0.0 && ca + cb >= 0.0
         } else {
             !(sb < 0.0 && sa > 0.0)
         }
-    })
+    };
+    if holds(0, 1) {
+        Some(0)
+    } else if holds(1, 2) {
+        Some(1)
+    } else if holds(2, 3) {
+        Some(2)
+    } else if holds(3, 0) {
+        Some(3)
+    } else {
+        None
+    }
 }
 
 /// Most contact phases of a cycle with separation in [`separation_form`]: the contact window is
