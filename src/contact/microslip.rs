@@ -1260,6 +1260,7 @@ fn harmonics(
 ///   slip until τ_P + 2π (eqs 8, 21). After the end of a slip the point cannot slip the same way
 ///   again before slipping the other way (g ≤ g(τ_P) = c_P after τ_P), so no other sequence
 ///   exists; the two arccosines depend on the amplitudes only, not on a previous event.
+#[inline(always)]
 fn closed_form(
     mo: &Motion,
     slider: f64,
