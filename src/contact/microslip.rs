@@ -242,8 +242,8 @@ struct Wave {
     x1: f64,
     x2: f64,
     amp: f64,
-    /// α (rad), computed on first use ([`Wave::phase`]; NaN before): a cycle without slip or
-    /// separation never needs it.
+    /// α (rad), computed on first use ([`Wave::phase`]; NaN before): the closed form of a cycle
+    /// in contact ([`closed_form`]) never needs it.
     alpha: Cell<f64>,
     /// cos α and sin α (1 and 0 for A = 0).
     ca: f64,
@@ -1096,7 +1096,8 @@ fn contact_rows(kn: f64) -> [[f64; 7]; 3] {
 }
 
 /// The phase integrals of a cycle summed per kind, with what the stick sliders add: the
-/// running sums of [`harmonics`] and of the closed forms ([`closed_form`]), turned into the
+/// running sums of [`harmonics`] and of the closed form with separation ([`separation_form`]),
+/// turned into the
 /// harmonic results by [`PhaseSums::finish`].
 ///
 /// On every phase f = c·e(τ) with c constant, so each coefficient is Σ_phases M(phase)·c with
@@ -1260,6 +1261,12 @@ fn harmonics(
 ///   slip until τ_P + 2π (eqs 8, 21). After the end of a slip the point cannot slip the same way
 ///   again before slipping the other way (g ≤ g(τ_P) = c_P after τ_P), so no other sequence
 ///   exists; the two arccosines depend on the amplitudes only, not on a previous event.
+///
+/// No phase angle α_G, α_H is formed: the phase lengths follow from the two arccosines and the
+/// relative phase δ = α_H − α_G ([`stick_slip_lengths`]; one inverse function at constant load,
+/// three with load variation), the ends' sines and cosines from the addition theorems, the
+/// phase holding τ ≡ 0 from their signs ([`phase_of_zero`]), and the forces and Jacobian from
+/// the integrals of the phases ([`stick_slip_forces`]).
 #[inline(always)]
 fn closed_form(
     mo: &Motion,
@@ -1357,14 +1364,14 @@ fn closed_form(
 /// With M(·) the projection of a sum of phases ([`PhaseIntegrals::projection`]), m_P, m_N the
 /// first columns of the two sticks' projections and e_P = e(τ_P), e_N = e(τ_N), the sticks'
 /// sliders w_P = e_P·U − (μ/k_t) e_P·N and w_N = e_N·U + (μ/k_t) e_N·N (N = (n0e, k_n V1,
-/// k_n V2), N) make the force of [`PhaseSums::finish`], F = k_t (M_stick U − w_P m_P − w_N m_N)
-/// + μ M_slip N, linear in U and N:
-/// F = k_t A U + μ B N with A = M_stick − m_P ⊗ e_P − m_N ⊗ e_N and
-/// B = M_slip + m_P ⊗ e_P − m_N ⊗ e_N (3 × 3, dimensionless). The phase ends depend on ratios of
-/// the amplitudes only and the force is continuous at them, so ∂F/∂U = k_t A (N/m),
-/// ∂F/∂V = μ k_n B (N/m) and ∂F/∂n0 = μ B_·0 (the derivatives of [`slider_derivative`] summed,
-/// Cigeroglu, An & Menq 2007, eq. 29). A_·0 = 0: M_stick's first column is m_P + m_N, F does not
-/// depend on U0. In contact all period N and its rows are those of complete stick.
+/// k_n V2), N) make the force of [`PhaseSums::finish`],
+/// F = k_t (M_stick U − w_P m_P − w_N m_N) + μ M_slip N, linear in U and N: F = k_t A U + μ B N
+/// with A = M_stick − m_P ⊗ e_P − m_N ⊗ e_N and B = M_slip + m_P ⊗ e_P − m_N ⊗ e_N (3 × 3,
+/// dimensionless). The phase ends depend on ratios of the amplitudes only and the force is
+/// continuous at them, so ∂F/∂U = k_t A (N/m), ∂F/∂V = μ k_n B (N/m) and ∂F/∂n0 = μ B_·0 (the
+/// derivatives of [`slider_derivative`] summed; Cigeroglu, An & Menq 2007, eq. 29). A_·0 = 0:
+/// M_stick's first column is m_P + m_N, so F does not depend on U0. In contact all period N and
+/// its rows are those of complete stick.
 #[inline(always)]
 fn stick_slip_forces(
     mo: &Motion,
