@@ -1130,26 +1130,41 @@ impl PhaseSums {
             PhaseKind::PositiveSlip => self.positive.add(&PhaseIntegrals::of(ph), 1.0),
             PhaseKind::NegativeSlip => self.negative.add(&PhaseIntegrals::of(ph), 1.0),
             PhaseKind::Stick { slider: w, origin } => {
-                let i = PhaseIntegrals::of(ph);
-                self.stick.add(&i, 1.0);
-                for (a, b) in self.w_int.iter_mut().zip(&i.0[..3]) {
-                    *a += w * b;
-                }
-                if jacobian && origin != SliderOrigin::Carried {
-                    let at = At {
-                        t: ph.start,
-                        s: ph.sc[0],
-                        c: ph.sc[1],
-                    };
-                    let (e, r) = slider_derivative(mo, origin, at);
-                    let m0 = i.first_column();
-                    for (k, &mk) in m0.iter().enumerate() {
-                        for (l, &el) in e.iter().enumerate() {
-                            let t = mk * el;
-                            self.w_u[k][l] += t;
-                            self.w_v[k][l] += r * t;
-                        }
-                    }
+                let at = At {
+                    t: ph.start,
+                    s: ph.sc[0],
+                    c: ph.sc[1],
+                };
+                let jacobian = jacobian && origin != SliderOrigin::Carried;
+                self.add_stick(mo, &PhaseIntegrals::of(ph), w, origin, at, jacobian);
+            }
+        }
+    }
+
+    /// Adds the integrals `i` of stick phases with the slider w (m) set at `at` as `origin`
+    /// says and, if `jacobian`, the slider's derivative ([`slider_derivative`]).
+    #[inline]
+    fn add_stick(
+        &mut self,
+        mo: &Motion,
+        i: &PhaseIntegrals,
+        w: f64,
+        origin: SliderOrigin,
+        at: At,
+        jacobian: bool,
+    ) {
+        self.stick.add(i, 1.0);
+        for (a, b) in self.w_int.iter_mut().zip(&i.0[..3]) {
+            *a += w * b;
+        }
+        if jacobian {
+            let (e, r) = slider_derivative(mo, origin, at);
+            let m0 = i.first_column();
+            for (k, &mk) in m0.iter().enumerate() {
+                for (l, &el) in e.iter().enumerate() {
+                    let t = mk * el;
+                    self.w_u[k][l] += t;
+                    self.w_v[k][l] += r * t;
                 }
             }
         }
@@ -1493,68 +1508,72 @@ impl Wave {
     }
 }
 
-/// The event that ends a contact phase of the state `kind` entered at `start` in a cycle with
-/// separation: (how far ahead of `start`, the event's instant, the state after it), or `None`
-/// if no event but the separation ends it (Cigeroglu, An & Menq 2007, §2.2.2; the conditions of the module documentation):
+/// The contact states of a cycle with separation (Cigeroglu, An & Menq 2007, §2.2.2), numbered
+/// in the order of the stick–slip cycle they follow each other in (positive slip, the stick it
+/// leaves, negative slip, the stick it leaves, then positive slip again), and the stick after a
+/// re-contact, which only the first phase of the window can be. The number indexes the phase
+/// integrals summed per state in [`separation_form`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum WindowState {
+    /// f = +μ n, ending at the maximum of g.
+    PositiveSlip = 0,
+    /// Stick with w_P = u(τ_P) − μ n(τ_P)/k_t, ending where h falls through c_N.
+    AfterPositiveSlip = 1,
+    /// f = −μ n, ending at the minimum of h.
+    NegativeSlip = 2,
+    /// Stick with w_N = u(τ_N) + μ n(τ_N)/k_t, ending where g rises through c_P.
+    AfterNegativeSlip = 3,
+    /// Stick with w = u(τ_Sp2), ending at the earlier of the mirrors of τ_Sp2.
+    AfterRecontact = 4,
+}
+
+/// The event that ends a contact phase in the state `state` entered at `start` (an instant
+/// labelled as in the march) in a cycle with separation: (the event's instant, the state after
+/// it), or `None` if only the separation can end the phase (Cigeroglu, An & Menq 2007, §2.2.2;
+/// the conditions of the module documentation):
 /// * positive slip ends at the maximum of g (eq. 8, θ_P of eq. 21), negative slip at the
-///   minimum of h (eq. 9, θ_N of eq. 22), each followed by stick with the slider the slip left;
-/// * stick after positive slip, with c_P = max g, can only end where h falls through c_N
-///   (eqs 12, 24: one arccosine), stick after negative slip only where g rises through c_P
-///   (eqs 11, 23);
-/// * stick after a re-contact at τ_Sp2 with w = u(τ_Sp2) has c_P = g(τ_Sp2) and c_N = h(τ_Sp2)
-///   (n(τ_Sp2) = 0): it ends where g takes its re-contact value again rising (θ_SpP, eq. 27) or h
-///   falling (θ_SpN, eq. 28), the mirrors of τ_Sp2 about the minimum of g and the maximum of h
-///   ([`Wave::mirror`]), whichever comes first.
+///   minimum of h (eq. 9, θ_N of eq. 22);
+/// * the stick after positive slip, whose level c_P is the maximum of g, can only end where h
+///   falls through c_N (eqs 12, 24: one arccosine), the stick after negative slip only where g
+///   rises through c_P (eqs 11, 23), the levels from the slider the slip left;
+/// * the stick after a re-contact at τ_Sp2 with w = u(τ_Sp2) has c_P = g(τ_Sp2) and
+///   c_N = h(τ_Sp2) (n(τ_Sp2) = 0): it ends where g takes its re-contact value again rising
+///   (θ_SpP, eq. 27) or h falling (θ_SpN, eq. 28), the mirrors of τ_Sp2 about the minimum of g
+///   and the maximum of h ([`Wave::mirror`]), whichever comes first (g's on a tie, as in the
+///   march).
 ///
 /// The levels and their tangency tests are those of the event march ([`Motion::next_event`]), so
 /// both take the same decisions.
-fn window_event(mo: &Motion, kind: PhaseKind, start: At) -> Option<(f64, At, PhaseKind)> {
+fn window_event(mo: &Motion, state: WindowState, start: At) -> Option<(At, WindowState)> {
     let (g, h) = (&mo.g, &mo.h);
-    let from = start.t;
     let mun = mo.p.mu * mo.n0e;
-    let ahead_of = |a: At, next: PhaseKind| Some((ahead(a.t, from), a, next));
-    match kind {
-        PhaseKind::PositiveSlip => {
-            let p = g.maximum();
-            let slider = mo.slider_in(PhaseKind::PositiveSlip, p);
-            let origin = SliderOrigin::AfterPositiveSlip(p.t);
-            ahead_of(p, PhaseKind::Stick { slider, origin })
+    match state {
+        WindowState::PositiveSlip => Some((g.maximum(), WindowState::AfterPositiveSlip)),
+        WindowState::NegativeSlip => Some((h.minimum(), WindowState::AfterNegativeSlip)),
+        WindowState::AfterPositiveSlip => {
+            let w = mo.slider_in(PhaseKind::PositiveSlip, g.maximum());
+            let r = (-mun - mo.p.kt * (mo.u[0] - w)) / h.amp;
+            (r > -1.0 + TANGENCY).then(|| (h.crossing(r, false), WindowState::NegativeSlip))
         }
-        PhaseKind::NegativeSlip => {
-            let n = h.minimum();
-            let slider = mo.slider_in(PhaseKind::NegativeSlip, n);
-            let origin = SliderOrigin::AfterNegativeSlip(n.t);
-            ahead_of(n, PhaseKind::Stick { slider, origin })
+        WindowState::AfterNegativeSlip => {
+            let w = mo.slider_in(PhaseKind::NegativeSlip, h.minimum());
+            let r = (mun - mo.p.kt * (mo.u[0] - w)) / g.amp;
+            (r < 1.0 - TANGENCY).then(|| (g.crossing(r, true), WindowState::PositiveSlip))
         }
-        PhaseKind::Stick { slider, origin } => {
-            let offset = mo.p.kt * (mo.u[0] - slider);
-            let rp = (mun - offset) / g.amp;
-            let rn = (-mun - offset) / h.amp;
-            let positive = rp < 1.0 - TANGENCY;
-            let negative = rn > -1.0 + TANGENCY;
-            match origin {
-                SliderOrigin::AfterPositiveSlip(_) if negative => {
-                    ahead_of(h.crossing(rn, false), PhaseKind::NegativeSlip)
-                }
-                SliderOrigin::AfterNegativeSlip(_) if positive => {
-                    ahead_of(g.crossing(rp, true), PhaseKind::PositiveSlip)
-                }
-                SliderOrigin::Recontact(_) => {
-                    // the earlier of the two mirrors (g's first on a tie, as in the march)
-                    let sp = positive.then(|| g.mirror(start));
-                    let sn = negative.then(|| h.mirror(start));
-                    let dp = sp.map_or(f64::INFINITY, |a| ahead(a.t, from));
-                    let dn = sn.map_or(f64::INFINITY, |a| ahead(a.t, from));
-                    match (sp, sn) {
-                        (Some(a), _) if dp <= dn => Some((dp, a, PhaseKind::PositiveSlip)),
-                        (_, Some(a)) => Some((dn, a, PhaseKind::NegativeSlip)),
-                        _ => None,
-                    }
-                }
+        WindowState::AfterRecontact => {
+            let offset = mo.p.kt * (mo.u[0] - mo.u_at(start));
+            let positive = (mun - offset) / g.amp < 1.0 - TANGENCY;
+            let negative = (-mun - offset) / h.amp > -1.0 + TANGENCY;
+            let sp = positive.then(|| g.mirror(start));
+            let sn = negative.then(|| h.mirror(start));
+            let dp = sp.map_or(f64::INFINITY, |a| ahead(a.t, start.t));
+            let dn = sn.map_or(f64::INFINITY, |a| ahead(a.t, start.t));
+            match (sp, sn) {
+                (Some(a), _) if dp <= dn => Some((a, WindowState::PositiveSlip)),
+                (_, Some(a)) => Some((a, WindowState::NegativeSlip)),
                 _ => None,
             }
         }
-        PhaseKind::Separation => None,
     }
 }
 
@@ -1564,11 +1583,12 @@ fn window_event(mo: &Motion, kind: PhaseKind, start: At) -> Option<(f64, At, Pha
 /// event its state allows ([`window_event`]: an extremum, one arccosine, or a mirror of τ_Sp2)
 /// or at the separation τ_Sp1, whichever comes first; separation then lasts until τ_Sp2 + 2π.
 /// The phases are those of the event march of [`build`] (which, from the same start, takes the
-/// earliest of up to three candidate events a phase) and are integrated by the same
-/// [`PhaseSums`] into `out`. False where the march is needed: no separation, a degenerate
-/// sinusoid (|G| = 0 or |H| = 0, k_t = 0), or more phases than a window holds.
+/// earliest of up to three candidate events a phase). Their integrals are summed per state
+/// ([`WindowState`]) and each stick's slider and its derivative enter once for all its phases
+/// ([`PhaseSums::window`]), without the dispatch of [`PhaseSums::add`] on every phase. False
+/// where the march is needed: no separation, a degenerate sinusoid (|G| = 0 or |H| = 0,
+/// k_t = 0), or more phases than a window holds.
 fn separation_form(mo: &Motion, jac: Option<&mut PointJacobian>, out: &mut Harmonics) -> bool {
-    let jacobian = jac.is_some();
     let Window::Part {
         recontact,
         separation,
@@ -1582,43 +1602,120 @@ fn separation_form(mo: &Motion, jac: Option<&mut PointJacobian>, out: &mut Harmo
     }
     // τ_Sp1 labelled after τ_Sp2
     let sp1 = separation.labelled(recontact.t + len);
-    let mut sums = PhaseSums::default();
     // the state at τ ≡ 0: the first phase that ends at or after it (as in `harmonics`)
     let zero = recontact.t + wrap(-recontact.t);
-    let mut at_zero = PhaseKind::Separation;
-    let mut found = false;
-    let mut add = |ph: Phase| {
-        if !found && ph.end >= zero {
-            at_zero = ph.kind;
-            found = true;
+    let mut integrals = [PhaseIntegrals::default(); 5];
+    // the stick states in the order of their phases (each has at most one in a window)
+    let mut sticks = [WindowState::AfterRecontact; 3];
+    let mut stick_count = 0;
+    let mut at_zero = None;
+    let mut add = |state: WindowState, a: At, b: At| {
+        let i = state as usize;
+        integrals[i].add(
+            &PhaseIntegrals::between(a.t, [a.s, a.c], b.t, [b.s, b.c]),
+            1.0,
+        );
+        let stick = !matches!(state, WindowState::PositiveSlip | WindowState::NegativeSlip);
+        if stick && stick_count < sticks.len() && !sticks[..stick_count].contains(&state) {
+            sticks[stick_count] = state;
+            stick_count += 1;
         }
-        sums.add(mo, &ph, jacobian);
+        if at_zero.is_none() && b.t >= zero {
+            at_zero = Some(state);
+        }
+    };
+    let mut state = match mo.recontact_state(recontact) {
+        PhaseKind::PositiveSlip => WindowState::PositiveSlip,
+        PhaseKind::NegativeSlip => WindowState::NegativeSlip,
+        _ => WindowState::AfterRecontact,
     };
     let mut cur = recontact;
-    let mut kind = mo.recontact_state(recontact);
+    let mut closed = false;
     for _ in 0..WINDOW_PHASES {
         let to_separation = sp1.t - cur.t;
-        match window_event(mo, kind, cur) {
-            Some((d, a, next)) if d <= to_separation => {
-                let at = a.labelled(cur.t + d);
-                if d > 0.0 {
-                    add(Phase::new(kind, cur, at));
-                }
-                cur = at;
-                kind = next;
+        let event = window_event(mo, state, cur)
+            .map(|(a, next)| (ahead(a.t, cur.t), a, next))
+            .filter(|&(d, _, _)| d <= to_separation);
+        let Some((d, a, next)) = event else {
+            if to_separation > 0.0 {
+                add(state, cur, sp1);
             }
-            _ => {
-                if to_separation > 0.0 {
-                    add(Phase::new(kind, cur, sp1));
-                }
-                let end = recontact.labelled(recontact.t + TAU);
-                add(Phase::new(PhaseKind::Separation, sp1, end));
-                sums.finish(mo, at_zero, jac, out);
-                return true;
-            }
+            closed = true;
+            break;
+        };
+        let at = a.labelled(cur.t + d);
+        if d > 0.0 {
+            add(state, cur, at);
         }
+        cur = at;
+        state = next;
     }
-    false
+    if !closed {
+        return false;
+    }
+    let sticks = &sticks[..stick_count];
+    let sums = PhaseSums::window(mo, recontact, &integrals, sticks, jac.is_some());
+    let at_zero = match at_zero {
+        None => PhaseKind::Separation,
+        Some(WindowState::PositiveSlip) => PhaseKind::PositiveSlip,
+        Some(WindowState::NegativeSlip) => PhaseKind::NegativeSlip,
+        Some(s) => {
+            let (slider, _, origin) = window_stick(mo, s, recontact);
+            PhaseKind::Stick { slider, origin }
+        }
+    };
+    sums.finish(mo, at_zero, jac, out);
+    true
+}
+
+/// The slider w (m) of a stick state of a cycle with separation ([`WindowState`]): the one the
+/// slip before it left at the maximum of g or the minimum of h, or u(τ_Sp2) after the re-contact
+/// at `recontact`; with the instant it was set and its origin (for its derivative).
+fn window_stick(mo: &Motion, state: WindowState, recontact: At) -> (f64, At, SliderOrigin) {
+    match state {
+        WindowState::AfterPositiveSlip => {
+            let p = mo.g.maximum();
+            let w = mo.slider_in(PhaseKind::PositiveSlip, p);
+            (w, p, SliderOrigin::AfterPositiveSlip(p.t))
+        }
+        WindowState::AfterNegativeSlip => {
+            let n = mo.h.minimum();
+            let w = mo.slider_in(PhaseKind::NegativeSlip, n);
+            (w, n, SliderOrigin::AfterNegativeSlip(n.t))
+        }
+        _ => (
+            mo.u_at(recontact),
+            recontact,
+            SliderOrigin::Recontact(recontact.t),
+        ),
+    }
+}
+
+impl PhaseSums {
+    /// The sums of a cycle with separation ([`separation_form`]) from the phase integrals summed
+    /// per state (`integrals`, indexed by [`WindowState`]) and the stick states in the order of
+    /// their phases (`sticks`): each stick's slider and its derivative enter once
+    /// ([`PhaseSums::add_stick`]), in the order and with the operations of [`PhaseSums::add`]
+    /// phase by phase.
+    fn window(
+        mo: &Motion,
+        recontact: At,
+        integrals: &[PhaseIntegrals; 5],
+        sticks: &[WindowState],
+        jacobian: bool,
+    ) -> PhaseSums {
+        let mut sums = PhaseSums {
+            positive: integrals[WindowState::PositiveSlip as usize],
+            negative: integrals[WindowState::NegativeSlip as usize],
+            separates: true,
+            ..PhaseSums::default()
+        };
+        for &state in sticks {
+            let (w, at, origin) = window_stick(mo, state, recontact);
+            sums.add_stick(mo, &integrals[state as usize], w, origin, at, jacobian);
+        }
+        sums
+    }
 }
 
 /// An error unless the motion and the slider state are finite: one test of Σ x·0, which is 0 for
