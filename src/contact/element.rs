@@ -71,7 +71,9 @@ impl LocalElement {
         self.tangential + usize::from(self.normal)
     }
 
-    fn check(&self) -> Result<()> {
+    /// An input error unless the law has as many tangential directions as it needs (1 or 2 for
+    /// the 1-D law, 2 for the 2-D law).
+    pub(crate) fn check(&self) -> Result<()> {
         if !(1..=2).contains(&self.tangential)
             || (self.variant == Variant::TwoD && self.tangential != 2)
         {
@@ -221,7 +223,9 @@ impl Workspace {
     /// but not zeroed: it holds the previous evaluation's values, and the caller writes every
     /// entry.
     pub(crate) fn analytic_jacobian_buffer(&mut self, rows: usize, cols: usize) -> &mut [f64] {
-        self.jacobian.resize(rows * cols, 0.0);
+        if self.jacobian.len() != rows * cols {
+            self.jacobian.resize(rows * cols, 0.0);
+        }
         self.jacobian_cols = cols;
         &mut self.jacobian
     }
@@ -613,7 +617,7 @@ pub fn evaluate_as(
             Ok(ws.marching)
         }
         Evaluation::Analytic => {
-            element.check()?;
+            // checks the element where its layout is not the one-direction fast path
             microslip::evaluate_element(
                 element,
                 aft.layout().harmonics,

@@ -242,8 +242,8 @@ struct Wave {
     x1: f64,
     x2: f64,
     amp: f64,
-    /// α (rad), computed on first use ([`Wave::phase`]; NaN before): a cycle without slip or
-    /// separation never needs it.
+    /// α (rad), computed on first use ([`Wave::phase`]; NaN before): the closed form of a cycle
+    /// in contact ([`closed_form`]) never needs it.
     alpha: Cell<f64>,
     /// cos α and sin α (1 and 0 for A = 0).
     ca: f64,
@@ -325,23 +325,39 @@ impl Wave {
     /// The rising crossing of A·r, τ = −α − β with β = arccos r.
     #[inline]
     fn rising(&self, arc: Arc) -> At {
-        let (r, b, sb) = (arc.r, arc.b, arc.sb);
+        let [s, c] = self.rising_sc(arc);
         At {
-            t: -self.phase() - b,
-            s: -(self.sa * r + self.ca * sb),
-            c: self.ca * r - self.sa * sb,
+            t: -self.phase() - arc.b,
+            s,
+            c,
         }
+    }
+
+    /// [sin τ, cos τ] of the rising crossing τ = −α − β of A·r (β = arccos r) by the addition
+    /// theorems, without α.
+    #[inline]
+    fn rising_sc(&self, arc: Arc) -> [f64; 2] {
+        let (r, sb) = (arc.r, arc.sb);
+        [-(self.sa * r + self.ca * sb), self.ca * r - self.sa * sb]
     }
 
     /// The falling crossing of A·r, τ = −α + β with β = arccos r.
     #[inline]
     fn falling(&self, arc: Arc) -> At {
-        let (r, b, sb) = (arc.r, arc.b, arc.sb);
+        let [s, c] = self.falling_sc(arc);
         At {
-            t: b - self.phase(),
-            s: sb * self.ca - r * self.sa,
-            c: r * self.ca + sb * self.sa,
+            t: arc.b - self.phase(),
+            s,
+            c,
         }
+    }
+
+    /// [sin τ, cos τ] of the falling crossing τ = −α + β of A·r (β = arccos r) by the addition
+    /// theorems, without α.
+    #[inline]
+    fn falling_sc(&self, arc: Arc) -> [f64; 2] {
+        let (r, sb) = (arc.r, arc.sb);
+        [sb * self.ca - r * self.sa, r * self.ca + sb * self.sa]
     }
 }
 
@@ -410,7 +426,7 @@ struct Motion {
 }
 
 /// x reduced to [0, 2π) (cheaply for the few periods the construction spans).
-#[inline]
+#[inline(always)]
 fn wrap(x: f64) -> f64 {
     if (0.0..TAU).contains(&x) {
         x
@@ -425,7 +441,7 @@ fn wrap(x: f64) -> f64 {
 
 /// How far ahead of `from` the angle `target` (mod 2π) lies, in [0, 2π); an angle less than
 /// [`BEHIND`] behind counts as 0.
-#[inline]
+#[inline(always)]
 fn ahead(target: f64, from: f64) -> f64 {
     let d = wrap(target - from);
     if d > TAU - BEHIND {
@@ -1080,7 +1096,8 @@ fn contact_rows(kn: f64) -> [[f64; 7]; 3] {
 }
 
 /// The phase integrals of a cycle summed per kind, with what the stick sliders add: the
-/// running sums of [`harmonics`] and of the closed forms ([`closed_form`]), turned into the
+/// running sums of [`harmonics`] and of the closed form with separation ([`separation_form`]),
+/// turned into the
 /// harmonic results by [`PhaseSums::finish`].
 ///
 /// On every phase f = c·e(τ) with c constant, so each coefficient is Σ_phases M(phase)·c with
@@ -1105,47 +1122,6 @@ struct PhaseSums {
 }
 
 impl PhaseSums {
-    /// The sums of the four phases of a stick–slip cycle in contact ([`closed_form`]): the
-    /// integrals of stick after positive slip, negative slip, stick after negative slip and
-    /// positive slip, in this order, and the two sticks' sliders w (m) with the instants the
-    /// slips left them, written out as [`PhaseSums::add`] would sum them phase by phase (the
-    /// same operations in the same order, without the dispatch on each phase's state).
-    #[inline]
-    fn stick_slip(
-        mo: &Motion,
-        [i_p, i_neg, i_n, i_pos]: [PhaseIntegrals; 4],
-        [(w_p, at_p), (w_n, at_n)]: [(f64, At); 2],
-        jacobian: bool,
-    ) -> PhaseSums {
-        let (a, b) = (&i_p.0, &i_n.0);
-        let stick = PhaseIntegrals(std::array::from_fn(|k| a[k] + b[k]));
-        let w_int = std::array::from_fn(|k| w_p * a[k] + w_n * b[k]);
-        let mut w_u = [[0.0; 3]; 3];
-        let mut w_v = [[0.0; 3]; 3];
-        if jacobian {
-            // ∂w = e·∂U + r (k_n e·∂V + ∂n0) with r = ∓μ/k_t after ±slip ([`slider_derivative`])
-            let (r_p, r_n) = (-mo.p.mu / mo.p.kt, mo.p.mu / mo.p.kt);
-            let (m_p, m_n) = (i_p.first_column(), i_n.first_column());
-            let (e_p, e_n) = (at_p.basis(), at_n.basis());
-            for k in 0..3 {
-                for l in 0..3 {
-                    let (t_p, t_n) = (m_p[k] * e_p[l], m_n[k] * e_n[l]);
-                    w_u[k][l] = t_p + t_n;
-                    w_v[k][l] = r_p * t_p + r_n * t_n;
-                }
-            }
-        }
-        PhaseSums {
-            stick,
-            positive: i_pos,
-            negative: i_neg,
-            w_int,
-            w_u,
-            w_v,
-            separates: false,
-        }
-    }
-
     /// Adds one phase of the cycle (with its slider's derivative if `jacobian`).
     #[inline]
     fn add(&mut self, mo: &Motion, ph: &Phase, jacobian: bool) {
@@ -1154,26 +1130,41 @@ impl PhaseSums {
             PhaseKind::PositiveSlip => self.positive.add(&PhaseIntegrals::of(ph), 1.0),
             PhaseKind::NegativeSlip => self.negative.add(&PhaseIntegrals::of(ph), 1.0),
             PhaseKind::Stick { slider: w, origin } => {
-                let i = PhaseIntegrals::of(ph);
-                self.stick.add(&i, 1.0);
-                for (a, b) in self.w_int.iter_mut().zip(&i.0[..3]) {
-                    *a += w * b;
-                }
-                if jacobian && origin != SliderOrigin::Carried {
-                    let at = At {
-                        t: ph.start,
-                        s: ph.sc[0],
-                        c: ph.sc[1],
-                    };
-                    let (e, r) = slider_derivative(mo, origin, at);
-                    let m0 = i.first_column();
-                    for (k, &mk) in m0.iter().enumerate() {
-                        for (l, &el) in e.iter().enumerate() {
-                            let t = mk * el;
-                            self.w_u[k][l] += t;
-                            self.w_v[k][l] += r * t;
-                        }
-                    }
+                let at = At {
+                    t: ph.start,
+                    s: ph.sc[0],
+                    c: ph.sc[1],
+                };
+                let jacobian = jacobian && origin != SliderOrigin::Carried;
+                self.add_stick(mo, &PhaseIntegrals::of(ph), w, origin, at, jacobian);
+            }
+        }
+    }
+
+    /// Adds the integrals `i` of stick phases with the slider w (m) set at `at` as `origin`
+    /// says and, if `jacobian`, the slider's derivative ([`slider_derivative`]).
+    #[inline]
+    fn add_stick(
+        &mut self,
+        mo: &Motion,
+        i: &PhaseIntegrals,
+        w: f64,
+        origin: SliderOrigin,
+        at: At,
+        jacobian: bool,
+    ) {
+        self.stick.add(i, 1.0);
+        for (a, b) in self.w_int.iter_mut().zip(&i.0[..3]) {
+            *a += w * b;
+        }
+        if jacobian {
+            let (e, r) = slider_derivative(mo, origin, at);
+            let m0 = i.first_column();
+            for (k, &mk) in m0.iter().enumerate() {
+                for (l, &el) in e.iter().enumerate() {
+                    let t = mk * el;
+                    self.w_u[k][l] += t;
+                    self.w_v[k][l] += r * t;
                 }
             }
         }
@@ -1285,6 +1276,13 @@ fn harmonics(
 ///   slip until τ_P + 2π (eqs 8, 21). After the end of a slip the point cannot slip the same way
 ///   again before slipping the other way (g ≤ g(τ_P) = c_P after τ_P), so no other sequence
 ///   exists; the two arccosines depend on the amplitudes only, not on a previous event.
+///
+/// No phase angle α_G, α_H is formed: the phase lengths follow from the two arccosines and the
+/// relative phase δ = α_H − α_G ([`stick_slip_lengths`]; one inverse function at constant load,
+/// three with load variation), the ends' sines and cosines from the addition theorems, the
+/// phase holding τ ≡ 0 from their signs ([`phase_of_zero`]), and the forces and Jacobian from
+/// the integrals of the phases ([`stick_slip_forces`]).
+#[inline(always)]
 fn closed_form(
     mo: &Motion,
     slider: f64,
@@ -1316,57 +1314,177 @@ fn closed_form(
         Harmonics::stuck(mo, w, jac, out);
         return true;
     }
-    // c_N/|H| and c_P/|G|
+    // c_N/|H| and c_P/|G|; at constant load one sinusoid, c_P/|G| = −c_N/|H| and δ = 0
     let arc_n = Arc::new((g.amp - 2.0 * mun) / h.amp);
-    let arc_p = if g.x1 == h.x1 && g.x2 == h.x2 {
-        // no normal motion: one sinusoid, one phase angle, and c_P/|G| = −c_N/|H|
-        h.alpha.set(g.phase());
+    let constant_load = g.x1 == h.x1 && g.x2 == h.x2;
+    let arc_p = if constant_load {
         arc_n.opposite()
     } else {
         Arc::new((2.0 * mun - h.amp) / g.amp)
     };
-    let p = g.maximum();
-    let p = p.labelled(wrap(p.t));
-    let stn = h.falling(arc_n);
-    let n = h.minimum();
-    let stp = g.rising(arc_p);
-    let t1 = p.t + ahead(stn.t, p.t);
-    let t2 = t1 + ahead(n.t, stn.t);
-    let t3 = t2 + ahead(stp.t, n.t);
-    let t4 = p.t + TAU;
-    if !(t3 < t4 && (t3 + ahead(p.t, stp.t) - t4).abs() < 1e-9) {
+    let Some(lengths) = stick_slip_lengths(g, h, arc_n, arc_p, constant_load) else {
         return false;
-    }
-    let w_p = mo.slider_in(PhaseKind::PositiveSlip, p);
-    let w_n = mo.slider_in(PhaseKind::NegativeSlip, n);
-    // the state at τ ≡ 0: the first phase that ends at or after it (as in `harmonics`)
-    let zero = p.t + wrap(-p.t);
-    let at_zero = if t1 >= zero {
-        PhaseKind::Stick {
-            slider: w_p,
-            origin: SliderOrigin::AfterPositiveSlip(p.t),
-        }
-    } else if t2 >= zero {
-        PhaseKind::NegativeSlip
-    } else if t3 >= zero {
-        PhaseKind::Stick {
-            slider: w_n,
-            origin: SliderOrigin::AfterNegativeSlip(n.t),
-        }
-    } else {
-        PhaseKind::PositiveSlip
     };
-    let integrals =
-        |a: At, ta: f64, b: At, tb: f64| PhaseIntegrals::between(ta, [a.s, a.c], tb, [b.s, b.c]);
-    let phases = [
-        integrals(p, p.t, stn, t1),
-        integrals(stn, t1, n, t2),
-        integrals(n, t2, stp, t3),
-        integrals(stp, t3, p, t4),
+    // [sin, cos] of the ends τ_P, τ_StN, τ_N, τ_StP
+    let ends = [
+        [-g.sa, g.ca],
+        h.falling_sc(arc_n),
+        [h.sa, -h.ca],
+        g.rising_sc(arc_p),
     ];
-    let sums = PhaseSums::stick_slip(mo, phases, [(w_p, p), (w_n, n)], jac.is_some());
-    sums.finish(mo, at_zero, jac, out);
+    let Some(zero) = phase_of_zero(&ends, &lengths) else {
+        return false;
+    };
+    let [p, stn, n, stp] = ends;
+    // (sin, cos, sin cos, sin²) at each end: a phase's integrals are their differences
+    // ([`PhaseIntegrals`]); the sticks [τ_P, τ_StN] and [τ_N, τ_StP] sum to
+    // (τ_StN − τ_N) − (τ_P − τ_StP), the slips [τ_StP, τ_P] − [τ_StN, τ_N] to their sum
+    let x = |[s, c]: [f64; 2]| [s, c, s * c, s * s];
+    let (xp, xstn, xn, xstp) = (x(p), x(stn), x(n), x(stp));
+    let d_n: [f64; 4] = std::array::from_fn(|k| xstn[k] - xn[k]);
+    let d_p: [f64; 4] = std::array::from_fn(|k| xp[k] - xstp[k]);
+    let [l_p, l_neg, l_n, l_pos] = lengths;
+    let [dn0, dn1, dn2, dn3] = d_n;
+    let [dp0, dp1, dp2, dp3] = d_p;
+    let sums = [
+        PhaseIntegrals([l_p + l_n, dn0 - dp0, dn1 - dp1, dn2 - dp2, dn3 - dp3]),
+        PhaseIntegrals([l_pos - l_neg, dn0 + dp0, dn1 + dp1, dn2 + dp2, dn3 + dp3]),
+        PhaseIntegrals([l_p, xstn[0] - xp[0], xstn[1] - xp[1], 0.0, 0.0]),
+        PhaseIntegrals([l_n, xstp[0] - xn[0], xstp[1] - xn[1], 0.0, 0.0]),
+    ];
+    stick_slip_forces(mo, sums, [p, n], jac, out);
+    // the slider state at τ ≡ 0: the stick's slider w = u(τ) ∓ μ n(τ)/k_t set where the slip
+    // before it ended, or the one the slip drags
+    let (at, sign) = match zero {
+        0 => (p, -1.0),
+        1 => ([0.0, 1.0], 1.0),
+        2 => (n, 1.0),
+        _ => ([0.0, 1.0], -1.0),
+    };
+    let at = At {
+        t: f64::NAN,
+        s: at[0],
+        c: at[1],
+    };
+    out.slider = mo.u_at(at) + sign * mo.p.mu / mo.p.kt * mo.n_at(at);
     true
+}
+
+/// The friction and normal forces, the energy and, if given, the Jacobian of a stick–slip cycle
+/// in contact ([`closed_form`]) into `out` and `jac`, from the integrals of its phases
+/// ([`PhaseIntegrals`]: the two sticks' sum, positive minus negative slip, the stick after
+/// positive slip and the stick after negative slip, of the last two the first three numbers) and
+/// `[sin, cos]` of the instants τ_P, τ_N where the slips end.
+///
+/// With M(·) the projection of a sum of phases ([`PhaseIntegrals::projection`]), m_P, m_N the
+/// first columns of the two sticks' projections and e_P = e(τ_P), e_N = e(τ_N), the sticks'
+/// sliders w_P = e_P·U − (μ/k_t) e_P·N and w_N = e_N·U + (μ/k_t) e_N·N (N = (n0e, k_n V1,
+/// k_n V2), N) make the force of [`PhaseSums::finish`],
+/// F = k_t (M_stick U − w_P m_P − w_N m_N) + μ M_slip N, linear in U and N: F = k_t A U + μ B N
+/// with A = M_stick − m_P ⊗ e_P − m_N ⊗ e_N and B = M_slip + m_P ⊗ e_P − m_N ⊗ e_N (3 × 3,
+/// dimensionless). The phase ends depend on ratios of the amplitudes only and the force is
+/// continuous at them, so ∂F/∂U = k_t A (N/m), ∂F/∂V = μ k_n B (N/m) and ∂F/∂n0 = μ B_·0 (the
+/// derivatives of [`slider_derivative`] summed; Cigeroglu, An & Menq 2007, eq. 29). A_·0 = 0:
+/// M_stick's first column is m_P + m_N, so F does not depend on U0. In contact all period N and
+/// its rows are those of complete stick.
+#[inline(always)]
+fn stick_slip_forces(
+    mo: &Motion,
+    [stick, slip, i_p, i_n]: [PhaseIntegrals; 4],
+    [[s_p, c_p], [s_n, c_n]]: [[f64; 2]; 2],
+    jac: Option<&mut PointJacobian>,
+    out: &mut Harmonics,
+) {
+    let (kt, kn, mu) = (mo.p.kt, mo.p.kn, mo.p.mu);
+    let (m_stick, m_slip) = (stick.projection(), slip.projection());
+    let (m_p, m_n) = (i_p.first_column(), i_n.first_column());
+    let (e_p, e_n) = ([1.0, c_p, -s_p], [1.0, c_n, -s_n]);
+    // k_t A and μ B, row by row
+    let mut ka = [[0.0; 3]; 3];
+    let mut mb = [[0.0; 3]; 3];
+    for k in 0..3 {
+        for l in 0..3 {
+            let (t_p, t_n) = (m_p[k] * e_p[l], m_n[k] * e_n[l]);
+            if l > 0 {
+                ka[k][l] = kt * (m_stick[k][l] - t_p - t_n);
+            }
+            mb[k][l] = mu * (m_slip[k][l] + t_p - t_n);
+        }
+    }
+    let (u, cn) = (mo.u, [mo.n0e, mo.nv.x1, mo.nv.x2]);
+    for k in 0..3 {
+        out.friction[k] = dot(ka[k], u) + dot(mb[k], cn);
+    }
+    out.normal = cn;
+    out.energy = PI * (u[1] * out.friction[2] - u[2] * out.friction[1]);
+    if let Some(j) = jac {
+        for k in 0..3 {
+            let [a, b] = [ka[k], mb[k]];
+            j[k] = [a[0], a[1], a[2], kn * b[0], kn * b[1], kn * b[2], b[0]];
+        }
+        [j[3], j[4], j[5]] = contact_rows(kn);
+    }
+}
+
+/// The lengths (rad) of the four phases of a stick–slip cycle in contact ([`closed_form`]) from
+/// the levels' arccosines β_N = arccos(c_N/|H|) (`arc_n`), β_P = arccos(c_P/|G|) (`arc_p`) and
+/// the relative phase δ = α_H − α_G of h and g: stick after positive slip τ_StN − τ_P =
+/// β_N − δ, negative slip τ_N − τ_StN = π − β_N, stick after negative slip τ_StP − τ_N =
+/// δ − β_P − π, positive slip τ_P − τ_StP = β_P (each mod 2π; an angle less than [`BEHIND`]
+/// below a whole period is 0, as in the event march). δ is one inverse function of the cross and
+/// dot products of the phases' unit vectors (cos δ = cos α_G cos α_H + sin α_G sin α_H), none at
+/// constant load, where δ = 0 and β_P = π − β_N make both sticks β_N long. `None` where the
+/// lengths do not add up to one period (to 1e-9): the sequence is not the four phases.
+#[inline(always)]
+fn stick_slip_lengths(
+    g: &Wave,
+    h: &Wave,
+    arc_n: Arc,
+    arc_p: Arc,
+    constant_load: bool,
+) -> Option<[f64; 4]> {
+    let (stick_p, stick_n) = if constant_load {
+        (arc_n.b, arc_n.b)
+    } else {
+        let delta = angle(g.ca * h.ca + g.sa * h.sa, g.ca * h.sa - g.sa * h.ca);
+        (
+            ahead(arc_n.b - delta, 0.0),
+            ahead(delta - arc_p.b - PI, 0.0),
+        )
+    };
+    let lengths = [stick_p, PI - arc_n.b, stick_n, arc_p.b];
+    let three = lengths[0] + lengths[1] + lengths[2];
+    (three < TAU && (three + lengths[3] - TAU).abs() < 1e-9).then_some(lengths)
+}
+
+/// Which of the four phases of a stick–slip cycle ([`closed_form`]: `ends` [sin, cos] of the
+/// phase starts τ_P, τ_StN, τ_N, τ_StP, the phase i running from ends\[i\] over `lengths`\[i\])
+/// holds τ ≡ 0 (mod 2π), by the signs of the ends' sines (no angle): a phase of length ≤ π holds
+/// it iff it runs from the lower half-plane (sin ≤ 0) to the upper one (sin ≥ 0) through
+/// cos > 0 (cos a + cos b ≥ 0), a longer one iff its complement does not (sin b < 0 and
+/// sin a > 0). The first phase that holds it (at a boundary both neighbours give the same slider
+/// state); `None` if none does by rounding at a boundary (the caller then marches).
+#[inline(always)]
+fn phase_of_zero(ends: &[[f64; 2]; 4], lengths: &[f64; 4]) -> Option<usize> {
+    let holds = |i: usize, j: usize| {
+        let ([sa, ca], [sb, cb]) = (ends[i], ends[j]);
+        if lengths[i] <= PI {
+            sa <= 0.0 && sb >= 0.0 && ca + cb >= 0.0
+        } else {
+            !(sb < 0.0 && sa > 0.0)
+        }
+    };
+    if holds(0, 1) {
+        Some(0)
+    } else if holds(1, 2) {
+        Some(1)
+    } else if holds(2, 3) {
+        Some(2)
+    } else if holds(3, 0) {
+        Some(3)
+    } else {
+        None
+    }
 }
 
 /// Most contact phases of a cycle with separation in [`separation_form`]: the contact window is
@@ -1390,68 +1508,72 @@ impl Wave {
     }
 }
 
-/// The event that ends a contact phase of the state `kind` entered at `start` in a cycle with
-/// separation: (how far ahead of `start`, the event's instant, the state after it), or `None`
-/// if no event but the separation ends it (Cigeroglu, An & Menq 2007, §2.2.2; the conditions of the module documentation):
+/// The contact states of a cycle with separation (Cigeroglu, An & Menq 2007, §2.2.2), numbered
+/// in the order of the stick–slip cycle they follow each other in (positive slip, the stick it
+/// leaves, negative slip, the stick it leaves, then positive slip again), and the stick after a
+/// re-contact, which only the first phase of the window can be. The number indexes the phase
+/// integrals summed per state in [`separation_form`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum WindowState {
+    /// f = +μ n, ending at the maximum of g.
+    PositiveSlip = 0,
+    /// Stick with w_P = u(τ_P) − μ n(τ_P)/k_t, ending where h falls through c_N.
+    AfterPositiveSlip = 1,
+    /// f = −μ n, ending at the minimum of h.
+    NegativeSlip = 2,
+    /// Stick with w_N = u(τ_N) + μ n(τ_N)/k_t, ending where g rises through c_P.
+    AfterNegativeSlip = 3,
+    /// Stick with w = u(τ_Sp2), ending at the earlier of the mirrors of τ_Sp2.
+    AfterRecontact = 4,
+}
+
+/// The event that ends a contact phase in the state `state` entered at `start` (an instant
+/// labelled as in the march) in a cycle with separation: (the event's instant, the state after
+/// it), or `None` if only the separation can end the phase (Cigeroglu, An & Menq 2007, §2.2.2;
+/// the conditions of the module documentation):
 /// * positive slip ends at the maximum of g (eq. 8, θ_P of eq. 21), negative slip at the
-///   minimum of h (eq. 9, θ_N of eq. 22), each followed by stick with the slider the slip left;
-/// * stick after positive slip, with c_P = max g, can only end where h falls through c_N
-///   (eqs 12, 24: one arccosine), stick after negative slip only where g rises through c_P
-///   (eqs 11, 23);
-/// * stick after a re-contact at τ_Sp2 with w = u(τ_Sp2) has c_P = g(τ_Sp2) and c_N = h(τ_Sp2)
-///   (n(τ_Sp2) = 0): it ends where g takes its re-contact value again rising (θ_SpP, eq. 27) or h
-///   falling (θ_SpN, eq. 28), the mirrors of τ_Sp2 about the minimum of g and the maximum of h
-///   ([`Wave::mirror`]), whichever comes first.
+///   minimum of h (eq. 9, θ_N of eq. 22);
+/// * the stick after positive slip, whose level c_P is the maximum of g, can only end where h
+///   falls through c_N (eqs 12, 24: one arccosine), the stick after negative slip only where g
+///   rises through c_P (eqs 11, 23), the levels from the slider the slip left;
+/// * the stick after a re-contact at τ_Sp2 with w = u(τ_Sp2) has c_P = g(τ_Sp2) and
+///   c_N = h(τ_Sp2) (n(τ_Sp2) = 0): it ends where g takes its re-contact value again rising
+///   (θ_SpP, eq. 27) or h falling (θ_SpN, eq. 28), the mirrors of τ_Sp2 about the minimum of g
+///   and the maximum of h ([`Wave::mirror`]), whichever comes first (g's on a tie, as in the
+///   march).
 ///
 /// The levels and their tangency tests are those of the event march ([`Motion::next_event`]), so
 /// both take the same decisions.
-fn window_event(mo: &Motion, kind: PhaseKind, start: At) -> Option<(f64, At, PhaseKind)> {
+fn window_event(mo: &Motion, state: WindowState, start: At) -> Option<(At, WindowState)> {
     let (g, h) = (&mo.g, &mo.h);
-    let from = start.t;
     let mun = mo.p.mu * mo.n0e;
-    let ahead_of = |a: At, next: PhaseKind| Some((ahead(a.t, from), a, next));
-    match kind {
-        PhaseKind::PositiveSlip => {
-            let p = g.maximum();
-            let slider = mo.slider_in(PhaseKind::PositiveSlip, p);
-            let origin = SliderOrigin::AfterPositiveSlip(p.t);
-            ahead_of(p, PhaseKind::Stick { slider, origin })
+    match state {
+        WindowState::PositiveSlip => Some((g.maximum(), WindowState::AfterPositiveSlip)),
+        WindowState::NegativeSlip => Some((h.minimum(), WindowState::AfterNegativeSlip)),
+        WindowState::AfterPositiveSlip => {
+            let w = mo.slider_in(PhaseKind::PositiveSlip, g.maximum());
+            let r = (-mun - mo.p.kt * (mo.u[0] - w)) / h.amp;
+            (r > -1.0 + TANGENCY).then(|| (h.crossing(r, false), WindowState::NegativeSlip))
         }
-        PhaseKind::NegativeSlip => {
-            let n = h.minimum();
-            let slider = mo.slider_in(PhaseKind::NegativeSlip, n);
-            let origin = SliderOrigin::AfterNegativeSlip(n.t);
-            ahead_of(n, PhaseKind::Stick { slider, origin })
+        WindowState::AfterNegativeSlip => {
+            let w = mo.slider_in(PhaseKind::NegativeSlip, h.minimum());
+            let r = (mun - mo.p.kt * (mo.u[0] - w)) / g.amp;
+            (r < 1.0 - TANGENCY).then(|| (g.crossing(r, true), WindowState::PositiveSlip))
         }
-        PhaseKind::Stick { slider, origin } => {
-            let offset = mo.p.kt * (mo.u[0] - slider);
-            let rp = (mun - offset) / g.amp;
-            let rn = (-mun - offset) / h.amp;
-            let positive = rp < 1.0 - TANGENCY;
-            let negative = rn > -1.0 + TANGENCY;
-            match origin {
-                SliderOrigin::AfterPositiveSlip(_) if negative => {
-                    ahead_of(h.crossing(rn, false), PhaseKind::NegativeSlip)
-                }
-                SliderOrigin::AfterNegativeSlip(_) if positive => {
-                    ahead_of(g.crossing(rp, true), PhaseKind::PositiveSlip)
-                }
-                SliderOrigin::Recontact(_) => {
-                    // the earlier of the two mirrors (g's first on a tie, as in the march)
-                    let sp = positive.then(|| g.mirror(start));
-                    let sn = negative.then(|| h.mirror(start));
-                    let dp = sp.map_or(f64::INFINITY, |a| ahead(a.t, from));
-                    let dn = sn.map_or(f64::INFINITY, |a| ahead(a.t, from));
-                    match (sp, sn) {
-                        (Some(a), _) if dp <= dn => Some((dp, a, PhaseKind::PositiveSlip)),
-                        (_, Some(a)) => Some((dn, a, PhaseKind::NegativeSlip)),
-                        _ => None,
-                    }
-                }
+        WindowState::AfterRecontact => {
+            let offset = mo.p.kt * (mo.u[0] - mo.u_at(start));
+            let positive = (mun - offset) / g.amp < 1.0 - TANGENCY;
+            let negative = (-mun - offset) / h.amp > -1.0 + TANGENCY;
+            let sp = positive.then(|| g.mirror(start));
+            let sn = negative.then(|| h.mirror(start));
+            let dp = sp.map_or(f64::INFINITY, |a| ahead(a.t, start.t));
+            let dn = sn.map_or(f64::INFINITY, |a| ahead(a.t, start.t));
+            match (sp, sn) {
+                (Some(a), _) if dp <= dn => Some((a, WindowState::PositiveSlip)),
+                (_, Some(a)) => Some((a, WindowState::NegativeSlip)),
                 _ => None,
             }
         }
-        PhaseKind::Separation => None,
     }
 }
 
@@ -1461,11 +1583,12 @@ fn window_event(mo: &Motion, kind: PhaseKind, start: At) -> Option<(f64, At, Pha
 /// event its state allows ([`window_event`]: an extremum, one arccosine, or a mirror of τ_Sp2)
 /// or at the separation τ_Sp1, whichever comes first; separation then lasts until τ_Sp2 + 2π.
 /// The phases are those of the event march of [`build`] (which, from the same start, takes the
-/// earliest of up to three candidate events a phase) and are integrated by the same
-/// [`PhaseSums`] into `out`. False where the march is needed: no separation, a degenerate
-/// sinusoid (|G| = 0 or |H| = 0, k_t = 0), or more phases than a window holds.
+/// earliest of up to three candidate events a phase). Their integrals are summed per state
+/// ([`WindowState`]) and each stick's slider and its derivative enter once for all its phases
+/// ([`PhaseSums::window`]), without the dispatch of [`PhaseSums::add`] on every phase. False
+/// where the march is needed: no separation, a degenerate sinusoid (|G| = 0 or |H| = 0,
+/// k_t = 0), or more phases than a window holds.
 fn separation_form(mo: &Motion, jac: Option<&mut PointJacobian>, out: &mut Harmonics) -> bool {
-    let jacobian = jac.is_some();
     let Window::Part {
         recontact,
         separation,
@@ -1479,47 +1602,129 @@ fn separation_form(mo: &Motion, jac: Option<&mut PointJacobian>, out: &mut Harmo
     }
     // τ_Sp1 labelled after τ_Sp2
     let sp1 = separation.labelled(recontact.t + len);
-    let mut sums = PhaseSums::default();
     // the state at τ ≡ 0: the first phase that ends at or after it (as in `harmonics`)
     let zero = recontact.t + wrap(-recontact.t);
-    let mut at_zero = PhaseKind::Separation;
-    let mut found = false;
-    let mut add = |ph: Phase| {
-        if !found && ph.end >= zero {
-            at_zero = ph.kind;
-            found = true;
+    let mut integrals = [PhaseIntegrals::default(); 5];
+    // the stick states in the order of their phases (each has at most one in a window)
+    let mut sticks = [WindowState::AfterRecontact; 3];
+    let mut stick_count = 0;
+    let mut at_zero = None;
+    let mut add = |state: WindowState, a: At, b: At| {
+        let i = state as usize;
+        integrals[i].add(
+            &PhaseIntegrals::between(a.t, [a.s, a.c], b.t, [b.s, b.c]),
+            1.0,
+        );
+        let stick = !matches!(state, WindowState::PositiveSlip | WindowState::NegativeSlip);
+        if stick && stick_count < sticks.len() && !sticks[..stick_count].contains(&state) {
+            sticks[stick_count] = state;
+            stick_count += 1;
         }
-        sums.add(mo, &ph, jacobian);
+        if at_zero.is_none() && b.t >= zero {
+            at_zero = Some(state);
+        }
+    };
+    let mut state = match mo.recontact_state(recontact) {
+        PhaseKind::PositiveSlip => WindowState::PositiveSlip,
+        PhaseKind::NegativeSlip => WindowState::NegativeSlip,
+        _ => WindowState::AfterRecontact,
     };
     let mut cur = recontact;
-    let mut kind = mo.recontact_state(recontact);
+    let mut closed = false;
     for _ in 0..WINDOW_PHASES {
         let to_separation = sp1.t - cur.t;
-        match window_event(mo, kind, cur) {
-            Some((d, a, next)) if d <= to_separation => {
-                let at = a.labelled(cur.t + d);
-                if d > 0.0 {
-                    add(Phase::new(kind, cur, at));
-                }
-                cur = at;
-                kind = next;
+        let event = window_event(mo, state, cur)
+            .map(|(a, next)| (ahead(a.t, cur.t), a, next))
+            .filter(|&(d, _, _)| d <= to_separation);
+        let Some((d, a, next)) = event else {
+            if to_separation > 0.0 {
+                add(state, cur, sp1);
             }
-            _ => {
-                if to_separation > 0.0 {
-                    add(Phase::new(kind, cur, sp1));
-                }
-                let end = recontact.labelled(recontact.t + TAU);
-                add(Phase::new(PhaseKind::Separation, sp1, end));
-                sums.finish(mo, at_zero, jac, out);
-                return true;
-            }
+            closed = true;
+            break;
+        };
+        let at = a.labelled(cur.t + d);
+        if d > 0.0 {
+            add(state, cur, at);
         }
+        cur = at;
+        state = next;
     }
-    false
+    if !closed {
+        return false;
+    }
+    let sticks = &sticks[..stick_count];
+    let sums = PhaseSums::window(mo, recontact, &integrals, sticks, jac.is_some());
+    let at_zero = match at_zero {
+        None => PhaseKind::Separation,
+        Some(WindowState::PositiveSlip) => PhaseKind::PositiveSlip,
+        Some(WindowState::NegativeSlip) => PhaseKind::NegativeSlip,
+        Some(s) => {
+            let (slider, _, origin) = window_stick(mo, s, recontact);
+            PhaseKind::Stick { slider, origin }
+        }
+    };
+    sums.finish(mo, at_zero, jac, out);
+    true
 }
 
+/// The slider w (m) of a stick state of a cycle with separation ([`WindowState`]): the one the
+/// slip before it left at the maximum of g or the minimum of h, or u(τ_Sp2) after the re-contact
+/// at `recontact`; with the instant it was set and its origin (for its derivative).
+fn window_stick(mo: &Motion, state: WindowState, recontact: At) -> (f64, At, SliderOrigin) {
+    match state {
+        WindowState::AfterPositiveSlip => {
+            let p = mo.g.maximum();
+            let w = mo.slider_in(PhaseKind::PositiveSlip, p);
+            (w, p, SliderOrigin::AfterPositiveSlip(p.t))
+        }
+        WindowState::AfterNegativeSlip => {
+            let n = mo.h.minimum();
+            let w = mo.slider_in(PhaseKind::NegativeSlip, n);
+            (w, n, SliderOrigin::AfterNegativeSlip(n.t))
+        }
+        _ => (
+            mo.u_at(recontact),
+            recontact,
+            SliderOrigin::Recontact(recontact.t),
+        ),
+    }
+}
+
+impl PhaseSums {
+    /// The sums of a cycle with separation ([`separation_form`]) from the phase integrals summed
+    /// per state (`integrals`, indexed by [`WindowState`]) and the stick states in the order of
+    /// their phases (`sticks`): each stick's slider and its derivative enter once
+    /// ([`PhaseSums::add_stick`]), in the order and with the operations of [`PhaseSums::add`]
+    /// phase by phase.
+    fn window(
+        mo: &Motion,
+        recontact: At,
+        integrals: &[PhaseIntegrals; 5],
+        sticks: &[WindowState],
+        jacobian: bool,
+    ) -> PhaseSums {
+        let mut sums = PhaseSums {
+            positive: integrals[WindowState::PositiveSlip as usize],
+            negative: integrals[WindowState::NegativeSlip as usize],
+            separates: true,
+            ..PhaseSums::default()
+        };
+        for &state in sticks {
+            let (w, at, origin) = window_stick(mo, state, recontact);
+            sums.add_stick(mo, &integrals[state as usize], w, origin, at, jacobian);
+        }
+        sums
+    }
+}
+
+/// An error unless the motion and the slider state are finite: one test of Σ x·0, which is 0 for
+/// finite x and NaN as soon as one x is infinite or NaN.
 fn check_finite(u: &[f64; 3], v: &[f64; 3], slider: f64) -> Result<()> {
-    if u.iter().chain(v).chain([&slider]).all(|x| x.is_finite()) {
+    let zero = (u[0] * 0.0 + u[1] * 0.0 + u[2] * 0.0)
+        + (v[0] * 0.0 + v[1] * 0.0 + v[2] * 0.0)
+        + slider * 0.0;
+    if zero == 0.0 {
         Ok(())
     } else {
         Err(Error::Compute(format!(
@@ -1619,6 +1824,8 @@ pub(crate) fn evaluate_element(
     ) {
         return evaluate_one_direction(&element.params, x, slider, force, jacobian, ws);
     }
+    // a valid layout above (the 1-D law, one direction); the others are checked here
+    element.check()?;
     let nt = element.tangential;
     let v = if element.normal {
         [x[nt * 3], x[nt * 3 + 1], x[nt * 3 + 2]]
