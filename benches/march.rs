@@ -28,6 +28,10 @@
 //! With `NLROM_BENCH_SECTOR_STIFF=10,100` it adds the same sector with k_t and k_n ×10 and
 //! ×100, every scheme ([`sector_stiff`]).
 //!
+//! With `NLROM_BENCH_SECTOR_MODES=20` it adds the same sector on its 20 lowest modes with the
+//! contacts open, every scheme with more rounds ([`sector_modes`]): a model whose top mode the
+//! contact sets.
+//!
 //! With `NLROM_BENCH_PASS=1` it first times the products of one step in isolation on the sector's
 //! matrices ([`product_passes`]).
 //!
@@ -245,6 +249,28 @@ fn sector_stiff(factor: f64) -> Model {
     sector_model(name, cm, 2, schemes())
 }
 
+/// The reduced sector of `cases/sector8_march.toml` on its `m` lowest modes with every element
+/// separated (`NLROM_BENCH_SECTOR_MODES=m`; [`MarchSystem::on_modes`]), every scheme with the
+/// settings of [`sector`] but 10 interleaved rounds (a march takes about 0.1 s): on 20 modes the
+/// contact sets the full-stick top mode (50.2 kHz against the basis's 17.3 kHz; every element
+/// slipping lengthens the shortest period 1.42 times, `tests/march_sector_stiffness.rs`).
+fn sector_modes(m: usize) -> Model {
+    use nlrom::march::dense::generalized_symmetric_eigen;
+    use nlrom::march::law::ContactState;
+    let mut cm = case_march(&case("sector8_march.toml"), None, &mut |_| {}).expect("sector march");
+    let open = vec![ContactState::Separated; cm.system.elements.len()];
+    let k_open = cm.system.effective_stiffness(&open);
+    let (_, phi) =
+        generalized_symmetric_eigen(&k_open, &cm.system.mass, cm.system.n).expect("open modes");
+    cm.system = cm.system.on_modes(&phi, m).expect("modal sector");
+    eprintln!("sector8 ROM on {m} open modes, k = 0, shroud contact");
+    Model {
+        rounds: 10,
+        progress: false,
+        ..sector_model("sector8 ROM on its lowest open modes", cm, 2, schemes())
+    }
+}
+
 /// The settings of `model` with `scheme`.
 fn with_scheme(model: &Model, scheme: MarchScheme) -> MarchSettings {
     MarchSettings {
@@ -424,6 +450,13 @@ fn bench(c: &mut Criterion) {
                 .expect("NLROM_BENCH_SECTOR_STIFF: numbers");
             table(&sector_stiff(factor));
         }
+    }
+    if let Ok(modes) = std::env::var("NLROM_BENCH_SECTOR_MODES") {
+        let m = modes
+            .trim()
+            .parse()
+            .expect("NLROM_BENCH_SECTOR_MODES: a number of modes");
+        table(&sector_modes(m));
     }
     for (group, model) in [
         ("damper_200hz_one_period", &damper),

@@ -8,8 +8,10 @@
 //! the states whose steps fall on the same rung share one step size, hence its step matrices and
 //! factorisations ([`super::schemes::Cache`]). A step is never above the eq. 8 value of its state.
 //!
-//! Below [`DENSE_BELOW`] DOF, ρ(s) is the spectral radius of M⁻¹(K + K_c(s)) (a dense
-//! eigenproblem per state). From there on a state meets no eigenproblem: the rung is found by
+//! Below [`DENSE_BELOW`] DOF, and in a state whose change from full stick has as many columns
+//! as the model has DOF (a modal model with many elements), ρ(s) is the spectral radius of
+//! M⁻¹(K + K_c(s)) (a dense eigenproblem per state, no dearer there than one rung test). Otherwise
+//! a state meets no eigenproblem: the rung is found by
 //! testing rungs ([`RungCheck`]): Δτ ≤ r 𝕋(s) holds exactly when ρ_Δτ M − K − K_c(s) has no
 //! negative eigenvalue, ρ_Δτ = (2π r/Δτ)², and K_c(s) differs from the full-stick K_c by a few
 //! columns per element out of stick, so Sylvester's law of inertia counts its negative eigenvalues
@@ -89,6 +91,23 @@ fn change_from_stick(e: &Element, s: ContactState) -> Option<[f64; 3]> {
             Some([-p.kt, 0.0, d])
         }
     }
+}
+
+/// The number of columns r of the change of K_c from full stick in `states` (one or two per
+/// element out of stick, [`change_from_stick`]): a rung test factors an r × r matrix.
+fn state_columns(sys: &MarchSystem, states: &[ContactState]) -> usize {
+    sys.elements
+        .iter()
+        .zip(states)
+        .filter_map(|(e, &s)| change_from_stick(e, s))
+        .map(|[a, b, d]| {
+            if b != 0.0 {
+                2
+            } else {
+                usize::from(a != 0.0) + usize::from(d != 0.0)
+            }
+        })
+        .sum()
 }
 
 /// One column u (an element's g_t or g_n) of the change of K_c from full stick.
@@ -389,7 +408,9 @@ impl AdaptiveSteps {
         ladder_step(dt, self.dt_stick, self.dt_max)
     }
 
-    /// The highest rung (or Δτ_max) the state in `self.states` allows, by the rung tests: up from
+    /// The highest rung (or Δτ_max) the state in `self.states` allows, by the rung tests (`None`,
+    /// for the dense eigenproblem, when the state has at least as many columns as the model has
+    /// DOF: each test would factor a matrix larger than the model's): up from
     /// Δτ_stick while the next rung is allowed (a rung is first tried against φ₁'s Rayleigh
     /// quotient; a state allowed a rung above Δτ_stick is allowed Δτ_stick), else Δτ_stick, or
     /// down from it when the state is stiffer than full stick. `None` without the tests or when no
@@ -398,6 +419,9 @@ impl AdaptiveSteps {
         let (ratio, dt_stick, dt_max) = (self.ratio, self.dt_stick, self.dt_max);
         let states = &self.states;
         let check = self.check.as_mut()?;
+        if state_columns(sys, states) >= sys.n {
+            return None;
+        }
         let rung = |k: i32| dt_stick * LADDER_RATIO.powi(k);
         let bound = check.lower_bound(sys, states);
         let mut k = 0;

@@ -163,6 +163,40 @@ impl MarchSystem {
         (rho > 0.0).then(|| 2.0 * std::f64::consts::PI / rho.sqrt())
     }
 
+    /// The model on its modes φ_j, j < `m` (the columns of `modes`, row-major n × n, as
+    /// [`dense::generalized_symmetric_eigen`] returns them; Φᵀ M Φ = I for those): q = Φ_m η,
+    /// with Φ_mᵀ (M, C, K) Φ_m, the forces Φ_mᵀ f_e and Φ_mᵀ f_d, every element direction's weights
+    /// g Φ_m (dense over the m modal coordinates; the prescribed parts unchanged) and the
+    /// coordinates named `mode 1` … `mode m`. The modal march's η maps back to the model's
+    /// coordinates by Φ_m η. Errors when `modes` is not n × n or `m` is 0 or above n.
+    pub fn on_modes(&self, modes: &[f64], m: usize) -> Result<MarchSystem> {
+        let n = self.n;
+        if modes.len() != n * n || m == 0 || m > n {
+            return Err(Error::input(format!(
+                "march model on modes: {} mode-shape entries for {n} DOF (n × n expected) and {m} modes (1 to {n})",
+                modes.len()
+            )));
+        }
+        let shapes: Vec<Vec<f64>> = (0..m)
+            .map(|j| (0..n).map(|i| modes[i * n + j]).collect())
+            .collect();
+        let mut out = self.clone();
+        out.n = m;
+        out.mass = project_matrix(&self.mass, &shapes);
+        out.damping = project_matrix(&self.damping, &shapes);
+        out.stiffness = project_matrix(&self.stiffness, &shapes);
+        out.force = project_forces(&self.force, &shapes);
+        out.damping_force = project_forces(&self.damping_force, &shapes);
+        out.dof_names = (1..=m).map(|j| format!("mode {j}")).collect();
+        for e in &mut out.elements {
+            e.tangential.weights = project_weights(&e.tangential.weights, &shapes);
+            if let Some(d) = e.normal.as_mut() {
+                d.weights = project_weights(&d.weights, &shapes);
+            }
+        }
+        Ok(out)
+    }
+
     /// All elements in stick: the stiffest state (paper §4.2).
     pub fn stick_states(&self) -> Vec<ContactState> {
         vec![ContactState::Stick; self.elements.len()]
@@ -193,4 +227,46 @@ impl MarchSystem {
             1.0
         }
     }
+}
+
+/// Φᵀ A Φ (row-major m × m) of the row-major n × n `a` for the m mode shapes `shapes` (each of
+/// length n).
+fn project_matrix(a: &[f64], shapes: &[Vec<f64>]) -> Vec<f64> {
+    let (m, n) = (shapes.len(), shapes.first().map_or(0, Vec::len));
+    let mut out = vec![0.0; m * m];
+    let mut a_phi = vec![0.0; n];
+    for (p, shape_p) in shapes.iter().enumerate() {
+        dense::matvec(a, shape_p, &mut a_phi);
+        for (q, shape_q) in shapes.iter().enumerate() {
+            out[q * m + p] = dense::dot(shape_q, &a_phi);
+        }
+    }
+    out
+}
+
+/// Φᵀ f of a per-DOF harmonic force (empty stays empty).
+fn project_forces(f: &[Harmonic], shapes: &[Vec<f64>]) -> Vec<Harmonic> {
+    if f.is_empty() {
+        return Vec::new();
+    }
+    let sum = |shape: &[f64], part: fn(&Harmonic) -> f64| -> f64 {
+        shape.iter().zip(f).map(|(p, h)| p * part(h)).sum()
+    };
+    shapes
+        .iter()
+        .map(|shape| Harmonic {
+            mean: sum(shape, |h| h.mean),
+            cos: sum(shape, |h| h.cos),
+            sin: sum(shape, |h| h.sin),
+        })
+        .collect()
+}
+
+/// The weights g Φ of a sparse direction g on the modes (one per mode).
+fn project_weights(w: &[(usize, f64)], shapes: &[Vec<f64>]) -> Vec<(usize, f64)> {
+    shapes
+        .iter()
+        .enumerate()
+        .map(|(j, shape)| (j, w.iter().map(|&(i, g)| g * shape[i]).sum()))
+        .collect()
 }
