@@ -281,12 +281,6 @@ impl Wave {
         a
     }
 
-    /// The value at τ.
-    #[inline]
-    fn at(&self, a: At) -> f64 {
-        self.x1 * a.c - self.x2 * a.s
-    }
-
     /// The rate d/dτ at τ.
     #[inline]
     fn rate(&self, a: At) -> f64 {
@@ -408,6 +402,45 @@ enum Window {
     },
 }
 
+impl Window {
+    /// The contact window of n(τ) = n0e + k_n v1(τ) (N), `nv` = (k_n V1, k_n V2) (N). Well
+    /// inside contact (n0e > 2|k_n V1|, decided on squares) it is the whole period without a
+    /// square root; otherwise from the sinusoid of k_n v1 (Cigeroglu, An & Menq 2007, §2.2.2).
+    #[inline(always)]
+    fn of(n0e: f64, [x1, x2]: [f64; 2]) -> Window {
+        if n0e > 0.0 && n0e * n0e > 4.0 * (x1 * x1 + x2 * x2) {
+            // ρ = −n0e/|k_n V1| < −2 below: contact all period
+            return Window::Always;
+        }
+        let nv = Wave::new(x1, x2);
+        let vamp = nv.amp;
+        if n0e + vamp <= 1e-14 * (n0e.abs() + vamp) {
+            Window::Never
+        } else if vamp > 0.0 {
+            // n = n0e + |V| cos(τ + α_V) < 0 where cos(τ + α_V) < ρ.
+            let rho = -n0e / vamp;
+            if rho > -1.0 + TANGENCY {
+                // Re-contact (n rising through 0) at τ + α_V = −arccos ρ; contact length
+                // 2 arccos ρ.
+                let arc = Arc::new(rho);
+                let recontact = nv.rising(arc);
+                let recontact = recontact.labelled(wrap(recontact.t));
+                let len = 2.0 * arc.b;
+                let separation = nv.falling(arc).labelled(recontact.t + len);
+                Window::Part {
+                    recontact,
+                    separation,
+                    len,
+                }
+            } else {
+                Window::Always
+            }
+        } else {
+            Window::Always
+        }
+    }
+}
+
 /// The harmonic motion of a point and its law's parameters, with the derived sinusoids.
 #[derive(Clone, Debug)]
 struct Motion {
@@ -420,8 +453,8 @@ struct Motion {
     g: Wave,
     /// h = k_t u1 + μ k_n v1.
     h: Wave,
-    /// k_n v1.
-    nv: Wave,
+    /// (k_n V1, k_n V2) (N): k_n v1 = k_n V1 cos τ − k_n V2 sin τ.
+    nv: [f64; 2],
     window: Window,
 }
 
@@ -459,32 +492,8 @@ impl Motion {
         let g = Wave::new(kt * u[1] - mu * kn * v[1], kt * u[2] - mu * kn * v[2]);
         let h = Wave::new(kt * u[1] + mu * kn * v[1], kt * u[2] + mu * kn * v[2]);
         // The phase of k_n v1 is computed only when the point separates.
-        let nv = Wave::new(kn * v[1], kn * v[2]);
-        let vamp = nv.amp;
-        let window = if n0e + vamp <= 1e-14 * (n0e.abs() + vamp) {
-            Window::Never
-        } else if vamp > 0.0 {
-            // n = n0e + |V| cos(τ + α_V) < 0 where cos(τ + α_V) < ρ.
-            let rho = -n0e / vamp;
-            if rho > -1.0 + TANGENCY {
-                // Re-contact (n rising through 0) at τ + α_V = −arccos ρ; contact length
-                // 2 arccos ρ.
-                let arc = Arc::new(rho);
-                let recontact = nv.rising(arc);
-                let recontact = recontact.labelled(wrap(recontact.t));
-                let len = 2.0 * arc.b;
-                let separation = nv.falling(arc).labelled(recontact.t + len);
-                Window::Part {
-                    recontact,
-                    separation,
-                    len,
-                }
-            } else {
-                Window::Always
-            }
-        } else {
-            Window::Always
-        };
+        let nv = [kn * v[1], kn * v[2]];
+        let window = Window::of(n0e, nv);
         Motion {
             p: *p,
             u,
@@ -505,7 +514,7 @@ impl Motion {
     /// n0e + k_n v1(τ) (the normal force in contact).
     #[inline]
     fn n_at(&self, a: At) -> f64 {
-        self.n0e + self.nv.at(a)
+        self.n0e + self.nv[0] * a.c - self.nv[1] * a.s
     }
 
     /// The slider position w (m) at the instant `a` in the state `kind`: the stick slider, the
@@ -1067,7 +1076,7 @@ impl Harmonics {
         let (kt, kn) = (mo.p.kt, mo.p.kn);
         let u = mo.u;
         out.friction = [kt * (u[0] - w), kt * u[1], kt * u[2]];
-        out.normal = [mo.n0e, mo.nv.x1, mo.nv.x2];
+        out.normal = [mo.n0e, mo.nv[0], mo.nv[1]];
         out.energy = PI * (u[1] * out.friction[2] - u[2] * out.friction[1]);
         out.slider = w;
         if let Some(j) = jac {
@@ -1187,7 +1196,7 @@ impl PhaseSums {
         let m_slip = slip.projection();
         let w_col =
             PhaseIntegrals([self.w_int[0], self.w_int[1], self.w_int[2], 0.0, 0.0]).first_column();
-        let cn = [mo.n0e, mo.nv.x1, mo.nv.x2];
+        let cn = [mo.n0e, mo.nv[0], mo.nv[1]];
         let Harmonics {
             friction, normal, ..
         } = out;
@@ -1411,7 +1420,7 @@ fn stick_slip_forces(
             mb[k][l] = mu * (m_slip[k][l] + t_p - t_n);
         }
     }
-    let (u, cn) = (mo.u, [mo.n0e, mo.nv.x1, mo.nv.x2]);
+    let (u, cn) = (mo.u, [mo.n0e, mo.nv[0], mo.nv[1]]);
     for k in 0..3 {
         out.friction[k] = dot(ka[k], u) + dot(mb[k], cn);
     }
@@ -2054,7 +2063,7 @@ mod tests {
                         }
                         let (values, d) = differences((&c, &cj), (&m, &mj), scale, kt + kn);
                         worst = worst.max(values);
-                        if (mo.n0e - mo.nv.amp).abs() <= 1e-12 * mo.n0e.abs() {
+                        if (mo.n0e - mo.nv[0].hypot(mo.nv[1])).abs() <= 1e-12 * mo.n0e.abs() {
                             grazing += 1;
                             worst_grazing = worst_grazing.max(d);
                         } else {
