@@ -29,7 +29,22 @@ use support::hbm::{complex_solve, layout_index};
 /// A fixed–free chain of n masses m_i = 1 + 0.1 i (kg) joined by springs k_i = 1 + 0.05 i
 /// (N/m, spring i between mass i − 1 and mass i, spring 0 to ground), in Matrix Market files.
 fn write_chain(dir: &Path, n: usize) {
-    let spring = |i: usize| 1.0 + 0.05 * i as f64;
+    write_chain_of(dir, n, |i| 1.0 + 0.1 * i as f64, |i| 1.0 + 0.05 * i as f64);
+}
+
+/// A fixed–free chain of n unit masses joined by unit springs, in Matrix Market files.
+fn write_uniform_chain(dir: &Path, n: usize) {
+    write_chain_of(dir, n, |_| 1.0, |_| 1.0);
+}
+
+/// A fixed–free chain of n masses `mass(i)` (kg) joined by springs `spring(i)` (N/m, spring i
+/// between mass i − 1 and mass i, spring 0 to ground): K.mtx and M.mtx in `dir`.
+fn write_chain_of(
+    dir: &Path,
+    n: usize,
+    mass: impl Fn(usize) -> f64,
+    spring: impl Fn(usize) -> f64,
+) {
     let mut k = Vec::new();
     for i in 0..n {
         let diagonal = spring(i) + if i + 1 < n { spring(i + 1) } else { 0.0 };
@@ -38,60 +53,20 @@ fn write_chain(dir: &Path, n: usize) {
             k.push(format!("{} {} {}", i + 2, i + 1, -spring(i + 1)));
         }
     }
-    std::fs::write(
-        dir.join("K.mtx"),
-        format!(
-            "%%MatrixMarket matrix coordinate real symmetric\n{n} {n} {}\n{}\n",
-            k.len(),
-            k.join("\n")
-        ),
-    )
-    .unwrap();
     let m: Vec<String> = (0..n)
-        .map(|i| format!("{} {} {}", i + 1, i + 1, 1.0 + 0.1 * i as f64))
+        .map(|i| format!("{} {} {}", i + 1, i + 1, mass(i)))
         .collect();
-    std::fs::write(
-        dir.join("M.mtx"),
-        format!(
-            "%%MatrixMarket matrix coordinate real symmetric\n{n} {n} {n}\n{}\n",
-            m.join("\n")
-        ),
-    )
-    .unwrap();
-}
-
-/// A fixed–free chain of n unit masses joined by unit springs, in Matrix Market files.
-fn write_uniform_chain(dir: &Path, n: usize) {
-    let mut k = Vec::new();
-    for i in 0..n {
-        k.push(format!(
-            "{} {} {}",
-            i + 1,
-            i + 1,
-            if i + 1 < n { 2.0 } else { 1.0 }
-        ));
-        if i + 1 < n {
-            k.push(format!("{} {} -1.0", i + 2, i + 1));
-        }
+    for (name, entries) in [("K.mtx", k), ("M.mtx", m)] {
+        std::fs::write(
+            dir.join(name),
+            format!(
+                "%%MatrixMarket matrix coordinate real symmetric\n{n} {n} {}\n{}\n",
+                entries.len(),
+                entries.join("\n")
+            ),
+        )
+        .unwrap();
     }
-    std::fs::write(
-        dir.join("K.mtx"),
-        format!(
-            "%%MatrixMarket matrix coordinate real symmetric\n{n} {n} {}\n{}\n",
-            k.len(),
-            k.join("\n")
-        ),
-    )
-    .unwrap();
-    let m: Vec<String> = (0..n).map(|i| format!("{} {} 1.0", i + 1, i + 1)).collect();
-    std::fs::write(
-        dir.join("M.mtx"),
-        format!(
-            "%%MatrixMarket matrix coordinate real symmetric\n{n} {n} {n}\n{}\n",
-            m.join("\n")
-        ),
-    )
-    .unwrap();
 }
 
 /// The chain case with Rayleigh damping [0.01 1/s, 0.02 s], 0.3 N at the last mass, and `extra`
