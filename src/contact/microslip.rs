@@ -242,6 +242,8 @@ struct Wave {
     x1: f64,
     x2: f64,
     amp: f64,
+    /// 1/A (0 for A = 0): levels relative to the amplitude by a product, not a division.
+    inv: f64,
     /// α (rad), computed on first use ([`Wave::phase`]; NaN before): the closed form of a cycle
     /// in contact ([`closed_form`]) never needs it.
     alpha: Cell<f64>,
@@ -253,16 +255,17 @@ struct Wave {
 impl Wave {
     fn new(x1: f64, x2: f64) -> Self {
         let amp = (x1 * x1 + x2 * x2).sqrt();
-        let (ca, sa) = if amp > 0.0 {
+        let (inv, ca, sa) = if amp > 0.0 {
             let inv = 1.0 / amp;
-            (x1 * inv, x2 * inv)
+            (inv, x1 * inv, x2 * inv)
         } else {
-            (1.0, 0.0)
+            (0.0, 1.0, 0.0)
         };
         Wave {
             x1,
             x2,
             amp,
+            inv,
             alpha: Cell::new(f64::NAN),
             ca,
             sa,
@@ -403,13 +406,20 @@ enum Window {
 }
 
 impl Window {
-    /// The contact window of n(τ) = n0e + k_n v1(τ) (N), `nv` = (k_n V1, k_n V2) (N). Well
-    /// inside contact (n0e > 2|k_n V1|, decided on squares) it is the whole period without a
+    /// Whether n(τ) = n0e + k_n v1(τ) stays positive all period because n0e > |k_n V1| (N),
+    /// decided on squares: ρ = −n0e/|k_n V1| < −1 (the squares' rounding, ~1e-16, lies well
+    /// inside the tangency tolerance of [`Window::of`], which gives the whole period there too).
+    #[inline(always)]
+    fn always(n0e: f64, [x1, x2]: [f64; 2]) -> bool {
+        n0e > 0.0 && n0e * n0e > x1 * x1 + x2 * x2
+    }
+
+    /// The contact window of n(τ) = n0e + k_n v1(τ) (N), `nv` = (k_n V1, k_n V2) (N). In
+    /// contact all period (n0e > |k_n V1|, decided on squares) it is the whole period without a
     /// square root; otherwise from the sinusoid of k_n v1 (Cigeroglu, An & Menq 2007, §2.2.2).
     #[inline(always)]
     fn of(n0e: f64, [x1, x2]: [f64; 2]) -> Window {
-        if n0e > 0.0 && n0e * n0e > 4.0 * (x1 * x1 + x2 * x2) {
-            // ρ = −n0e/|k_n V1| < −2 below: contact all period
+        if Window::always(n0e, [x1, x2]) {
             return Window::Always;
         }
         let nv = Wave::new(x1, x2);
@@ -543,6 +553,7 @@ impl Motion {
     }
 
     /// The state at τ = 0 from the slider w (the first sample of the time-discrete law).
+    #[inline(always)]
     fn initial_state(&self, w: f64) -> PhaseKind {
         match self.window {
             Window::Never => return PhaseKind::Separation,
@@ -1072,6 +1083,7 @@ impl Harmonics {
     /// Complete stick with the slider w (m) kept (eq. 19) into `out`: f = k_t (u − w) and
     /// n = n0e + k_n v1 at every instant, so F = k_t (U0 − w, U1, U2), N = (n0e, k_n V1, k_n V2),
     /// no energy, and the Jacobian is k_t on (F, U), k_n on (N, V) and 1 on (N0, n0).
+    #[inline(always)]
     fn stuck(mo: &Motion, w: f64, jac: Option<&mut PointJacobian>, out: &mut Harmonics) {
         let (kt, kn) = (mo.p.kt, mo.p.kn);
         let u = mo.u;
@@ -1324,12 +1336,12 @@ fn closed_form(
         return true;
     }
     // c_N/|H| and c_P/|G|; at constant load one sinusoid, c_P/|G| = −c_N/|H| and δ = 0
-    let arc_n = Arc::new((g.amp - 2.0 * mun) / h.amp);
+    let arc_n = Arc::new((g.amp - 2.0 * mun) * h.inv);
     let constant_load = g.x1 == h.x1 && g.x2 == h.x2;
     let arc_p = if constant_load {
         arc_n.opposite()
     } else {
-        Arc::new((2.0 * mun - h.amp) / g.amp)
+        Arc::new((2.0 * mun - h.amp) * g.inv)
     };
     let Some(lengths) = stick_slip_lengths(g, h, arc_n, arc_p, constant_load) else {
         return false;
@@ -1806,6 +1818,7 @@ pub fn state_at(
 /// Cigeroglu, An & Menq 2007, §2) on the local coefficients `x` = `[U1; U2; V]` with H = 1
 /// (three coefficients per signal). Writes the forces `[F1; F2; Fn]`, the end slider state and,
 /// if `jacobian`, the local Jacobian (with the ∂n0 column) to the workspace.
+#[inline]
 pub(crate) fn evaluate_element(
     element: &super::element::LocalElement,
     harmonics_count: usize,
@@ -1815,15 +1828,8 @@ pub(crate) fn evaluate_element(
     jacobian: bool,
     ws: &mut super::element::Workspace,
 ) -> Result<()> {
-    if element.variant != super::law::Variant::OneD {
-        return Err(Error::input(
-            "evaluation = \"analytic\" is the exact cycle of the 1-D friction law; the 2-D (Coulomb disc) element is evaluated by the AFT only (evaluation = \"aft\")",
-        ));
-    }
-    if harmonics_count != 1 {
-        return Err(Error::input(format!(
-            "evaluation = \"analytic\" is the exact single-harmonic cycle and needs harmonics = 1 (here H = {harmonics_count}); use evaluation = \"aft\" for H > 1"
-        )));
+    if element.variant != super::law::Variant::OneD || harmonics_count != 1 {
+        return Err(unsupported(element, harmonics_count));
     }
     if let (1, true, Ok(x), Ok(force)) = (
         element.tangential,
@@ -1833,7 +1839,36 @@ pub(crate) fn evaluate_element(
     ) {
         return evaluate_one_direction(&element.params, x, slider, force, jacobian, ws);
     }
-    // a valid layout above (the 1-D law, one direction); the others are checked here
+    evaluate_directions(element, x, slider, force, jacobian, ws)
+}
+
+/// The error for an element or a harmonic count the exact cycle does not evaluate: the 2-D law,
+/// or H ≠ 1.
+#[cold]
+#[inline(never)]
+fn unsupported(element: &super::element::LocalElement, harmonics_count: usize) -> Error {
+    if element.variant != super::law::Variant::OneD {
+        return Error::input(
+            "evaluation = \"analytic\" is the exact cycle of the 1-D friction law; the 2-D (Coulomb disc) element is evaluated by the AFT only (evaluation = \"aft\")",
+        );
+    }
+    Error::input(format!(
+        "evaluation = \"analytic\" is the exact single-harmonic cycle and needs harmonics = 1 (here H = {harmonics_count}); use evaluation = \"aft\" for H > 1"
+    ))
+}
+
+/// [`evaluate_element`] for the layouts other than [`evaluate_one_direction`]'s: two tangential
+/// directions (independent points sharing the normal motion) or no normal direction.
+#[inline(never)]
+fn evaluate_directions(
+    element: &super::element::LocalElement,
+    x: &[f64],
+    slider: &mut [f64; 2],
+    force: &mut [f64],
+    jacobian: bool,
+    ws: &mut super::element::Workspace,
+) -> Result<()> {
+    // the 1-D law and H = 1 are checked by the caller, the layout here
     element.check()?;
     let nt = element.tangential;
     let v = if element.normal {
@@ -1894,6 +1929,28 @@ fn point(
     mut jac: Option<&mut PointJacobian>,
     out: &mut Harmonics,
 ) -> Result<()> {
+    let (n0e, nv) = (p.n0 + p.kn * v[0], [p.kn * v[1], p.kn * v[2]]);
+    if Window::always(n0e, nv)
+        && closed_form(&Motion::new(p, u, v), slider, jac.as_deref_mut(), out)
+    {
+        return Ok(());
+    }
+    point_otherwise(p, u, v, slider, jac, out)
+}
+
+/// [`point`] where the contact is not decided on squares or [`closed_form`] does not apply: the
+/// closed forms ([`separation_form`], [`closed_form`]) or else the event march ([`harmonics`]).
+/// Out of line and building its own motion, so that the motion of the path in contact is never
+/// stored to memory.
+#[inline(never)]
+fn point_otherwise(
+    p: &ContactParams,
+    u: [f64; 3],
+    v: [f64; 3],
+    slider: f64,
+    mut jac: Option<&mut PointJacobian>,
+    out: &mut Harmonics,
+) -> Result<()> {
     let mo = Motion::new(p, u, v);
     let exact = match mo.window {
         Window::Part { .. } => separation_form(&mo, jac.as_deref_mut(), out),
@@ -1908,6 +1965,7 @@ fn point(
 /// [`evaluate_element`] for one tangential direction and the normal direction, the layout of
 /// one point: x = (U0, U1, U2, V0, V1, V2) (m), forces (F0, Re F1, Im F1, N0, Re N1, Im N1) (N),
 /// and the point's Jacobian ([`PointJacobian`]) written straight into the workspace's buffer.
+#[inline(never)]
 fn evaluate_one_direction(
     p: &ContactParams,
     x: &[f64; 6],
