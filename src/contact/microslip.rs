@@ -1796,6 +1796,7 @@ impl PhaseSums {
 
 /// An error unless the motion and the slider state are finite: one test of Σ x·0, which is 0 for
 /// finite x and NaN as soon as one x is infinite or NaN.
+#[inline(always)]
 fn check_finite(u: &[f64; 3], v: &[f64; 3], slider: f64) -> Result<()> {
     let zero = (u[0] * 0.0 + u[1] * 0.0 + u[2] * 0.0)
         + (v[0] * 0.0 + v[1] * 0.0 + v[2] * 0.0)
@@ -1803,10 +1804,18 @@ fn check_finite(u: &[f64; 3], v: &[f64; 3], slider: f64) -> Result<()> {
     if zero == 0.0 {
         Ok(())
     } else {
-        Err(Error::Compute(format!(
-            "analytic friction point: non-finite input u = {u:?}, v = {v:?}, slider = {slider}"
-        )))
+        Err(non_finite(*u, *v, slider))
     }
+}
+
+/// The error of [`check_finite`], out of line: the motion is then never stored to memory for
+/// its message on the path that does not fail.
+#[cold]
+#[inline(never)]
+fn non_finite(u: [f64; 3], v: [f64; 3], slider: f64) -> Error {
+    Error::Compute(format!(
+        "analytic friction point: non-finite input u = {u:?}, v = {v:?}, slider = {slider}"
+    ))
 }
 
 /// Evaluates one point (one tangential direction): the periodic cycle from the slider state
