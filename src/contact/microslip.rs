@@ -2283,13 +2283,7 @@ mod tests {
     /// Jacobians to 1e-12 of k_t + k_n (measured 4.7e-16 and 5.1e-15).
     #[test]
     fn stick_slip_closed_form_equals_the_march_at_random_points() {
-        let mut seed: u64 = 12345;
-        let mut random = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = uniform(12345);
         let (mut points, mut worst, mut worst_jac) = (0, 0.0f64, 0.0f64);
         for _ in 0..20_000 {
             let p = ContactParams {
@@ -2336,19 +2330,23 @@ mod tests {
         assert!(worst_jac < 1e-12, "{worst_jac:e}");
     }
 
+    /// Pseudo-random numbers in [0, 1) from `seed` (xorshift64, Marsaglia 2003).
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     /// The inline inverse functions ([`arccos`], [`angle`]) against libm's acos and atan2 on
     /// 200 000 arguments (uniform, crowded towards ±1 and around ±1/2 where the reduction
     /// switches) and 100 000 unit vectors: within 2 ulp of libm's value (each is within 1.1 and
     /// 0.52 ulp of the correctly rounded one, by a comparison at 120 bits).
     #[test]
     fn inline_inverse_functions_equal_libm() {
-        let mut seed: u64 = 987_654_321;
-        let mut random = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = uniform(987_654_321);
         let ulps = |a: f64, b: f64| (a - b).abs() / (b.abs() * f64::EPSILON).max(f64::MIN_POSITIVE);
         let mut worst = 0.0f64;
         for i in 0..200_000 {
