@@ -251,18 +251,20 @@ fn angle(c: f64, s: f64) -> f64 {
 const PIO2_LO: f64 = 6.123233995736766e-17;
 
 /// R(z) = (arcsin √z − √z)/√z for z in [0, 1/4] (FDLIBM's rational approximation P(z)/Q(z),
-/// Sun Microsystems 1993, error below 2^−58.75), so arcsin x = x + x R(x²) for |x| ≤ 1/2.
+/// Sun Microsystems 1993, error below 2^−58.75), so arcsin x = x + x R(x²) for |x| ≤ 1/2. P and
+/// Q by Estrin's scheme (pairs of terms, then z² and z⁴): a shorter dependent chain than
+/// Horner's, whose latency the exact point's chain of inverse functions would add up.
 #[inline(always)]
 fn arcsin_ratio(z: f64) -> f64 {
+    let z2 = z * z;
+    let z4 = z2 * z2;
     let p = z
-        * (0.16666666666666666
-            + z * (-0.3255658186224009
-                + z * (0.20121253213486293
-                    + z * (-0.04005553450067941
-                        + z * (0.0007915349942898145 + z * 3.479331075960212e-05)))));
-    let q = 1.0
-        + z * (-2.403394911734414
-            + z * (2.0209457602335057 + z * (-0.6882839716054533 + z * 0.07703815055590194)));
+        * ((0.16666666666666666 - 0.3255658186224009 * z)
+            + z2 * (0.20121253213486293 - 0.04005553450067941 * z)
+            + z4 * (0.0007915349942898145 + 3.479331075960212e-05 * z));
+    let q = (1.0 - 2.403394911734414 * z)
+        + z2 * (2.0209457602335057 - 0.6882839716054533 * z)
+        + z4 * 0.07703815055590194;
     p / q
 }
 
@@ -334,6 +336,13 @@ impl Wave {
         if !a.is_nan() {
             return a;
         }
+        self.first_phase()
+    }
+
+    /// [`Wave::phase`] on its first use, out of line (the inline [`angle`] would make every
+    /// caller of the phase too large to inline).
+    #[inline(never)]
+    fn first_phase(&self) -> f64 {
         let a = angle(self.ca, self.sa);
         self.alpha.set(a);
         a
@@ -423,12 +432,29 @@ struct Arc {
 }
 
 impl Arc {
+    /// The arc of the level r (clamped to [−1, 1]) by libm's arccos: in the chains of dependent
+    /// events (the contact window, the crossings of the separation and of the march) its
+    /// latency is shorter than that of the inline [`arccos`].
     #[inline]
     fn new(r: f64) -> Self {
         let r = r.clamp(-1.0, 1.0);
+        Arc::with(r, r.acos())
+    }
+
+    /// [`Arc::new`] by the inline [`arccos`], for arcs computed side by side (the two slip
+    /// lengths of [`closed_form`]): without a call, the two evaluations overlap.
+    #[inline(always)]
+    fn side_by_side(r: f64) -> Self {
+        let r = r.clamp(-1.0, 1.0);
+        Arc::with(r, arccos(r))
+    }
+
+    /// The arc of the level r in [−1, 1] with β = arccos r given.
+    #[inline(always)]
+    fn with(r: f64, b: f64) -> Self {
         Arc {
             r,
-            b: arccos(r),
+            b,
             sb: ((1.0 - r) * (1.0 + r)).sqrt(),
         }
     }
@@ -1391,12 +1417,12 @@ fn closed_form(
         return true;
     }
     // c_N/|H| and c_P/|G|; at constant load one sinusoid, c_P/|G| = −c_N/|H| and δ = 0
-    let arc_n = Arc::new((g.amp - 2.0 * mun) * h.inv);
+    let arc_n = Arc::side_by_side((g.amp - 2.0 * mun) * h.inv);
     let constant_load = g.x1 == h.x1 && g.x2 == h.x2;
     let arc_p = if constant_load {
         arc_n.opposite()
     } else {
-        Arc::new((2.0 * mun - h.amp) * g.inv)
+        Arc::side_by_side((2.0 * mun - h.amp) * g.inv)
     };
     let Some(lengths) = stick_slip_lengths(g, h, arc_n, arc_p, constant_load) else {
         return false;
@@ -2021,8 +2047,22 @@ fn point_otherwise(
         _ => closed_form(&mo, slider, jac.as_deref_mut(), out),
     };
     if !exact {
-        *out = harmonics(&mo, slider, jac, |_| true)?.0;
+        march_point(&mo, slider, jac, out)?;
     }
+    Ok(())
+}
+
+/// The harmonics of a point by the event march ([`harmonics`]) into `out`, for the starts and
+/// degenerate sinusoids the closed forms leave out. Out of line: inlined, the march's code
+/// would crowd the registers of the closed forms beside it.
+#[inline(never)]
+fn march_point(
+    mo: &Motion,
+    slider: f64,
+    jac: Option<&mut PointJacobian>,
+    out: &mut Harmonics,
+) -> Result<()> {
+    *out = harmonics(mo, slider, jac, |_| true)?.0;
     Ok(())
 }
 
