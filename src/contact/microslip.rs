@@ -457,7 +457,15 @@ impl Window {
             return None;
         };
         let t = wrap(-angle(ca, sa) - 0.5 * len);
-        Some((At { t, s, c }, At { t: t + len, s: s1, c: c1 }, len))
+        Some((
+            At { t, s, c },
+            At {
+                t: t + len,
+                s: s1,
+                c: c1,
+            },
+            len,
+        ))
     }
 }
 
@@ -657,9 +665,10 @@ impl Motion {
             }
         }
         // Every contact phase also ends at the start of separation.
-        if let (Some((_, separation, _)), false) =
-            (self.window.labelled(), matches!(kind, PhaseKind::Separation))
-        {
+        if let (Some((_, separation, _)), false) = (
+            self.window.labelled(),
+            matches!(kind, PhaseKind::Separation),
+        ) {
             consider(&mut best, t, separation, PhaseKind::Separation);
         }
         // Fill in the slider of a stick that follows a slip.

@@ -11,9 +11,7 @@
 
 use std::f64::consts::TAU;
 
-use super::{
-    ahead, angle, At, Harmonics, Motion, PhaseIntegrals, PointJacobian, Window, TANGENCY,
-};
+use super::{ahead, angle, At, Harmonics, Motion, PhaseIntegrals, PointJacobian, Window, TANGENCY};
 use crate::vec3::dot;
 
 /// [sin x, cos x] of an angle x (rad).
@@ -244,7 +242,13 @@ impl Walk {
             return Some(None);
         }
         (0..m)
-            .find(|&i| arc_holds_zero(self.sc[i], self.sc[i + 1], self.theta[i + 1] - self.theta[i]))
+            .find(|&i| {
+                arc_holds_zero(
+                    self.sc[i],
+                    self.sc[i + 1],
+                    self.theta[i + 1] - self.theta[i],
+                )
+            })
             .map(|i| Some(self.state[i]))
     }
 }
