@@ -11,7 +11,9 @@
 
 use std::f64::consts::TAU;
 
-use super::{ahead, angle, At, Harmonics, Motion, PhaseIntegrals, PointJacobian, Window, TANGENCY};
+use super::{
+    ahead, angle, At, Harmonics, Motion, PhaseIntegrals, PointJacobian, Window, BEHIND, TANGENCY,
+};
 use crate::vec3::dot;
 
 /// [sin x, cos x] of an angle x (rad).
@@ -155,102 +157,83 @@ impl Frame {
     }
 }
 
-/// The phases of a contact window: boundaries 0 = θ_0 ≤ θ_1 ≤ … ≤ θ_m = len (rad, relative to
-/// τ_Sp2) with [sin, cos] of the instants τ_Sp2 + θ_i, and the state of each phase.
-struct Walk {
-    theta: [f64; MOST_PHASES + 1],
-    sc: [SinCos; MOST_PHASES + 1],
-    state: [WindowState; MOST_PHASES],
-    /// The number of phases m.
-    count: usize,
+/// (θ, sin τ, cos τ, sin τ cos τ, sin² τ) of an instant at θ (rad) from the re-contact with
+/// [sin τ, cos τ] = `sc`: a phase's integrals ([`PhaseIntegrals`]) are the differences of these
+/// between its ends.
+#[inline(always)]
+fn ends_values(theta: f64, [s, c]: SinCos) -> [f64; 5] {
+    [theta, s, c, s * c, s * s]
 }
 
-impl Walk {
-    /// The phases from the re-contact `recontact` to the separation `separation` ([sin, cos] of
-    /// τ_Sp2 and τ_Sp1 = τ_Sp2 + `len`): the state entered at the re-contact, then the
-    /// stick–slip sequence, each phase ending at the one event its state allows ([`Frame`]) or at
-    /// the separation, whichever comes first. An event's position is the first θ ≥ the phase's
-    /// start at its angle, one inverse function of its [sin θ, cos θ] ([`angle`], [`ahead`]: an
-    /// event less than a rounding behind the start is immediate, as in the march); its instant's
-    /// sine and cosine by the addition theorems. `None` if more phases than a window holds
-    /// (coinciding events of a degenerate input).
-    #[inline(always)]
-    fn new(frame: &Frame, recontact: SinCos, separation: SinCos, len: f64) -> Option<Walk> {
-        let (first, mut end, mut next) = frame.first();
-        let mut walk = Walk {
-            theta: [0.0; MOST_PHASES + 1],
-            sc: [recontact; MOST_PHASES + 1],
-            state: [first; MOST_PHASES],
-            count: 0,
-        };
-        let [s_r, c_r] = recontact;
-        let mut pos = 0.0;
-        for i in 1..=MOST_PHASES {
-            let Some([s, c]) = end else {
-                break;
-            };
-            let d = ahead(angle(c, s), pos);
-            if pos + d >= len {
-                break;
-            }
+/// The phases of a contact window from the re-contact `recontact` to the separation `separation`
+/// ([sin, cos] of τ_Sp2 and τ_Sp1 = τ_Sp2 + `len`), integrated as they are found: the state
+/// entered at the re-contact, then the stick–slip sequence, each phase ending at the one event its
+/// state allows ([`Frame`]) or at the separation, whichever comes first. An event's position is
+/// the first θ at or after the phase's start at its angle, one inverse function of its
+/// [sin θ, cos θ] ([`angle`], [`ahead`]: an event less than a rounding behind the start is
+/// immediate, as in the event march); its instant's sine and cosine by the addition theorems.
+/// The window holds at most [`MOST_PHASES`] phases: the four of the sequence after the first add
+/// up to a whole period, so a fifth boundary lies beyond the window unless they all coincide.
+///
+/// Returns the phase integrals summed per state (indexed by [`WindowState`]) and the state at
+/// τ ≡ 0 (mod 2π; `None`: separated), found by the signs of the phases' ends
+/// ([`arc_holds_zero`]; at a boundary both neighbours give the same slider state); `None` where
+/// the march is needed (coinciding events, or rounding leaves τ ≡ 0 on no phase).
+#[inline(always)]
+fn walk(
+    frame: &Frame,
+    recontact: SinCos,
+    separation: SinCos,
+    len: f64,
+) -> Option<([PhaseIntegrals; 5], Option<WindowState>)> {
+    let (mut state, mut end, mut next) = frame.first();
+    let [s_r, c_r] = recontact;
+    let mut sums = [PhaseIntegrals::default(); 5];
+    let (mut a, mut a_sc) = (ends_values(0.0, recontact), recontact);
+    let mut at_zero = None;
+    let mut theta_1 = 0.0;
+    for i in 1..=MOST_PHASES {
+        let mut b_sc = separation;
+        let mut theta = len;
+        if let Some([s, c]) = end {
             if i == MOST_PHASES {
-                return None;
+                // the fifth boundary is the first one a period later, beyond the window,
+                // unless the four events of the sequence coincide
+                if a[0] - theta_1 <= BEHIND {
+                    return None;
+                }
+            } else {
+                let d = ahead(angle(c, s), a[0]);
+                if a[0] + d < len {
+                    theta = a[0] + d;
+                    b_sc = [s_r * c + c_r * s, c_r * c - s_r * s];
+                }
             }
-            pos += d;
-            walk.theta[i] = pos;
-            walk.sc[i] = [s_r * c + c_r * s, c_r * c - s_r * s];
-            walk.state[i] = next;
-            walk.count = i;
-            let k = next as usize;
-            end = frame.exists[k].then_some(frame.ends[k]);
-            next = next.following();
         }
-        walk.count += 1;
-        walk.theta[walk.count] = len;
-        walk.sc[walk.count] = separation;
-        Some(walk)
-    }
-
-    /// The phases' integrals ([`PhaseIntegrals`]) summed per state, indexed by [`WindowState`]:
-    /// each phase adds the differences of (θ, sin, cos, sin cos, sin²) between its ends.
-    #[inline(always)]
-    fn integrals(&self) -> [PhaseIntegrals; 5] {
-        let x = |i: usize| {
-            let [s, c] = self.sc[i];
-            [self.theta[i], s, c, s * c, s * s]
-        };
-        let mut sums = [PhaseIntegrals::default(); 5];
-        let mut a = x(0);
-        for i in 0..self.count {
-            let b = x(i + 1);
-            let sum = &mut sums[self.state[i] as usize].0;
-            for k in 0..5 {
-                sum[k] += b[k] - a[k];
-            }
-            a = b;
+        let b = ends_values(theta, b_sc);
+        let sum = &mut sums[state as usize].0;
+        for k in 0..5 {
+            sum[k] += b[k] - a[k];
         }
-        sums
-    }
-
-    /// The state at τ ≡ 0 (mod 2π): `Some(None)` in separation, `Some(Some(state))` in contact,
-    /// by the signs of the boundaries' sines ([`arc_holds_zero`]; at a boundary both neighbours
-    /// give the same slider state); `None` if rounding leaves no phase holding it.
-    #[inline(always)]
-    fn state_at_zero(&self, len: f64) -> Option<Option<WindowState>> {
-        let m = self.count;
-        if arc_holds_zero(self.sc[m], self.sc[0], TAU - len) {
-            return Some(None);
+        if at_zero.is_none() && arc_holds_zero(a_sc, b_sc, theta - a[0]) {
+            at_zero = Some(state);
         }
-        (0..m)
-            .find(|&i| {
-                arc_holds_zero(
-                    self.sc[i],
-                    self.sc[i + 1],
-                    self.theta[i + 1] - self.theta[i],
-                )
-            })
-            .map(|i| Some(self.state[i]))
+        if theta >= len {
+            break;
+        }
+        if i == 1 {
+            theta_1 = theta;
+        }
+        (a, a_sc) = (b, b_sc);
+        state = next;
+        let k = next as usize;
+        end = frame.exists[k].then_some(frame.ends[k]);
+        next = next.following();
     }
+    if at_zero.is_none() && !arc_holds_zero(separation, recontact, TAU - len) {
+        return None;
+    }
+    Some((sums, at_zero))
 }
 
 /// Whether the arc from the instant `a` to `b` (each [sin, cos]) of the given length (rad, in
@@ -268,7 +251,7 @@ fn arc_holds_zero([sa, ca]: SinCos, [sb, cb]: SinCos, length: f64) -> bool {
 
 /// The harmonics of a point whose contact window is part of the period (Cigeroglu, An & Menq
 /// 2007, §2.2.2) into `out` and, if given, its Jacobian into `jac`, in closed form: the window's
-/// phases in the frame of the re-contact ([`Walk`]: the cycle starts at the re-contact τ_Sp2,
+/// phases in the frame of the re-contact ([`walk`]: the cycle starts at the re-contact τ_Sp2,
 /// history-free, so the caller's slider does not enter), their integrals summed per state, and
 /// the forces from small matrices ([`separation_forces`]). The phases are those of the event
 /// march of the parent module (to rounding). False where the march is needed: no separation, a
@@ -293,14 +276,11 @@ pub(super) fn separation_form(
         return false;
     }
     let frame = Frame::new(mo, recontact);
-    let Some(walk) = Walk::new(&frame, recontact, separation, len) else {
-        return false;
-    };
-    let Some(at_zero) = walk.state_at_zero(len) else {
+    let Some((sums, at_zero)) = walk(&frame, recontact, separation, len) else {
         return false;
     };
     let window = PhaseIntegrals::between(0.0, recontact, len, separation);
-    separation_forces(mo, &walk.integrals(), &window, recontact, jac, out);
+    separation_forces(mo, &sums, &window, recontact, jac, out);
     out.slider = slider_at_zero(mo, at_zero, recontact);
     true
 }
@@ -359,17 +339,17 @@ fn separation_forces(
         stick_r.first_column(),
     );
     let [e_p, e_n, e_r] = slider_instants(mo, recontact);
-    // k_t A and μ B, row by row
-    let mut ka = [[0.0; 3]; 3];
-    let mut mb = [[0.0; 3]; 3];
+    // k_t A and μ B
+    let (mut ka, mut mb) = (m_stick, m_slip);
+    add_outer(&mut ka, m_p, e_p, -1.0);
+    add_outer(&mut ka, m_n, e_n, -1.0);
+    add_outer(&mut ka, m_r, e_r, -1.0);
+    add_outer(&mut mb, m_p, e_p, 1.0);
+    add_outer(&mut mb, m_n, e_n, -1.0);
     for k in 0..3 {
-        for l in 0..3 {
-            let (t_p, t_n) = (m_p[k] * e_p[l], m_n[k] * e_n[l]);
-            if l > 0 {
-                ka[k][l] = kt * (m_stick[k][l] - t_p - t_n - m_r[k] * e_r[l]);
-            }
-            mb[k][l] = mu * (m_slip[k][l] + t_p - t_n);
-        }
+        // A_·0 = 0 (M_stick's first column is m_P + m_N + m_R)
+        ka[k] = [0.0, kt * ka[k][1], kt * ka[k][2]];
+        mb[k] = mb[k].map(|x| mu * x);
     }
     let (u, cn) = (mo.u, [mo.n0e, mo.nv[0], mo.nv[1]]);
     let m_window = window.projection();
@@ -403,6 +383,16 @@ fn separation_forces(
         ];
         let w = m_window[k];
         j[3 + k] = [0.0, 0.0, 0.0, kn * w[0], kn * w[1], kn * w[2], w[0]];
+    }
+}
+
+/// m + k a ⊗ b (3 × 3).
+#[inline(always)]
+fn add_outer(m: &mut [[f64; 3]; 3], a: [f64; 3], b: [f64; 3], k: f64) {
+    for (row, ak) in m.iter_mut().zip(a) {
+        for (x, bl) in row.iter_mut().zip(b) {
+            *x += k * (ak * bl);
+        }
     }
 }
 
