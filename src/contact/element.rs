@@ -232,12 +232,17 @@ impl Workspace {
 
     /// Records an analytic evaluation (its Jacobian, if any, is already in
     /// [`Workspace::analytic_jacobian`]).
+    #[inline]
     pub(crate) fn set_analytic(&mut self, period: AnalyticPeriod) {
         self.marching = Marching {
             periods: 1,
             converged: true,
         };
-        self.analytic = Some(period);
+        // in place over the previous record where there is one (no temporary of the option)
+        match self.analytic.as_mut() {
+            Some(last) => *last = period,
+            None => self.analytic = Some(period),
+        }
     }
 
     /// The samples τ_j = 2πj/N_t of an analytic period into the sample buffers.

@@ -42,7 +42,7 @@
 //! phase after a re-contact depends on the re-contact instant, which enters through the slider.
 
 use std::cell::Cell;
-use std::f64::consts::{FRAC_1_PI, PI, TAU};
+use std::f64::consts::{FRAC_1_PI, FRAC_PI_2, PI, TAU};
 
 use crate::contact::law::ContactParams;
 use crate::error::{Error, Result};
@@ -216,12 +216,13 @@ impl At {
 }
 
 /// The angle α (rad, in [−π, π]) with cos α = `c` and sin α = `s` (a unit vector, the
-/// atan2(s, c) of a sinusoid's phase), by arcsin or arccos on the side where it is well
-/// conditioned (|argument| ≤ 1/√2): the same to a few ulp and several times cheaper than atan2.
-#[inline]
+/// atan2(s, c) of a sinusoid's phase): arcsin s where |s| ≤ 1/2, else ± arccos c (|c| < √3/2),
+/// each on the side where it is well conditioned; within 1.4 ulp of atan2 and inline (no call
+/// into libm, whose calls make every live floating-point register spill).
+#[inline(always)]
 fn angle(c: f64, s: f64) -> f64 {
-    if c.abs() >= s.abs() {
-        let a = s.asin();
+    if s.abs() <= 0.5 {
+        let a = arcsin_small(s);
         if c >= 0.0 {
             a
         } else if s >= 0.0 {
@@ -230,12 +231,66 @@ fn angle(c: f64, s: f64) -> f64 {
             -PI - a
         }
     } else {
-        let a = c.acos();
+        let a = arccos(c);
         if s >= 0.0 {
             a
         } else {
             -a
         }
+    }
+}
+
+// The rational approximation below is that of FDLIBM's e_asin.c and e_acos.c:
+// ====================================================
+// Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
+//
+// Developed at SunSoft, a Sun Microsystems, Inc. business.
+// Permission to use, copy, modify, and distribute this
+// software is freely granted, provided that this notice
+// is preserved.
+// ====================================================
+
+/// π/2 minus its double [`FRAC_PI_2`] (FDLIBM's `pio2_lo`): arccos keeps this part.
+const PIO2_LO: f64 = 6.123233995736766e-17;
+
+/// R(z) = (arcsin √z − √z)/√z for z in [0, 1/4] (FDLIBM's rational approximation P(z)/Q(z),
+/// Sun Microsystems 1993, error below 2^−58.75), so arcsin x = x + x R(x²) for |x| ≤ 1/2.
+#[inline(always)]
+fn arcsin_ratio(z: f64) -> f64 {
+    let p = z
+        * (0.16666666666666666
+            + z * (-0.3255658186224009
+                + z * (0.20121253213486293
+                    + z * (-0.04005553450067941
+                        + z * (0.0007915349942898145 + z * 3.479331075960212e-05)))));
+    let q = 1.0
+        + z * (-2.403394911734414
+            + z * (2.0209457602335057 + z * (-0.6882839716054533 + z * 0.07703815055590194)));
+    p / q
+}
+
+/// arcsin x (rad) for |x| ≤ 1/2: x + x R(x²) ([`arcsin_ratio`]).
+#[inline(always)]
+fn arcsin_small(x: f64) -> f64 {
+    x + x * arcsin_ratio(x * x)
+}
+
+/// arccos x (rad, in [0, π]) for x in [−1, 1], inline (the reduction of FDLIBM's acos without
+/// its last-bit correction for x > 1/2): π/2 − arcsin x for |x| ≤ 1/2, else
+/// 2 arcsin √z with z = (1 − |x|)/2 ≤ 1/4 (exact), mirrored to π − 2 arcsin √z for x < 0.
+/// Within 1.1 ulp of the correctly rounded value (libm's is within 0.52).
+#[inline(always)]
+fn arccos(x: f64) -> f64 {
+    if x.abs() <= 0.5 {
+        return FRAC_PI_2 - (x - (PIO2_LO - x * arcsin_ratio(x * x)));
+    }
+    let z = 0.5 * (1.0 - x.abs());
+    let s = z.sqrt();
+    let r = s * arcsin_ratio(z);
+    if x > 0.0 {
+        2.0 * (s + r)
+    } else {
+        2.0 * (FRAC_PI_2 - (s + (r - PIO2_LO)))
     }
 }
 
@@ -245,6 +300,8 @@ struct Wave {
     x1: f64,
     x2: f64,
     amp: f64,
+    /// 1/A (0 for A = 0): levels relative to the amplitude by a product, not a division.
+    inv: f64,
     /// α (rad), computed on first use ([`Wave::phase`]; NaN before): the closed form of a cycle
     /// in contact ([`closed_form`]) never needs it.
     alpha: Cell<f64>,
@@ -256,16 +313,17 @@ struct Wave {
 impl Wave {
     fn new(x1: f64, x2: f64) -> Self {
         let amp = (x1 * x1 + x2 * x2).sqrt();
-        let (ca, sa) = if amp > 0.0 {
+        let (inv, ca, sa) = if amp > 0.0 {
             let inv = 1.0 / amp;
-            (x1 * inv, x2 * inv)
+            (inv, x1 * inv, x2 * inv)
         } else {
-            (1.0, 0.0)
+            (0.0, 1.0, 0.0)
         };
         Wave {
             x1,
             x2,
             amp,
+            inv,
             alpha: Cell::new(f64::NAN),
             ca,
             sa,
@@ -373,7 +431,7 @@ impl Arc {
         let r = r.clamp(-1.0, 1.0);
         Arc {
             r,
-            b: r.acos(),
+            b: arccos(r),
             sb: ((1.0 - r) * (1.0 + r)).sqrt(),
         }
     }
@@ -409,16 +467,23 @@ enum Window {
 }
 
 impl Window {
-    /// The contact window of n(τ) = n0e + k_n v1(τ) (N), `nv` = (k_n V1, k_n V2) (N). Well
-    /// inside contact (n0e > 2|k_n V1|, decided on squares) it is the whole period without a
+    /// Whether n(τ) = n0e + k_n v1(τ) stays positive all period because n0e > |k_n V1| (N),
+    /// decided on squares: ρ = −n0e/|k_n V1| < −1 (the squares' rounding, ~1e-16, lies well
+    /// inside the tangency tolerance of [`Window::of`], which gives the whole period there too).
+    #[inline(always)]
+    fn always(n0e: f64, [x1, x2]: [f64; 2]) -> bool {
+        n0e > 0.0 && n0e * n0e > x1 * x1 + x2 * x2
+    }
+
+    /// The contact window of n(τ) = n0e + k_n v1(τ) (N), `nv` = (k_n V1, k_n V2) (N). In
+    /// contact all period (n0e > |k_n V1|, decided on squares) it is the whole period without a
     /// square root; otherwise from the sinusoid of k_n v1 (Cigeroglu, An & Menq 2007, §2.2.2):
     /// n < 0 where cos(τ + α_V) < ρ = −n0e/|k_n V1|, so contact is regained at
     /// τ_Sp2 = −α_V − arccos ρ and lasts 2 arccos ρ (one inverse function; the instants' sines
     /// and cosines by the addition theorems, without α_V).
     #[inline(always)]
     fn of(n0e: f64, [x1, x2]: [f64; 2]) -> Window {
-        if n0e > 0.0 && n0e * n0e > 4.0 * (x1 * x1 + x2 * x2) {
-            // ρ = −n0e/|k_n V1| < −2 below: contact all period
+        if Window::always(n0e, [x1, x2]) {
             return Window::Always;
         }
         let nv = Wave::new(x1, x2);
@@ -571,6 +636,7 @@ impl Motion {
     }
 
     /// The state at τ = 0 from the slider w (the first sample of the time-discrete law).
+    #[inline(always)]
     fn initial_state(&self, w: f64) -> PhaseKind {
         if self.window == Window::Never {
             return PhaseKind::Separation;
@@ -1098,6 +1164,7 @@ impl Harmonics {
     /// Complete stick with the slider w (m) kept (eq. 19) into `out`: f = k_t (u − w) and
     /// n = n0e + k_n v1 at every instant, so F = k_t (U0 − w, U1, U2), N = (n0e, k_n V1, k_n V2),
     /// no energy, and the Jacobian is k_t on (F, U), k_n on (N, V) and 1 on (N0, n0).
+    #[inline(always)]
     fn stuck(mo: &Motion, w: f64, jac: Option<&mut PointJacobian>, out: &mut Harmonics) {
         let (kt, kn) = (mo.p.kt, mo.p.kn);
         let u = mo.u;
@@ -1349,12 +1416,12 @@ fn closed_form(
         return true;
     }
     // c_N/|H| and c_P/|G|; at constant load one sinusoid, c_P/|G| = −c_N/|H| and δ = 0
-    let arc_n = Arc::new((g.amp - 2.0 * mun) / h.amp);
+    let arc_n = Arc::new((g.amp - 2.0 * mun) * h.inv);
     let constant_load = g.x1 == h.x1 && g.x2 == h.x2;
     let arc_p = if constant_load {
         arc_n.opposite()
     } else {
-        Arc::new((2.0 * mun - h.amp) / g.amp)
+        Arc::new((2.0 * mun - h.amp) * g.inv)
     };
     let Some(lengths) = stick_slip_lengths(g, h, arc_n, arc_p, constant_load) else {
         return false;
@@ -1523,6 +1590,7 @@ fn phase_of_zero(ends: &[[f64; 2]; 4], lengths: &[f64; 4]) -> Option<usize> {
 
 /// An error unless the motion and the slider state are finite: one test of Σ x·0, which is 0 for
 /// finite x and NaN as soon as one x is infinite or NaN.
+#[inline(always)]
 fn check_finite(u: &[f64; 3], v: &[f64; 3], slider: f64) -> Result<()> {
     let zero = (u[0] * 0.0 + u[1] * 0.0 + u[2] * 0.0)
         + (v[0] * 0.0 + v[1] * 0.0 + v[2] * 0.0)
@@ -1530,10 +1598,18 @@ fn check_finite(u: &[f64; 3], v: &[f64; 3], slider: f64) -> Result<()> {
     if zero == 0.0 {
         Ok(())
     } else {
-        Err(Error::Compute(format!(
-            "analytic friction point: non-finite input u = {u:?}, v = {v:?}, slider = {slider}"
-        )))
+        Err(non_finite(*u, *v, slider))
     }
+}
+
+/// The error of [`check_finite`], out of line: the motion is then never stored to memory for
+/// its message on the path that does not fail.
+#[cold]
+#[inline(never)]
+fn non_finite(u: [f64; 3], v: [f64; 3], slider: f64) -> Error {
+    Error::Compute(format!(
+        "analytic friction point: non-finite input u = {u:?}, v = {v:?}, slider = {slider}"
+    ))
 }
 
 /// Evaluates one point (one tangential direction): the periodic cycle from the slider state
@@ -1600,6 +1676,7 @@ pub fn state_at(
 /// Cigeroglu, An & Menq 2007, §2) on the local coefficients `x` = `[U1; U2; V]` with H = 1
 /// (three coefficients per signal). Writes the forces `[F1; F2; Fn]`, the end slider state and,
 /// if `jacobian`, the local Jacobian (with the ∂n0 column) to the workspace.
+#[inline]
 pub(crate) fn evaluate_element(
     element: &super::element::LocalElement,
     harmonics_count: usize,
@@ -1609,15 +1686,8 @@ pub(crate) fn evaluate_element(
     jacobian: bool,
     ws: &mut super::element::Workspace,
 ) -> Result<()> {
-    if element.variant != super::law::Variant::OneD {
-        return Err(Error::input(
-            "evaluation = \"analytic\" is the exact cycle of the 1-D friction law; the 2-D (Coulomb disc) element is evaluated by the AFT only (evaluation = \"aft\")",
-        ));
-    }
-    if harmonics_count != 1 {
-        return Err(Error::input(format!(
-            "evaluation = \"analytic\" is the exact single-harmonic cycle and needs harmonics = 1 (here H = {harmonics_count}); use evaluation = \"aft\" for H > 1"
-        )));
+    if element.variant != super::law::Variant::OneD || harmonics_count != 1 {
+        return Err(unsupported(element, harmonics_count));
     }
     if let (1, true, Ok(x), Ok(force)) = (
         element.tangential,
@@ -1627,7 +1697,36 @@ pub(crate) fn evaluate_element(
     ) {
         return evaluate_one_direction(&element.params, x, slider, force, jacobian, ws);
     }
-    // a valid layout above (the 1-D law, one direction); the others are checked here
+    evaluate_directions(element, x, slider, force, jacobian, ws)
+}
+
+/// The error for an element or a harmonic count the exact cycle does not evaluate: the 2-D law,
+/// or H ≠ 1.
+#[cold]
+#[inline(never)]
+fn unsupported(element: &super::element::LocalElement, harmonics_count: usize) -> Error {
+    if element.variant != super::law::Variant::OneD {
+        return Error::input(
+            "evaluation = \"analytic\" is the exact cycle of the 1-D friction law; the 2-D (Coulomb disc) element is evaluated by the AFT only (evaluation = \"aft\")",
+        );
+    }
+    Error::input(format!(
+        "evaluation = \"analytic\" is the exact single-harmonic cycle and needs harmonics = 1 (here H = {harmonics_count}); use evaluation = \"aft\" for H > 1"
+    ))
+}
+
+/// [`evaluate_element`] for the layouts other than [`evaluate_one_direction`]'s: two tangential
+/// directions (independent points sharing the normal motion) or no normal direction.
+#[inline(never)]
+fn evaluate_directions(
+    element: &super::element::LocalElement,
+    x: &[f64],
+    slider: &mut [f64; 2],
+    force: &mut [f64],
+    jacobian: bool,
+    ws: &mut super::element::Workspace,
+) -> Result<()> {
+    // the 1-D law and H = 1 are checked by the caller, the layout here
     element.check()?;
     let nt = element.tangential;
     let v = if element.normal {
@@ -1688,6 +1787,28 @@ fn point(
     mut jac: Option<&mut PointJacobian>,
     out: &mut Harmonics,
 ) -> Result<()> {
+    let (n0e, nv) = (p.n0 + p.kn * v[0], [p.kn * v[1], p.kn * v[2]]);
+    if Window::always(n0e, nv)
+        && closed_form(&Motion::new(p, u, v), slider, jac.as_deref_mut(), out)
+    {
+        return Ok(());
+    }
+    point_otherwise(p, u, v, slider, jac, out)
+}
+
+/// [`point`] where the contact is not decided on squares or [`closed_form`] does not apply: the
+/// closed forms ([`separation_form`], [`closed_form`]) or else the event march ([`harmonics`]).
+/// Out of line and building its own motion, so that the motion of the path in contact is never
+/// stored to memory.
+#[inline(never)]
+fn point_otherwise(
+    p: &ContactParams,
+    u: [f64; 3],
+    v: [f64; 3],
+    slider: f64,
+    mut jac: Option<&mut PointJacobian>,
+    out: &mut Harmonics,
+) -> Result<()> {
     let mo = Motion::new(p, u, v);
     let exact = match mo.window {
         Window::Part { .. } => separation_form(&mo, jac.as_deref_mut(), out),
@@ -1702,6 +1823,7 @@ fn point(
 /// [`evaluate_element`] for one tangential direction and the normal direction, the layout of
 /// one point: x = (U0, U1, U2, V0, V1, V2) (m), forces (F0, Re F1, Im F1, N0, Re N1, Im N1) (N),
 /// and the point's Jacobian ([`PointJacobian`]) written straight into the workspace's buffer.
+#[inline(never)]
 fn evaluate_one_direction(
     p: &ContactParams,
     x: &[f64; 6],
@@ -1956,25 +2078,20 @@ mod tests {
     /// force scale k_t |U1| + |n0e| + k_n |V1| and Jacobians to 1e-12 of k_t + k_n.
     #[test]
     fn separation_form_equals_the_march_at_random_points() {
-        let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
-        let mut uniform = |lo: f64, hi: f64| {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
-        };
+        let mut random = uniform(6789);
+        let mut between = |lo: f64, hi: f64| lo + (hi - lo) * random();
         let (mut points, mut worst, mut worst_jac) = (0, 0.0f64, 0.0f64);
         for _ in 0..20_000 {
             let p = ContactParams {
-                kt: uniform(0.5, 3.5),
-                kn: uniform(0.5, 8.5),
-                mu: uniform(0.1, 0.9),
-                n0: uniform(-1.0, 2.0),
+                kt: between(0.5, 3.5),
+                kn: between(0.5, 8.5),
+                mu: between(0.1, 0.9),
+                n0: between(-1.0, 2.0),
             };
-            let b = uniform(0.0, 0.6);
-            let u = [uniform(-0.5, 0.5), uniform(-1.0, 1.0), uniform(-1.0, 1.0)];
-            let v = [uniform(-0.05, 0.05), uniform(-b, b), uniform(-b, b)];
-            let w = uniform(-0.5, 0.5);
+            let b = between(0.0, 0.6);
+            let u = [between(-0.5, 0.5), between(-1.0, 1.0), between(-1.0, 1.0)];
+            let v = [between(-0.05, 0.05), between(-b, b), between(-b, b)];
+            let w = between(-0.5, 0.5);
             let mo = Motion::new(&p, u, v);
             if !matches!(mo.window, Window::Part { .. }) {
                 continue;
@@ -2021,13 +2138,7 @@ mod tests {
     /// Jacobians to 1e-12 of k_t + k_n (measured 4.7e-16 and 5.1e-15).
     #[test]
     fn stick_slip_closed_form_equals_the_march_at_random_points() {
-        let mut seed: u64 = 12345;
-        let mut random = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = uniform(12345);
         let (mut points, mut worst, mut worst_jac) = (0, 0.0f64, 0.0f64);
         for _ in 0..20_000 {
             let p = ContactParams {
@@ -2072,5 +2183,48 @@ mod tests {
         assert!(points > 10_000, "{points}");
         assert!(worst < 1e-12, "{worst:e}");
         assert!(worst_jac < 1e-12, "{worst_jac:e}");
+    }
+
+    /// Pseudo-random numbers in [0, 1) from `seed` (xorshift64, Marsaglia 2003).
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// The inline inverse functions ([`arccos`], [`angle`]) against libm's acos and atan2 on
+    /// 200 000 arguments (uniform, crowded towards ±1 and around ±1/2 where the reduction
+    /// switches) and 100 000 unit vectors: within 2 ulp of libm's value (each is within 1.1 and
+    /// 0.52 ulp of the correctly rounded one, by a comparison at 120 bits).
+    #[test]
+    fn inline_inverse_functions_equal_libm() {
+        let mut random = uniform(987_654_321);
+        let ulps = |a: f64, b: f64| (a - b).abs() / (b.abs() * f64::EPSILON).max(f64::MIN_POSITIVE);
+        let mut worst = 0.0f64;
+        for i in 0..200_000 {
+            let r = random();
+            let x = match i % 4 {
+                0 => 2.0 * r - 1.0,
+                1 => 1.0 - r.powi(6),
+                2 => -1.0 + r.powi(6),
+                _ => (if r < 0.5 { 0.5 } else { -0.5 }) + 1e-6 * (random() - 0.5),
+            };
+            worst = worst.max(ulps(arccos(x), x.acos()));
+        }
+        for x in [-1.0, -0.5, 0.0, 0.5, 1.0] {
+            worst = worst.max(ulps(arccos(x), f64::acos(x)));
+        }
+        let mut worst_angle = 0.0f64;
+        for _ in 0..100_000 {
+            let (s, c) = (TAU * (random() - 0.5)).sin_cos();
+            worst_angle = worst_angle.max(ulps(angle(c, s), s.atan2(c)));
+        }
+        eprintln!(
+            "arccos within {worst:.2} ulp of libm's acos, angle within {worst_angle:.2} of atan2"
+        );
+        assert!(worst <= 2.0 && worst_angle <= 2.0);
     }
 }

@@ -96,8 +96,8 @@ impl Frame {
         let (sg, cg) = (g.sa * c + g.ca * s, g.ca * c - g.sa * s);
         let (sh, ch) = (h.sa * c + h.ca * s, h.ca * c - h.sa * s);
         let mun2 = 2.0 * mo.p.mu * mo.n0e;
-        let r_n = ((g.amp - mun2) / h.amp).clamp(-1.0, 1.0);
-        let r_p = ((mun2 - h.amp) / g.amp).clamp(-1.0, 1.0);
+        let r_n = ((g.amp - mun2) * h.inv).clamp(-1.0, 1.0);
+        let r_p = ((mun2 - h.amp) * g.inv).clamp(-1.0, 1.0);
         let sb_n = ((1.0 - r_n) * (1.0 + r_n)).sqrt();
         let sb_p = ((1.0 - r_p) * (1.0 + r_p)).sqrt();
         Frame {
