@@ -2073,7 +2073,7 @@ mod tests {
     /// The closed form with separation ([`separation_form`]: the window's phases by angles
     /// relative to the re-contact, F = k_t A U + μ B N) against the event march of [`build`] off
     /// the grid above: 20 000 points with random k_t, k_n, μ, n0 (gaps included), motion and
-    /// slider, of which the march finds about 9 000 with separation; each must take the closed
+    /// slider, of which the march finds about 10 000 with separation; each must take the closed
     /// form, with forces, normal forces, end slider (times k_t) and energy equal to 1e-12 of the
     /// force scale k_t |U1| + |n0e| + k_n |V1| and Jacobians to 1e-12 of k_t + k_n.
     #[test]
