@@ -2120,7 +2120,7 @@ mod tests {
     fn separation_form_equals_the_march_at_random_points() {
         let mut random = uniform(6789);
         let mut between = |lo: f64, hi: f64| lo + (hi - lo) * random();
-        let (mut points, mut worst, mut worst_jac) = (0, 0.0f64, 0.0f64);
+        let mut largest = Largest::default();
         for _ in 0..20_000 {
             let p = ContactParams {
                 kt: between(0.5, 3.5),
@@ -2147,27 +2147,11 @@ mod tests {
             let (marched, regime) = harmonics(&mo, w, Some(mj), |_| true).unwrap();
             assert_eq!(regime, CycleRegime::Separation);
             *m = marched;
-            points += 1;
             let scale = p.kt * u[1].hypot(u[2]) + mo.n0e.abs() + mo.nv[0].hypot(mo.nv[1]);
-            for r in &mut results {
-                r.slider *= p.kt;
-                r.energy *= p.kt / scale;
-            }
-            let (values, d) = differences(
-                (&results[0], &jacobians[0]),
-                (&results[1], &jacobians[1]),
-                scale,
-                p.kt + p.kn,
-            );
-            worst = worst.max(values);
-            worst_jac = worst_jac.max(d);
+            let [c, m] = results;
+            largest.add(&p, scale, (c, &jacobians[0]), (m, &jacobians[1]));
         }
-        eprintln!(
-            "random separating points: {points}; largest difference {worst:.2e} of the scale, Jacobians {worst_jac:.2e} of k_t + k_n"
-        );
-        assert!(points > 5_000, "{points}");
-        assert!(worst < 1e-12, "{worst:e}");
-        assert!(worst_jac < 1e-12, "{worst_jac:e}");
+        largest.check("random separating points", 5_000);
     }
 
     /// The stick–slip closed form ([`closed_form`]: lengths from δ, the phase of τ ≡ 0 by sign
@@ -2179,7 +2163,7 @@ mod tests {
     #[test]
     fn stick_slip_closed_form_equals_the_march_at_random_points() {
         let mut random = uniform(12345);
-        let (mut points, mut worst, mut worst_jac) = (0, 0.0f64, 0.0f64);
+        let mut largest = Largest::default();
         for _ in 0..20_000 {
             let p = ContactParams {
                 kt: 0.5 + 3.0 * random(),
@@ -2199,7 +2183,7 @@ mod tests {
             let mut c = Harmonics::default();
             let (mut cj, mut mj) = ([[0.0; 7]; 6], [[0.0; 7]; 6]);
             let closed = closed_form(&mo, w, Some(&mut cj), &mut c);
-            let (mut m, regime) = harmonics(&mo, w, Some(&mut mj), |_| true).unwrap();
+            let (m, regime) = harmonics(&mo, w, Some(&mut mj), |_| true).unwrap();
             if regime != CycleRegime::StickSlip {
                 continue;
             }
@@ -2207,22 +2191,52 @@ mod tests {
                 closed,
                 "stick–slip left to the march: {p:?} {u:?} {v:?} {w}"
             );
-            points += 1;
             let scale = p.kt * u[1].hypot(u[2]) + p.n0 + p.kn * v[1].hypot(v[2]);
-            c.slider *= p.kt;
-            c.energy *= p.kt / scale;
-            m.slider *= p.kt;
-            m.energy *= p.kt / scale;
-            let (values, d) = differences((&c, &cj), (&m, &mj), scale, p.kt + p.kn);
-            worst = worst.max(values);
-            worst_jac = worst_jac.max(d);
+            largest.add(&p, scale, (c, &cj), (m, &mj));
         }
-        eprintln!(
-            "random stick–slip points: {points}; largest difference {worst:.2e} of the scale, Jacobians {worst_jac:.2e} of k_t + k_n"
-        );
-        assert!(points > 10_000, "{points}");
-        assert!(worst < 1e-12, "{worst:e}");
-        assert!(worst_jac < 1e-12, "{worst_jac:e}");
+        largest.check("random stick–slip points", 10_000);
+    }
+
+    /// The largest differences of the closed forms from the event march over random points:
+    /// forces, normal forces, end slider (times k_t) and energy relative to each point's force
+    /// scale, Jacobians relative to k_t + k_n ([`differences`]).
+    #[derive(Default)]
+    struct Largest {
+        points: usize,
+        values: f64,
+        jacobian: f64,
+    }
+
+    impl Largest {
+        /// Adds one point: the closed form's result and Jacobian against the march's, on the
+        /// force scale `scale` (N) of the point's law `p`.
+        fn add(
+            &mut self,
+            p: &ContactParams,
+            scale: f64,
+            (mut c, cj): (Harmonics, &PointJacobian),
+            (mut m, mj): (Harmonics, &PointJacobian),
+        ) {
+            for r in [&mut c, &mut m] {
+                r.slider *= p.kt;
+                r.energy *= p.kt / scale;
+            }
+            let (values, d) = differences((&c, cj), (&m, mj), scale, p.kt + p.kn);
+            self.points += 1;
+            self.values = self.values.max(values);
+            self.jacobian = self.jacobian.max(d);
+        }
+
+        /// Prints the differences and asserts more than `least` points, each within 1e-12.
+        fn check(&self, what: &str, least: usize) {
+            let (points, worst, worst_jac) = (self.points, self.values, self.jacobian);
+            eprintln!(
+                "{what}: {points}; largest difference {worst:.2e} of the scale, Jacobians {worst_jac:.2e} of k_t + k_n"
+            );
+            assert!(points > least, "{points}");
+            assert!(worst < 1e-12, "{worst:e}");
+            assert!(worst_jac < 1e-12, "{worst_jac:e}");
+        }
     }
 
     /// Pseudo-random numbers in [0, 1) from `seed` (xorshift64, Marsaglia 2003).
