@@ -4,7 +4,8 @@
 //! factors a step matrix met for the first time), on the underplatform damper
 //! of Gastaldi & Berruti 2018 (cases/damper.toml, static start, three contacts with lift-off,
 //! stick and slip) and on a one-DOF oscillator with a Jenkins element (stick–slip every half
-//! period).
+//! period), soft and stiff (k_t = 400 N/m at ω = 0.2 rad/s: the adaptive standard step meets
+//! corrector cycles and re-runs those steps with the full-stick step, without forming an error).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -64,8 +65,8 @@ fn allocations<T>(f: impl FnOnce() -> T) -> (T, u64) {
     (out, COUNT.with(|c| c.get()))
 }
 
-/// m q̈ + c q̇ + k q + f_t = F cos ωt, Jenkins element (k_t, slip force μ n0) on q.
-fn jenkins_oscillator() -> MarchSystem {
+/// m q̈ + c q̇ + k q + f_t = F cos ωt, Jenkins element (k_t = `kt` N/m, slip force μ n0) on q.
+fn jenkins_oscillator(kt: f64) -> MarchSystem {
     let mut sys = MarchSystem {
         n: 1,
         mass: vec![1.0],
@@ -81,7 +82,7 @@ fn jenkins_oscillator() -> MarchSystem {
             },
             normal: None,
             params: FrictionParams {
-                kt: 5.0,
+                kt,
                 kn: 0.0,
                 mu: 1.0,
                 n0: 0.5,
@@ -124,7 +125,8 @@ fn steps_allocate_nothing_after_the_first_period() {
         "/cases/damper.toml"
     )))
     .unwrap();
-    let jenkins = jenkins_oscillator();
+    let jenkins = jenkins_oscillator(5.0);
+    let stiff = jenkins_oscillator(400.0);
     let mut report: Vec<(bool, String)> = Vec::new();
     for scheme in MarchScheme::ALL.into_iter().filter(|s| !s.is_nonsmooth()) {
         let cm = case_march(&case, Some(scheme), &mut |_| {}).unwrap();
@@ -139,9 +141,15 @@ fn steps_allocate_nothing_after_the_first_period() {
             steps_per_period: 200,
             ..MarchSettings::default()
         };
+        let stiff_settings = MarchSettings {
+            omega: 0.2,
+            steps_per_period: 300,
+            ..oscillator.clone()
+        };
         for (name, sys, settings) in [
             ("damper", &cm.system, &damper),
             ("Jenkins oscillator", &jenkins, &oscillator),
+            ("stiff Jenkins oscillator", &stiff, &stiff_settings),
         ] {
             let (per, changes) = count_after_first_period(sys, settings);
             assert!(

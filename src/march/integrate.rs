@@ -8,7 +8,7 @@ use super::adaptive::AdaptiveSteps;
 use super::law::{ContactState, LawSample};
 use super::periodic::{self, Extremes};
 use super::schemes::{
-    self, Cache, Excitation, ExcitationAt, Kinematics, Snapshot, StepContext, Workspace,
+    self, Cache, Corrected, Excitation, ExcitationAt, Kinematics, Snapshot, StepContext, Workspace,
 };
 use super::system::{InitialCondition, MarchSystem};
 use crate::case::MarchScheme;
@@ -307,6 +307,9 @@ pub struct Marcher<'a> {
     dt_stick: f64,
     /// Adaptive step per contact-state combination (adaptive schemes).
     adaptive_dt: Option<AdaptiveSteps>,
+    /// The adaptive step of the current state when the previous step found it (the state it
+    /// ended in).
+    next_dt: Option<f64>,
     codes: Vec<u8>,
     history: MarchHistory,
     /// The scratch of the period's amplitude.
@@ -362,6 +365,7 @@ impl<'a> Marcher<'a> {
             tolerance: settings.tolerance * sys.displacement_scale,
             dt_stick: dt_max,
             adaptive_dt: None,
+            next_dt: None,
             codes: Vec::with_capacity(ne),
             history: MarchHistory::default(),
             extremes: Extremes::new(n),
@@ -437,7 +441,8 @@ impl<'a> Marcher<'a> {
                     &mut self.cache,
                     &mut self.ws,
                     &mut self.next,
-                )?;
+                )?
+                .map_err(|why| why.error(&ctx))?;
                 self.total_iterations += its as u64;
                 self.step_range = (self.step_range.0.min(dt), self.step_range.1.max(dt));
                 std::mem::swap(&mut self.cur, &mut self.next);
@@ -447,9 +452,11 @@ impl<'a> Marcher<'a> {
         } else {
             while t_end - self.t > 1e-9 * period {
                 let remaining = t_end - self.t;
-                let steps = self.adaptive_dt.as_mut().expect("adaptive steps set up");
-                state_codes_into(&self.cur.samples, &mut self.codes);
-                let mut dt = steps.step(sys, &self.codes, &self.cur.samples);
+                // the step of the current state, found as the previous step ended
+                let mut dt = match self.next_dt.take() {
+                    Some(dt) => dt,
+                    None => self.adaptive_step(false),
+                };
                 // the step closing the period (shortened to its end) is a one-off size
                 let end_time = |dt: f64, t: f64| {
                     if dt > remaining * (1.0 - 1e-9) {
@@ -461,27 +468,29 @@ impl<'a> Marcher<'a> {
                 let (h, mut t1, mut one_off) = end_time(dt, self.t);
                 dt = h;
                 let mut its = match self.attempt(t1, dt, one_off) {
-                    Ok(its) => its as u64,
+                    Ok(Ok(its)) => its as u64,
                     // the standard corrector diverges when the state stiffens within a long
                     // step (Δτ/𝕋 beyond 1/π): re-run with the full-stick step, the shortest
-                    Err(_) if dt > self.dt_stick * (1.0 + 1e-12) => {
+                    Ok(Err(_)) | Err(_) if dt > self.dt_stick * (1.0 + 1e-12) => {
                         (dt, t1, one_off) = end_time(self.dt_stick, self.t);
                         self.rejected += 1;
-                        self.attempt(t1, dt, one_off)? as u64
+                        self.converged(t1, dt, one_off)? as u64
                     }
+                    Ok(Err(why)) => return Err(self.unconverged(why, t1, dt, one_off)),
                     Err(e) => return Err(e),
                 };
                 // paper §4.2: re-run with the smaller step the new state asks for
                 for _ in 0..8 {
-                    state_codes_into(&self.next.samples, &mut self.codes);
-                    let steps = self.adaptive_dt.as_mut().expect("adaptive steps set up");
-                    let dt_new = steps.step(sys, &self.codes, &self.next.samples);
-                    if dt_new >= dt * (1.0 - 1e-12) {
+                    let dt_new = self.adaptive_step(true);
+                    let (h, t_new, one) = end_time(dt_new, self.t);
+                    // a step closing the period is the same step at the smaller size
+                    if dt_new >= dt * (1.0 - 1e-12) || h.to_bits() == dt.to_bits() {
+                        self.next_dt = Some(dt_new);
                         break;
                     }
-                    (dt, t1, one_off) = end_time(dt_new, self.t);
+                    (dt, t1, one_off) = (h, t_new, one);
                     self.rejected += 1;
-                    its += self.attempt(t1, dt, one_off)? as u64;
+                    its += self.converged(t1, dt, one_off)? as u64;
                 }
                 self.total_iterations += its;
                 self.step_range = (self.step_range.0.min(dt), self.step_range.1.max(dt));
@@ -519,9 +528,19 @@ impl<'a> Marcher<'a> {
         Ok(steady)
     }
 
+    /// The adaptive step (s) of the contact state of the current snapshot, or of the next one
+    /// (`next`: the state an attempted step ended in).
+    fn adaptive_step(&mut self, next: bool) -> f64 {
+        let snapshot = if next { &self.next } else { &self.cur };
+        state_codes_into(&snapshot.samples, &mut self.codes);
+        let steps = self.adaptive_dt.as_mut().expect("adaptive steps set up");
+        steps.step(self.sys, &self.codes, &snapshot.samples)
+    }
+
     /// One adaptive step from the current state to `t1` (step `dt`; `one_off`: a size met once)
-    /// into the next state, with the excitation at `t1`; returns the iterations.
-    fn attempt(&mut self, t1: f64, dt: f64, one_off: bool) -> Result<u32> {
+    /// into the next state, with the excitation at `t1`; returns the iterations, or why the
+    /// standard corrector did not converge.
+    fn attempt(&mut self, t1: f64, dt: f64, one_off: bool) -> Result<Corrected> {
         let (sys, s) = (self.sys, self.settings);
         self.excitation.fill(sys, s.omega, t1, true);
         let ctx = context(
@@ -541,6 +560,28 @@ impl<'a> Marcher<'a> {
             &mut self.ws,
             &mut self.next,
         )
+    }
+
+    /// [`Marcher::attempt`], its non-convergence as an error.
+    fn converged(&mut self, t1: f64, dt: f64, one_off: bool) -> Result<u32> {
+        match self.attempt(t1, dt, one_off)? {
+            Ok(its) => Ok(its),
+            Err(why) => Err(self.unconverged(why, t1, dt, one_off)),
+        }
+    }
+
+    /// The error of an adaptive step to `t1` (step `dt`) whose corrector did not converge.
+    fn unconverged(&self, why: schemes::Unconverged, t1: f64, dt: f64, one_off: bool) -> Error {
+        let ctx = context(
+            self.sys,
+            self.settings,
+            self.tolerance,
+            t1,
+            dt,
+            self.excitation.view(),
+            one_off,
+        );
+        why.error(&ctx)
     }
 
     /// The outcome: the history, the period summaries and the harmonics of the last period.
@@ -711,7 +752,8 @@ fn fixed_step(sys: &MarchSystem, s: &MarchSettings, dt_max: f64) -> Result<f64> 
     }
 }
 
-/// One step of the chosen scheme from `cur` into `next`; returns the iterations.
+/// One step of the chosen scheme from `cur` into `next`; returns the iterations, or why the
+/// standard corrector did not converge.
 fn step(
     s: &MarchSettings,
     ctx: &StepContext,
@@ -719,15 +761,15 @@ fn step(
     cache: &mut Cache,
     ws: &mut Workspace,
     next: &mut Snapshot,
-) -> Result<u32> {
+) -> Result<Corrected> {
     match s.scheme {
         MarchScheme::Newmark | MarchScheme::Adaptive => {
-            schemes::standard_step(ctx, cur, cache, ws, next)
+            schemes::standard_corrector(ctx, cur, cache, ws, next)
         }
         MarchScheme::PiecewiseLinear | MarchScheme::AdaptivePiecewiseLinear => {
-            schemes::piecewise_linear_step(ctx, cur, cache, ws, next)
+            schemes::piecewise_linear_step(ctx, cur, cache, ws, next).map(Ok)
         }
-        MarchScheme::QuasiStatic => schemes::quasi_static_step(ctx, cur, cache, ws, next),
+        MarchScheme::QuasiStatic => schemes::quasi_static_step(ctx, cur, cache, ws, next).map(Ok),
         MarchScheme::MoreauJean | MarchScheme::Carpenter => Err(Error::input(format!(
             "the scheme `{}` does not march friction elements",
             s.scheme

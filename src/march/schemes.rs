@@ -181,6 +181,8 @@ pub struct Workspace {
     /// Whether `b` holds the Newmark right-hand side of the current step.
     b_ready: bool,
     lu: dense::ScratchLu,
+    /// The standard corrector's cycle check.
+    cycle: CycleCheck,
     damped: bool,
 }
 
@@ -213,6 +215,7 @@ impl Workspace {
             column: v(),
             b_ready: false,
             lu: dense::ScratchLu::new(n),
+            cycle: CycleCheck::new(n),
             damped: sys.damping.iter().any(|&c| c != 0.0),
         }
     }
@@ -1008,6 +1011,111 @@ pub fn state_name(code: u8) -> &'static str {
     }
 }
 
+/// The first corrector iteration at which [`standard_corrector`] compares its iterates for a cycle
+/// (Brent 1980): the standard steps of the bundled models converge in at most 17 iterations, so
+/// a converging step never pays for the comparison.
+pub const CYCLE_CHECK_FROM: u32 = 16;
+
+/// Why the standard corrector stopped without converging. No message is formed here: the adaptive
+/// march re-runs such a step with the full-stick step, and a step must not allocate
+/// ([`Unconverged::error`] forms the message).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Unconverged {
+    /// The iteration limit was reached.
+    Limit(u32),
+    /// Iterate `repeat` equals iterate `first` bit for bit: the iterates cycle from there on, and
+    /// since none of the cycle's iterates converged none ever will (the slip of a one-DOF Jenkins
+    /// element alternating between its two signs, each iterate the other's exact image).
+    Cycle {
+        /// The earlier iterate.
+        first: u32,
+        /// The iterate that repeats it.
+        repeat: u32,
+    },
+}
+
+impl Unconverged {
+    /// The error of a step of `ctx` that did not converge.
+    pub fn error(self, ctx: &StepContext) -> Error {
+        let how = match self {
+            Unconverged::Limit(n) => format!("did not converge in {n} iterations"),
+            Unconverged::Cycle { first, repeat } => format!(
+                "cycles (iterate {repeat} repeats iterate {first} bit for bit, so it cannot converge)"
+            ),
+        };
+        Error::Compute(format!(
+            "standard Newmark: the corrector {how} at t = {:.6e} s (Δτ = {:e} s); the fixed point needs Δτ/𝕋 < 1/π — lower `step_ratio` or the time step",
+            ctx.t1, ctx.dt
+        ))
+    }
+}
+
+/// The result of [`standard_corrector`]: the iterations, or why it did not converge.
+pub type Corrected = std::result::Result<u32, Unconverged>;
+
+/// Brent's cycle detection (Brent 1980, "An improved Monte Carlo factorization algorithm", BIT 20,
+/// §2) on the iterates q̃_k of the standard corrector, a map q̃_{k+1} = F(q̃_k) that depends on q̃_k
+/// alone within a step: one saved iterate, moved to the current one whenever the distance to it
+/// reaches a power of two, so a cycle of length L entered at iterate μ is found by iterate
+/// 2 max(μ, L) or so, with one comparison of n values per iteration and no allocation.
+pub struct CycleCheck {
+    /// The saved iterate.
+    saved: Vec<f64>,
+    /// Its index k.
+    saved_at: u32,
+    /// The distance at which the saved iterate moves on.
+    power: u32,
+}
+
+impl CycleCheck {
+    /// Room for iterates of `n` DOF.
+    pub fn new(n: usize) -> Self {
+        CycleCheck {
+            saved: Vec::with_capacity(n),
+            saved_at: 0,
+            power: 1,
+        }
+    }
+
+    /// Iterate `it` is `q`: the index of an earlier iterate it equals bit for bit, if any. The
+    /// comparisons start at [`CYCLE_CHECK_FROM`] (that iterate is saved).
+    fn repeat_of(&mut self, it: u32, q: &[f64]) -> Option<u32> {
+        if it < CYCLE_CHECK_FROM {
+            return None;
+        }
+        if it > CYCLE_CHECK_FROM && same_bits(&self.saved, q) {
+            return Some(self.saved_at);
+        }
+        if it == CYCLE_CHECK_FROM || it - self.saved_at == self.power {
+            self.power = if it == CYCLE_CHECK_FROM {
+                1
+            } else {
+                2 * self.power
+            };
+            self.saved.clear();
+            self.saved.extend_from_slice(q);
+            self.saved_at = it;
+        }
+        None
+    }
+}
+
+/// Whether `a` and `b` hold the same values bit for bit.
+fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
+/// [`standard_corrector`], its non-convergence as an error ([`Unconverged::error`]).
+pub fn standard_step(
+    ctx: &StepContext,
+    start: &Snapshot,
+    cache: &mut Cache,
+    ws: &mut Workspace,
+    out: &mut Snapshot,
+) -> Result<u32> {
+    standard_corrector(ctx, start, cache, ws, out)?.map_err(|why| why.error(ctx))
+}
+
 /// Standard Newmark-β step, Appendix A.3 generalised to C, K ≠ 0: predictor q̃ = q_n; then repeat
 /// (A9) R = M q̈̃ + C q̇̃ + K q̃ − f_e(τ_{n+1}) − f_c(q̃), (A10) Δq = −S⁻¹ R with
 /// S = M/(βΔτ²) + γC/(βΔτ) + K (the paper's M/(βΔτ²) for the rigid damper), (A11) q̃ += Δq, until
@@ -1017,14 +1125,17 @@ pub fn state_name(code: u8) -> &'static str {
 /// With R = S q̃ − b − f_c(q̃) (b = f + M q*/(βΔτ²) + C(γ q*/(βΔτ) − v*), the part of R that does
 /// not change within the step), the update is q̃ ← S⁻¹ b + S⁻¹ f_c(q̃): S⁻¹ b is computed once per
 /// step and an iteration costs one law evaluation and one product with S⁻¹ (the same iterates).
-/// Writes the step's end into `out`; returns the iterations.
-pub fn standard_step(
+/// The iterates are checked for an exact cycle from [`CYCLE_CHECK_FROM`] on ([`CycleCheck`]): a
+/// cycle stops the corrector with the outcome the iteration limit would give, without the
+/// iterations up to the limit. Writes the step's end into `out`; returns the iterations, or why
+/// the corrector did not converge (errors: a singular Newmark matrix).
+pub fn standard_corrector(
     ctx: &StepContext,
     start: &Snapshot,
     cache: &mut Cache,
     ws: &mut Workspace,
     out: &mut Snapshot,
-) -> Result<u32> {
+) -> Result<Corrected> {
     let sys = ctx.sys;
     let dt = ctx.dt;
     newmark_predictors(&start.kin, dt, &mut ws.qs, &mut ws.vs);
@@ -1077,13 +1188,13 @@ pub fn standard_step(
                 &start.samples,
                 &mut out.samples,
             );
-            return Ok(it);
+            return Ok(Ok(it));
+        }
+        if let Some(first) = ws.cycle.repeat_of(it, q) {
+            return Ok(Err(Unconverged::Cycle { first, repeat: it }));
         }
     }
-    Err(Error::Compute(format!(
-        "standard Newmark: the corrector did not converge in {} iterations at t = {:.6e} s (Δτ = {dt:e} s); the fixed point needs Δτ/𝕋 < 1/π — lower `step_ratio` or the time step",
-        ctx.max_iterations, ctx.t1
-    )))
+    Ok(Err(Unconverged::Limit(ctx.max_iterations)))
 }
 
 /// How the state iteration solves a state's linear step.
@@ -1374,4 +1485,53 @@ fn damped_newton(
         ctx.t1,
         ctx.max_iterations
     )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The iterate of Brent's check at which `sequence` (iterate k at index k − 1) is found to
+    /// repeat an earlier iterate, with that iterate's index.
+    fn detection(sequence: &[f64]) -> Option<(u32, u32)> {
+        let mut check = CycleCheck::new(1);
+        (1..=sequence.len() as u32).find_map(|it| {
+            check
+                .repeat_of(it, &sequence[it as usize - 1..it as usize])
+                .map(|f| (f, it))
+        })
+    }
+
+    #[test]
+    fn brent_check_finds_exact_cycles_soon_after_they_start_and_nothing_else() {
+        // distinct iterates up to k = 20, then the cycle A, B (the Jenkins slip signs)
+        let two: Vec<f64> = (1..=500)
+            .map(|k| match k {
+                k if k < 20 => k as f64,
+                k if k % 2 == 0 => 0.699586488238333,
+                _ => 0.7022815566695447,
+            })
+            .collect();
+        let (first, repeat) = detection(&two).expect("2-cycle found");
+        assert_eq!(
+            two[first as usize - 1].to_bits(),
+            two[repeat as usize - 1].to_bits()
+        );
+        assert_eq!((repeat - first) % 2, 0);
+        assert!(repeat <= 20 + 8, "2-cycle entered at 20 found at {repeat}");
+        // a 3-cycle from the first compared iterate on
+        let three: Vec<f64> = (1..=500).map(|k| [1.0, 2.0, 3.0][k % 3]).collect();
+        let (first, repeat) = detection(&three).expect("3-cycle found");
+        assert_eq!((repeat - first) % 3, 0);
+        assert!(repeat <= CYCLE_CHECK_FROM + 8, "found at {repeat}");
+        // iterates that never repeat (alternating about a limit they approach slowly): no cycle
+        let distinct: Vec<f64> = (1..=500)
+            .map(|k| 1.0 + (-0.5f64).powi(k % 2) / k as f64)
+            .collect();
+        assert_eq!(detection(&distinct), None);
+        // a value seen before the comparisons start is not a cycle of the compared iterates
+        let mut early: Vec<f64> = (1..=500).map(|k| k as f64).collect();
+        early[CYCLE_CHECK_FROM as usize + 3] = early[2];
+        assert_eq!(detection(&early), None);
+    }
 }
