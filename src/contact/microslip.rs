@@ -517,9 +517,9 @@ impl Window {
         if n0e + vamp <= 1e-14 * (n0e.abs() + vamp) {
             Window::Never
         } else if vamp > 0.0 {
-            let rho = -n0e / vamp;
+            let rho = -n0e * nv.inv;
             if rho > -1.0 + TANGENCY {
-                let arc = Arc::side_by_side(rho);
+                let arc = Arc::new(rho);
                 Window::Part {
                     recontact: nv.rising_sc(arc),
                     separation: nv.falling_sc(arc),
@@ -996,19 +996,23 @@ impl PhaseIntegrals {
 
     /// M_kl = p_k ∫ e_k e_l dτ with the projection weights p = (1/2π, 1/π, 1/π) of the harmonic
     /// coefficients (F0 = (1/2π)∮f, Re F1 = (1/π)∮f cos τ, Im F1 = −(1/π)∮f sin τ), e(τ) =
-    /// (1, cos τ, −sin τ): ∫cos² = d/2 + Δ(sin cos)/2, ∫sin² = d/2 − Δ(sin cos)/2,
-    /// ∫cos·(−sin) = −Δ sin²/2.
+    /// (1, cos τ, −sin τ): π M ([`PhaseIntegrals::projection_pi`]) times 1/π.
+    #[inline(always)]
     fn projection(&self) -> [[f64; 3]; 3] {
+        self.projection_pi().map(|row| row.map(|x| x * FRAC_1_PI))
+    }
+
+    /// π M of [`PhaseIntegrals::projection`], for callers that fold 1/π into their own factors:
+    /// ∫cos = Δ sin, ∫(−sin) = Δ cos, ∫cos² = d/2 + Δ(sin cos)/2, ∫sin² = d/2 − Δ(sin cos)/2,
+    /// ∫cos·(−sin) = −Δ sin²/2, the first row halved.
+    #[inline(always)]
+    fn projection_pi(&self) -> [[f64; 3]; 3] {
         let [d, ds, dc, dsc, dss] = self.0;
-        let q = FRAC_1_PI;
-        let (ic, is) = (ds * q, dc * q); // ∫cos, ∫(−sin)
-        let icc = 0.5 * (d + dsc) * q;
-        let iss = 0.5 * (d - dsc) * q;
-        let ics = -0.5 * dss * q;
+        let ics = -0.5 * dss;
         [
-            [0.5 * d * q, 0.5 * ic, 0.5 * is],
-            [ic, icc, ics],
-            [is, ics, iss],
+            [0.5 * d, 0.5 * ds, 0.5 * dc],
+            [ds, 0.5 * (d + dsc), ics],
+            [dc, ics, 0.5 * (d - dsc)],
         ]
     }
 }

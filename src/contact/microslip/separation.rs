@@ -13,7 +13,7 @@
 //! searched for, and the five inverse functions (the window's length, the first event, β_N, β_P
 //! and δ) are independent of each other. No absolute phase angle α_G, α_H, α_V is formed.
 
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::{FRAC_1_PI, PI, TAU};
 
 use super::{
     ahead, angle, sequence_ends, sequence_lengths, Arc, At, Harmonics, Motion, PhaseIntegrals,
@@ -315,13 +315,15 @@ fn separation_forces(
     out: &mut Harmonics,
 ) {
     let [stick, slip, window, stick_r, stick_a, stick_b] = slots.integrals();
-    let (kt, kn, mu) = (mo.p.kt, mo.p.kn, slots.sign * mo.p.mu);
-    let (m_stick, m_slip, m_window) = (stick.projection(), slip.projection(), window.projection());
-    let (m_a, m_b, m_r) = (
-        stick_a.first_column(),
-        stick_b.first_column(),
-        stick_r.first_column(),
+    // π M of each sum (the factor 1/π folded into k_t, μ and k_n below) and π m of each stick
+    let (p_stick, p_slip, p_window) = (
+        stick.projection_pi(),
+        slip.projection_pi(),
+        window.projection_pi(),
     );
+    let [m_r, m_a, m_b] = [stick_r, stick_a, stick_b].map(|i| i.projection_pi().map(|row| row[0]));
+    let (kt, kn) = (mo.p.kt, mo.p.kn);
+    let (ktq, muq, q) = (kt * FRAC_1_PI, slots.sign * mo.p.mu * FRAC_1_PI, FRAC_1_PI);
     let [e_a, e_b] = slots.slip_ends.map(basis);
     let recontact = slots.at[0];
     let e_r = basis(recontact);
@@ -332,41 +334,42 @@ fn separation_forces(
     for k in 0..3 {
         let (pa, pb, pr) = (m_a[k], m_b[k], m_r[k]);
         for l in 1..3 {
-            ka[k][l - 1] = kt * (m_stick[k][l] - pa * e_a[l] - pb * e_b[l] - pr * e_r[l]);
+            ka[k][l - 1] = ktq * (p_stick[k][l] - pa * e_a[l] - pb * e_b[l] - pr * e_r[l]);
         }
-        mb[k][0] = mu * (m_slip[k][0] + pa - pb);
+        mb[k][0] = muq * (p_slip[k][0] + pa - pb);
         for l in 1..3 {
-            mb[k][l] = mu * (m_slip[k][l] + pa * e_a[l] - pb * e_b[l]);
+            mb[k][l] = muq * (p_slip[k][l] + pa * e_a[l] - pb * e_b[l]);
         }
         out.friction[k] = ka[k][0] * u[1] + ka[k][1] * u[2] + dot(mb[k], cn);
-        out.normal[k] = dot(m_window[k], cn);
+        out.normal[k] = q * dot(p_window[k], cn);
     }
     out.energy = PI * (u[1] * out.friction[2] - u[2] * out.friction[1]);
     let Some(j) = jac else {
         return;
     };
-    // k_t r_R with r_R = −u1′/(k_n v1′) at τ_Sp2 (0 where v1′ = 0: a tangent window)
+    // k_t r_R / π with r_R = −u1′/(k_n v1′) at τ_Sp2 (0 where v1′ = 0: a tangent window)
     let [s_r, c_r] = recontact;
     let dv = kn * (mo.v[1] * s_r + mo.v[2] * c_r);
-    let q = if dv.abs() > 0.0 {
-        -kt * (u[1] * s_r + u[2] * c_r) / dv
+    let r = if dv.abs() > 0.0 {
+        -ktq * (u[1] * s_r + u[2] * c_r) / dv
     } else {
         0.0
     };
+    let knq = kn * FRAC_1_PI;
     for k in 0..3 {
         let ([a1, a2], [b0, b1, b2]) = (ka[k], mb[k]);
-        let qm = q * m_r[k];
+        let rm = r * m_r[k];
         j[k] = [
             0.0,
             a1,
             a2,
-            kn * (b0 - qm),
-            kn * (b1 - qm * e_r[1]),
-            kn * (b2 - qm * e_r[2]),
-            b0 - qm,
+            kn * (b0 - rm),
+            kn * (b1 - rm * e_r[1]),
+            kn * (b2 - rm * e_r[2]),
+            b0 - rm,
         ];
-        let w = m_window[k];
-        j[3 + k] = [0.0, 0.0, 0.0, kn * w[0], kn * w[1], kn * w[2], w[0]];
+        let w = p_window[k];
+        j[3 + k] = [0.0, 0.0, 0.0, knq * w[0], knq * w[1], knq * w[2], q * w[0]];
     }
 }
 
