@@ -399,6 +399,30 @@ impl AdaptiveSteps {
         dt
     }
 
+    /// [`AdaptiveSteps::step`] of the contact state of `samples`: the state of the previous call
+    /// is recognised from the samples' states without forming their codes (into `codes`, scratch,
+    /// only for another state).
+    #[inline]
+    pub fn step_of(
+        &mut self,
+        sys: &MarchSystem,
+        samples: &[LawSample],
+        codes: &mut Vec<u8>,
+    ) -> f64 {
+        let same = self.last.len() == samples.len()
+            && self
+                .last
+                .iter()
+                .zip(samples)
+                .all(|(&c, s)| c == s.state.code());
+        if same {
+            return self.last_dt;
+        }
+        codes.clear();
+        codes.extend(samples.iter().map(|s| s.state.code()));
+        self.step(sys, codes, samples)
+    }
+
     /// The ladder's rung below eq. 8 from the dense eigenproblem of the state in `self.states`.
     fn dense_step(&mut self, sys: &MarchSystem) -> f64 {
         self.dense_solves += 1;

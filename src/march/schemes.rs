@@ -102,6 +102,13 @@ impl Excitation {
     /// of ωt for every signal.
     pub fn fill(&mut self, sys: &MarchSystem, omega: f64, t: f64, dynamic: bool) {
         let (s, c) = (omega * t).sin_cos();
+        self.fill_at_phase(sys, c, s, dynamic);
+    }
+
+    /// The excitation of `sys` at the phase ωt of cosine `c` and sine `s` ([`Excitation::fill`]
+    /// without the sin_cos; the adaptive march steps the phase, [`super::signal::PhaseSteps`]).
+    #[inline]
+    pub fn fill_at_phase(&mut self, sys: &MarchSystem, c: f64, s: f64, dynamic: bool) {
         self.phase = (c, s);
         for (fi, h) in self.force.iter_mut().zip(&sys.force) {
             *fi = h.at_phase(c, s);
