@@ -519,7 +519,7 @@ impl Window {
         } else if vamp > 0.0 {
             let rho = -n0e / vamp;
             if rho > -1.0 + TANGENCY {
-                let arc = Arc::new(rho);
+                let arc = Arc::side_by_side(rho);
                 Window::Part {
                     recontact: nv.rising_sc(arc),
                     separation: nv.falling_sc(arc),
@@ -667,9 +667,12 @@ impl Motion {
         if self.window == Window::Never {
             return PhaseKind::Separation;
         }
-        if let Some((recontact, _, len)) = self.window.labelled() {
-            if ahead(0.0, recontact.t) >= len {
-                return PhaseKind::Separation;
+        // (the discriminant first: where the caller knows the window, no call is left)
+        if let Window::Part { .. } = self.window {
+            if let Some((recontact, _, len)) = self.window.labelled() {
+                if ahead(0.0, recontact.t) >= len {
+                    return PhaseKind::Separation;
+                }
             }
         }
         let z = At::ZERO;
@@ -1452,13 +1455,7 @@ fn closed_form(
     let Some(lengths) = stick_slip_lengths(g, h, arc_n, arc_p, constant_load) else {
         return false;
     };
-    // [sin, cos] of the ends τ_P, τ_StN, τ_N, τ_StP
-    let ends = [
-        [-g.sa, g.ca],
-        h.falling_sc(arc_n),
-        [h.sa, -h.ca],
-        g.rising_sc(arc_p),
-    ];
+    let ends = sequence_ends(g, h, arc_n, arc_p);
     let Some(zero) = phase_of_zero(&ends, &lengths) else {
         return false;
     };
@@ -1553,23 +1550,32 @@ fn stick_slip_forces(
     }
 }
 
-/// The lengths (rad) of the four phases of a stick–slip cycle in contact ([`closed_form`]) from
-/// the levels' arccosines β_N = arccos(c_N/|H|) (`arc_n`), β_P = arccos(c_P/|G|) (`arc_p`) and
-/// the relative phase δ = α_H − α_G of h and g: stick after positive slip τ_StN − τ_P =
-/// β_N − δ, negative slip τ_N − τ_StN = π − β_N, stick after negative slip τ_StP − τ_N =
-/// δ − β_P − π, positive slip τ_P − τ_StP = β_P (each mod 2π; an angle less than [`BEHIND`]
-/// below a whole period is 0, as in the event march). δ is one inverse function of the cross and
-/// dot products of the phases' unit vectors (cos δ = cos α_G cos α_H + sin α_G sin α_H), none at
-/// constant load, where δ = 0 and β_P = π − β_N make both sticks β_N long. `None` where the
-/// lengths do not add up to one period (to 1e-9): the sequence is not the four phases.
+/// [sin, cos] of the ends of the four phases of the stick–slip sequence (Cigeroglu, An & Menq
+/// 2007, §2.2.1), by the addition theorems from the phases of g and h and the levels' arcs
+/// β_N = arccos(c_N/|H|) (`arc_n`), β_P = arccos(c_P/|G|) (`arc_p`), without α_G, α_H: the
+/// maximum of g τ_P = −α_G (eq. 8), h falling through c_N at τ_StN = −α_H + β_N (eq. 24), the
+/// minimum of h τ_N = π − α_H (eq. 9) and g rising through c_P at τ_StP = −α_G − β_P (eq. 23).
 #[inline(always)]
-fn stick_slip_lengths(
-    g: &Wave,
-    h: &Wave,
-    arc_n: Arc,
-    arc_p: Arc,
-    constant_load: bool,
-) -> Option<[f64; 4]> {
+fn sequence_ends(g: &Wave, h: &Wave, arc_n: Arc, arc_p: Arc) -> [[f64; 2]; 4] {
+    [
+        [-g.sa, g.ca],
+        h.falling_sc(arc_n),
+        [h.sa, -h.ca],
+        g.rising_sc(arc_p),
+    ]
+}
+
+/// The lengths (rad) of the four phases of the stick–slip sequence ([`sequence_ends`]; phase i
+/// runs from end i to end i + 1) from the levels' arccosines β_N = arccos(c_N/|H|) (`arc_n`),
+/// β_P = arccos(c_P/|G|) (`arc_p`) and the relative phase δ = α_H − α_G of h and g: stick after
+/// positive slip τ_StN − τ_P = β_N − δ, negative slip τ_N − τ_StN = π − β_N, stick after
+/// negative slip τ_StP − τ_N = δ − β_P − π, positive slip τ_P − τ_StP = β_P (each mod 2π; an
+/// angle less than [`BEHIND`] below a whole period is 0, as in the event march). δ is one
+/// inverse function of the cross and dot products of the phases' unit vectors (cos δ =
+/// cos α_G cos α_H + sin α_G sin α_H), none at constant load, where δ = 0 and β_P = π − β_N make
+/// both sticks β_N long.
+#[inline(always)]
+fn sequence_lengths(g: &Wave, h: &Wave, arc_n: Arc, arc_p: Arc, constant_load: bool) -> [f64; 4] {
     let (stick_p, stick_n) = if constant_load {
         (arc_n.b, arc_n.b)
     } else {
@@ -1579,7 +1585,21 @@ fn stick_slip_lengths(
             ahead(delta - arc_p.b - PI, 0.0),
         )
     };
-    let lengths = [stick_p, PI - arc_n.b, stick_n, arc_p.b];
+    [stick_p, PI - arc_n.b, stick_n, arc_p.b]
+}
+
+/// The lengths (rad) of the four phases of a stick–slip cycle in contact ([`closed_form`],
+/// [`sequence_lengths`]); `None` where they do not add up to one period (to 1e-9): the sequence
+/// is not the four phases.
+#[inline(always)]
+fn stick_slip_lengths(
+    g: &Wave,
+    h: &Wave,
+    arc_n: Arc,
+    arc_p: Arc,
+    constant_load: bool,
+) -> Option<[f64; 4]> {
+    let lengths = sequence_lengths(g, h, arc_n, arc_p, constant_load);
     let three = lengths[0] + lengths[1] + lengths[2];
     (three < TAU && (three + lengths[3] - TAU).abs() < 1e-9).then_some(lengths)
 }
@@ -1825,7 +1845,7 @@ fn point(
 /// [`point`] where the contact is not decided on squares or [`closed_form`] does not apply: the
 /// closed forms ([`separation_form`], [`closed_form`]) or else the event march ([`harmonics`]).
 /// Out of line and building its own motion, so that the motion of the path in contact is never
-/// stored to memory.
+/// stored to memory; the march builds its own again, so that no address of this one is taken.
 #[inline(never)]
 fn point_otherwise(
     p: &ContactParams,
@@ -1841,7 +1861,7 @@ fn point_otherwise(
         _ => closed_form(&mo, slider, jac.as_deref_mut(), out),
     };
     if !exact {
-        march_point(&mo, slider, jac, out)?;
+        march_point(p, u, v, slider, jac, out)?;
     }
     Ok(())
 }
@@ -1851,12 +1871,14 @@ fn point_otherwise(
 /// would crowd the registers of the closed forms beside it.
 #[inline(never)]
 fn march_point(
-    mo: &Motion,
+    p: &ContactParams,
+    u: [f64; 3],
+    v: [f64; 3],
     slider: f64,
     jac: Option<&mut PointJacobian>,
     out: &mut Harmonics,
 ) -> Result<()> {
-    *out = harmonics(mo, slider, jac, |_| true)?.0;
+    *out = harmonics(&Motion::new(p, u, v), slider, jac, |_| true)?.0;
     Ok(())
 }
 
