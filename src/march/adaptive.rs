@@ -399,24 +399,29 @@ impl AdaptiveSteps {
         dt
     }
 
-    /// [`AdaptiveSteps::step`] of the contact state of `samples`: the state of the previous call
-    /// is recognised from the samples' states without forming their codes (into `codes`, scratch,
-    /// only for another state).
+    /// The step (s) of the previous call's contact state when `samples` are in it, recognised
+    /// from the samples' states without forming codes.
     #[inline]
-    pub fn step_of(
-        &mut self,
-        sys: &MarchSystem,
-        samples: &[LawSample],
-        codes: &mut Vec<u8>,
-    ) -> f64 {
+    pub fn last_step(&self, samples: &[LawSample]) -> Option<f64> {
         let same = self.last.len() == samples.len()
             && self
                 .last
                 .iter()
                 .zip(samples)
                 .all(|(&c, s)| c == s.state.code());
-        if same {
-            return self.last_dt;
+        same.then_some(self.last_dt)
+    }
+
+    /// [`AdaptiveSteps::step`] of the contact state of `samples` (their codes formed into
+    /// `codes`, scratch) when it is not the previous call's ([`AdaptiveSteps::last_step`]).
+    pub fn step_of(
+        &mut self,
+        sys: &MarchSystem,
+        samples: &[LawSample],
+        codes: &mut Vec<u8>,
+    ) -> f64 {
+        if let Some(dt) = self.last_step(samples) {
+            return dt;
         }
         codes.clear();
         codes.extend(samples.iter().map(|s| s.state.code()));

@@ -1066,7 +1066,7 @@ pub type Corrected = std::result::Result<u32, Unconverged>;
 /// alone within a step: one saved iterate, moved to the current one whenever the distance to it
 /// reaches a power of two, so a cycle of length L entered at iterate μ is found by iterate
 /// 2 max(μ, L) or so, with one comparison of n values per iteration and no allocation.
-pub struct CycleCheck {
+struct CycleCheck {
     /// The saved iterate.
     saved: Vec<f64>,
     /// Its index k.
@@ -1077,7 +1077,7 @@ pub struct CycleCheck {
 
 impl CycleCheck {
     /// Room for iterates of `n` DOF.
-    pub fn new(n: usize) -> Self {
+    fn new(n: usize) -> Self {
         CycleCheck {
             saved: Vec::with_capacity(n),
             saved_at: 0,
@@ -1133,7 +1133,7 @@ pub fn standard_step(
 /// With R = S q̃ − b − f_c(q̃) (b = f + M q*/(βΔτ²) + C(γ q*/(βΔτ) − v*), the part of R that does
 /// not change within the step), the update is q̃ ← S⁻¹ b + S⁻¹ f_c(q̃): S⁻¹ b is computed once per
 /// step and an iteration costs one law evaluation and one product with S⁻¹ (the same iterates).
-/// The iterates are checked for an exact cycle from [`CYCLE_CHECK_FROM`] on ([`CycleCheck`]): a
+/// The iterates are checked for an exact cycle from [`CYCLE_CHECK_FROM`] on (Brent 1980): a
 /// cycle stops the corrector with the outcome the iteration limit would give, without the
 /// iterations up to the limit. Writes the step's end into `out`; returns the iterations, or why
 /// the corrector did not converge (errors: a singular Newmark matrix).
