@@ -85,7 +85,7 @@ fn damper() -> Model {
             periods: 1,
             ..cm.settings
         },
-        rounds: 40,
+        rounds: 200,
         progress: false,
         schemes: schemes(),
     }
@@ -134,7 +134,7 @@ fn jenkins() -> Model {
             steps_per_period: 300,
             ..MarchSettings::default()
         },
-        rounds: 40,
+        rounds: 200,
         progress: false,
         schemes: schemes(),
     }
@@ -154,7 +154,7 @@ fn jenkins_quasi_static() -> Model {
             steps_per_period: 300,
             ..MarchSettings::default()
         },
-        rounds: 20,
+        rounds: 100,
         progress: false,
         schemes: schemes(),
     }

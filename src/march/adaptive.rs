@@ -399,6 +399,35 @@ impl AdaptiveSteps {
         dt
     }
 
+    /// The step (s) of the previous call's contact state when `samples` are in it, recognised
+    /// from the samples' states without forming codes.
+    #[inline]
+    pub fn last_step(&self, samples: &[LawSample]) -> Option<f64> {
+        let same = self.last.len() == samples.len()
+            && self
+                .last
+                .iter()
+                .zip(samples)
+                .all(|(&c, s)| c == s.state.code());
+        same.then_some(self.last_dt)
+    }
+
+    /// [`AdaptiveSteps::step`] of the contact state of `samples` (their codes formed into
+    /// `codes`, scratch) when it is not the previous call's ([`AdaptiveSteps::last_step`]).
+    pub fn step_of(
+        &mut self,
+        sys: &MarchSystem,
+        samples: &[LawSample],
+        codes: &mut Vec<u8>,
+    ) -> f64 {
+        if let Some(dt) = self.last_step(samples) {
+            return dt;
+        }
+        codes.clear();
+        codes.extend(samples.iter().map(|s| s.state.code()));
+        self.step(sys, codes, samples)
+    }
+
     /// The ladder's rung below eq. 8 from the dense eigenproblem of the state in `self.states`.
     fn dense_step(&mut self, sys: &MarchSystem) -> f64 {
         self.dense_solves += 1;

@@ -10,6 +10,7 @@ use super::periodic::{self, Extremes};
 use super::schemes::{
     self, Cache, Corrected, Excitation, ExcitationAt, Kinematics, Snapshot, StepContext, Workspace,
 };
+use super::signal::{Phase, PhaseSteps};
 use super::system::{InitialCondition, MarchSystem};
 use crate::case::MarchScheme;
 use crate::error::{Error, Result};
@@ -300,6 +301,12 @@ pub struct Marcher<'a> {
     t: f64,
     /// The excitation of the current step (adaptive step) or of t = 0.
     excitation: Excitation,
+    /// The phase ωt of the current state (adaptive step).
+    phase: Phase,
+    /// The phase of the step attempted last (adaptive step).
+    next_phase: Phase,
+    /// The phases of the adaptive steps, stepped per step size.
+    phases: PhaseSteps,
     /// Fixed step: the steps of one period with the excitation at their ends.
     table: StepTable,
     tolerance: f64,
@@ -361,6 +368,9 @@ impl<'a> Marcher<'a> {
             cur,
             t: 0.0,
             excitation: Excitation::at(sys, settings.omega, 0.0, settings.dynamic()),
+            phase: Phase::at(settings.omega, 0.0),
+            next_phase: Phase::at(settings.omega, 0.0),
+            phases: PhaseSteps::new(settings.omega),
             table: StepTable::default(),
             tolerance: settings.tolerance * sys.displacement_scale,
             dt_stick: dt_max,
@@ -481,7 +491,11 @@ impl<'a> Marcher<'a> {
                 };
                 // paper §4.2: re-run with the smaller step the new state asks for
                 for _ in 0..8 {
-                    let dt_new = self.adaptive_step(true);
+                    let steps = self.adaptive_dt.as_ref().expect("adaptive steps set up");
+                    let dt_new = match steps.last_step(&self.next.samples) {
+                        Some(dt) => dt,
+                        None => self.adaptive_step(true),
+                    };
                     let (h, t_new, one) = end_time(dt_new, self.t);
                     // a step closing the period is the same step at the smaller size
                     if dt_new >= dt * (1.0 - 1e-12) || h.to_bits() == dt.to_bits() {
@@ -496,6 +510,7 @@ impl<'a> Marcher<'a> {
                 self.step_range = (self.step_range.0.min(dt), self.step_range.1.max(dt));
                 std::mem::swap(&mut self.cur, &mut self.next);
                 self.t = t1;
+                self.phase = self.next_phase;
                 self.history.push(
                     t1,
                     &self.cur,
@@ -532,17 +547,24 @@ impl<'a> Marcher<'a> {
     /// (`next`: the state an attempted step ended in).
     fn adaptive_step(&mut self, next: bool) -> f64 {
         let snapshot = if next { &self.next } else { &self.cur };
-        state_codes_into(&snapshot.samples, &mut self.codes);
         let steps = self.adaptive_dt.as_mut().expect("adaptive steps set up");
-        steps.step(self.sys, &self.codes, &snapshot.samples)
+        steps.step_of(self.sys, &snapshot.samples, &mut self.codes)
     }
 
     /// One adaptive step from the current state to `t1` (step `dt`; `one_off`: a size met once)
-    /// into the next state, with the excitation at `t1`; returns the iterations, or why the
-    /// standard corrector did not converge.
+    /// into the next state, with the excitation at `t1` (its phase stepped from the current one,
+    /// [`PhaseSteps::advance`]; from sin_cos for a one-off step); returns the iterations, or why
+    /// the standard corrector did not converge.
     fn attempt(&mut self, t1: f64, dt: f64, one_off: bool) -> Result<Corrected> {
         let (sys, s) = (self.sys, self.settings);
-        self.excitation.fill(sys, s.omega, t1, true);
+        let phase = if one_off {
+            Phase::at(s.omega, t1)
+        } else {
+            self.phases.advance(self.phase, self.t, dt, t1)
+        };
+        self.next_phase = phase;
+        self.excitation
+            .fill_at_phase(sys, phase.cos, phase.sin, true);
         let ctx = context(
             sys,
             s,
@@ -697,11 +719,6 @@ fn context<'b>(
         excitation,
         one_off,
     }
-}
-
-/// State codes of `samples` into `out`.
-fn state_codes_into(samples: &[LawSample], out: &mut Vec<u8>) {
-    schemes::state_codes(samples, out);
 }
 
 /// Marches `sys` with `settings`: [`Marcher::march_period`] for each of the settings' periods,

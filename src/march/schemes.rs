@@ -102,6 +102,13 @@ impl Excitation {
     /// of ωt for every signal.
     pub fn fill(&mut self, sys: &MarchSystem, omega: f64, t: f64, dynamic: bool) {
         let (s, c) = (omega * t).sin_cos();
+        self.fill_at_phase(sys, c, s, dynamic);
+    }
+
+    /// The excitation of `sys` at the phase ωt of cosine `c` and sine `s` ([`Excitation::fill`]
+    /// without the sin_cos; the adaptive march steps the phase, [`super::signal::PhaseSteps`]).
+    #[inline]
+    pub fn fill_at_phase(&mut self, sys: &MarchSystem, c: f64, s: f64, dynamic: bool) {
         self.phase = (c, s);
         for (fi, h) in self.force.iter_mut().zip(&sys.force) {
             *fi = h.at_phase(c, s);
@@ -1012,8 +1019,9 @@ pub fn state_name(code: u8) -> &'static str {
 }
 
 /// The first corrector iteration at which [`standard_corrector`] compares its iterates for a cycle
-/// (Brent 1980): the standard steps of the bundled models converge in at most 17 iterations, so
-/// a converging step never pays for the comparison.
+/// (Brent 1980): the standard steps of the damper and the one-DOF oscillators of
+/// `benches/march.rs` converge in at most 17 iterations, so a converging step hardly ever pays
+/// for the comparison.
 pub const CYCLE_CHECK_FROM: u32 = 16;
 
 /// Why the standard corrector stopped without converging. No message is formed here: the adaptive
@@ -1058,7 +1066,7 @@ pub type Corrected = std::result::Result<u32, Unconverged>;
 /// alone within a step: one saved iterate, moved to the current one whenever the distance to it
 /// reaches a power of two, so a cycle of length L entered at iterate μ is found by iterate
 /// 2 max(μ, L) or so, with one comparison of n values per iteration and no allocation.
-pub struct CycleCheck {
+struct CycleCheck {
     /// The saved iterate.
     saved: Vec<f64>,
     /// Its index k.
@@ -1069,7 +1077,7 @@ pub struct CycleCheck {
 
 impl CycleCheck {
     /// Room for iterates of `n` DOF.
-    pub fn new(n: usize) -> Self {
+    fn new(n: usize) -> Self {
         CycleCheck {
             saved: Vec::with_capacity(n),
             saved_at: 0,
@@ -1125,7 +1133,7 @@ pub fn standard_step(
 /// With R = S q̃ − b − f_c(q̃) (b = f + M q*/(βΔτ²) + C(γ q*/(βΔτ) − v*), the part of R that does
 /// not change within the step), the update is q̃ ← S⁻¹ b + S⁻¹ f_c(q̃): S⁻¹ b is computed once per
 /// step and an iteration costs one law evaluation and one product with S⁻¹ (the same iterates).
-/// The iterates are checked for an exact cycle from [`CYCLE_CHECK_FROM`] on ([`CycleCheck`]): a
+/// The iterates are checked for an exact cycle from [`CYCLE_CHECK_FROM`] on (Brent 1980): a
 /// cycle stops the corrector with the outcome the iteration limit would give, without the
 /// iterations up to the limit. Writes the step's end into `out`; returns the iterations, or why
 /// the corrector did not converge (errors: a singular Newmark matrix).
