@@ -436,16 +436,17 @@ struct Arc {
 
 impl Arc {
     /// The arc of the level r (clamped to [−1, 1]) by libm's arccos: in the chains of dependent
-    /// events (the contact window, the crossings of the separation and of the march) its
-    /// latency is shorter than that of the inline [`arccos`].
+    /// events (the contact window, at whose length every boundary of the separation is cut, and
+    /// the crossings of the march) its latency is shorter than that of the inline [`arccos`].
     #[inline]
     fn new(r: f64) -> Self {
         let r = r.clamp(-1.0, 1.0);
         Arc::with(r, r.acos())
     }
 
-    /// [`Arc::new`] by the inline [`arccos`], for arcs computed side by side (the two slip
-    /// lengths of [`closed_form`]): without a call, the two evaluations overlap.
+    /// [`Arc::new`] by the inline [`arccos`], for arcs computed side by side (the two levels'
+    /// arcs β_N and β_P of [`closed_form`] and of the separation): without a call, the two
+    /// evaluations overlap.
     #[inline(always)]
     fn side_by_side(r: f64) -> Self {
         let r = r.clamp(-1.0, 1.0);
@@ -990,8 +991,14 @@ impl PhaseIntegrals {
     /// The first column M_k0 of [`PhaseIntegrals::projection`]: p_k ∫ e_k dτ.
     #[inline]
     fn first_column(&self) -> [f64; 3] {
+        self.first_column_pi().map(|x| x * FRAC_1_PI)
+    }
+
+    /// π M_k0 ([`PhaseIntegrals::first_column`] without the factor 1/π): (∫1/2, ∫cos, ∫(−sin)).
+    #[inline(always)]
+    fn first_column_pi(&self) -> [f64; 3] {
         let [d, ds, dc, _, _] = self.0;
-        [0.5 * d * FRAC_1_PI, ds * FRAC_1_PI, dc * FRAC_1_PI]
+        [0.5 * d, ds, dc]
     }
 
     /// M_kl = p_k ∫ e_k e_l dτ with the projection weights p = (1/2π, 1/π, 1/π) of the harmonic

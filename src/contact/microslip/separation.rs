@@ -321,7 +321,7 @@ fn separation_forces(
         slip.projection_pi(),
         window.projection_pi(),
     );
-    let [m_r, m_a, m_b] = [stick_r, stick_a, stick_b].map(|i| i.projection_pi().map(|row| row[0]));
+    let [m_r, m_a, m_b] = [stick_r, stick_a, stick_b].map(|i| i.first_column_pi());
     let (kt, kn) = (mo.p.kt, mo.p.kn);
     let (ktq, muq, q) = (kt * FRAC_1_PI, slots.sign * mo.p.mu * FRAC_1_PI, FRAC_1_PI);
     let [e_a, e_b] = slots.slip_ends.map(basis);
