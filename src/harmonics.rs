@@ -127,33 +127,18 @@ pub trait HarmonicForce: Send + Sync {
     }
 
     /// Whether F_nl reads velocities q̇ = ω ∂q/∂τ and so depends on the frequency ω (then it is
-    /// evaluated with [`HarmonicForce::evaluate_at`]). Default: false.
+    /// evaluated with [`HarmonicForce::evaluate_into`]). Default: false.
     fn reads_velocity(&self) -> bool {
         false
     }
 
-    /// As [`HarmonicForce::evaluate`] at the fundamental frequency `omega` (rad/s), adding also
-    /// ∂F_nl/∂ω to `d_omega` when given. The default is for forces of displacements only: it
-    /// calls `evaluate` and adds nothing to `d_omega`.
-    #[allow(clippy::too_many_arguments)]
-    fn evaluate_at(
-        &self,
-        layout: &HarmonicLayout,
-        q: &[f64],
-        omega: f64,
-        state: &mut Self::State,
-        force: &mut [f64],
-        jacobian: Option<MatMut<'_, f64>>,
-        d_omega: Option<&mut [f64]>,
-    ) -> Result<()> {
-        let _ = (omega, d_omega);
-        self.evaluate(layout, q, state, force, jacobian)
-    }
-
-    /// As [`HarmonicForce::evaluate_at`] with the Jacobian added into a dense or a block-stored
-    /// matrix or a [`JacobianSink`] ([`JacobianMut`]). The default
-    /// evaluates a block-stored or sunk Jacobian through a dense temporary of the force's order;
-    /// forces with many DOFs add theirs element by element.
+    /// As [`HarmonicForce::evaluate`] at the fundamental frequency `omega` (rad/s), with the
+    /// Jacobian added into a dense or a block-stored matrix or a [`JacobianSink`]
+    /// ([`JacobianMut`]), and ∂F_nl/∂ω added to `d_omega` when given. The default is for forces
+    /// of displacements only: it calls `evaluate`, adds nothing to `d_omega`, and evaluates a
+    /// block-stored or sunk Jacobian through a dense temporary of the force's order; forces that
+    /// read velocities, and forces with many DOFs (which add their Jacobians element by
+    /// element), implement it.
     #[allow(clippy::too_many_arguments)]
     fn evaluate_into(
         &self,
@@ -165,22 +150,13 @@ pub trait HarmonicForce: Send + Sync {
         jacobian: Option<JacobianMut<'_>>,
         d_omega: Option<&mut [f64]>,
     ) -> Result<()> {
+        let _ = (omega, d_omega);
         match jacobian {
-            None => self.evaluate_at(layout, q, omega, state, force, None, d_omega),
-            Some(JacobianMut::Dense(j)) => {
-                self.evaluate_at(layout, q, omega, state, force, Some(j), d_omega)
-            }
+            None => self.evaluate(layout, q, state, force, None),
+            Some(JacobianMut::Dense(j)) => self.evaluate(layout, q, state, force, Some(j)),
             Some(mut target) => {
                 let mut dense = Mat::<f64>::zeros(q.len(), q.len());
-                self.evaluate_at(
-                    layout,
-                    q,
-                    omega,
-                    state,
-                    force,
-                    Some(dense.as_mut()),
-                    d_omega,
-                )?;
+                self.evaluate(layout, q, state, force, Some(dense.as_mut()))?;
                 match target {
                     JacobianMut::Blocks(b) => b.add_dense(dense.as_ref()),
                     _ => {

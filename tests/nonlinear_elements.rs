@@ -13,7 +13,7 @@ use faer::Mat;
 use nlrom::case::{Case, FrictionElement};
 use nlrom::commands::{solve_case, Reporter, RomPolicy, SolveOptions};
 use nlrom::contact::grounded::DofElements;
-use nlrom::harmonics::{HarmonicForce, HarmonicLayout};
+use nlrom::harmonics::{HarmonicForce, HarmonicLayout, JacobianMut};
 
 mod support;
 use support::random::XorShift;
@@ -48,13 +48,13 @@ fn evaluate(
     let mut f = vec![0.0; n];
     let mut jac = Mat::<f64>::zeros(n, n);
     let mut dw = vec![0.0; n];
-    set.evaluate_at(
+    set.evaluate_into(
         layout,
         q,
         omega,
         &mut state,
         &mut f,
-        Some(jac.as_mut()),
+        Some(JacobianMut::Dense(jac.as_mut())),
         Some(&mut dw),
     )
     .unwrap();

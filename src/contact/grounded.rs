@@ -12,7 +12,7 @@
 //! The other `[[element]]` kinds (springs, dampers, tanh friction: [`super::memoryless`]) read
 //! one combination x = Σ_i w_i q_{d_i} and act back along it the same way, F_{d_i} += w_i f; they
 //! carry no state. Elements that read velocities make the force depend on ω
-//! ([`HarmonicForce::evaluate_at`]).
+//! ([`HarmonicForce::evaluate_into`]).
 
 use std::sync::Arc;
 
@@ -640,7 +640,7 @@ impl HarmonicForce for DofElements {
         vec![0.0; self.elements.len()]
     }
 
-    /// Errors when an element reads velocities (those need ω: [`HarmonicForce::evaluate_at`]).
+    /// Errors when an element reads velocities (those need ω: [`HarmonicForce::evaluate_into`]).
     fn evaluate(
         &self,
         layout: &HarmonicLayout,
@@ -654,25 +654,12 @@ impl HarmonicForce for DofElements {
                 "the [[element]] list holds a quadratic_damper or tanh_friction element, whose force depends on the frequency; it is evaluated by the frequency response only (Hill stability and the time-domain tools take displacement elements)".into(),
             ));
         }
-        self.evaluate_at(layout, q, 0.0, state, force, jacobian, None)
+        let jacobian = jacobian.map(JacobianMut::Dense);
+        self.evaluate_into(layout, q, 0.0, state, force, jacobian, None)
     }
 
     fn reads_velocity(&self) -> bool {
         self.memoryless.iter().any(|e| e.law.reads_velocity())
-    }
-
-    fn evaluate_at(
-        &self,
-        layout: &HarmonicLayout,
-        q: &[f64],
-        omega: f64,
-        state: &mut Vec<f64>,
-        force: &mut [f64],
-        jacobian: Option<MatMut<'_, f64>>,
-        d_omega: Option<&mut [f64]>,
-    ) -> Result<()> {
-        let jacobian = jacobian.map(JacobianMut::Dense);
-        self.evaluate_into(layout, q, omega, state, force, jacobian, d_omega)
     }
 
     /// The elements' Jacobians are added element by element (no dense temporary).

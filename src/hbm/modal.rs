@@ -628,8 +628,8 @@ impl<F: HarmonicForce> HarmonicForce for ModalForce<F> {
         self.inner.initial_state()
     }
 
-    /// As [`HarmonicForce::evaluate_into`]; a contact force that reads velocities must be
-    /// evaluated at a frequency ([`HarmonicForce::evaluate_at`]).
+    /// As [`HarmonicForce::evaluate_into`] at ω = 0; a contact force that reads velocities must
+    /// be evaluated at a frequency.
     fn evaluate(
         &self,
         layout: &HarmonicLayout,
@@ -655,20 +655,6 @@ impl<F: HarmonicForce> HarmonicForce for ModalForce<F> {
     /// An element in transition couples every pair of modes across harmonics.
     fn sparse_harmonic_coupling(&self) -> bool {
         false
-    }
-
-    fn evaluate_at(
-        &self,
-        layout: &HarmonicLayout,
-        q: &[f64],
-        omega: f64,
-        state: &mut F::State,
-        force: &mut [f64],
-        jacobian: Option<MatMut<'_, f64>>,
-        d_omega: Option<&mut [f64]>,
-    ) -> Result<()> {
-        let jacobian = jacobian.map(JacobianMut::Dense);
-        self.evaluate_into(layout, q, omega, state, force, jacobian, d_omega)
     }
 
     /// F = Φ_cᵀ F_nl(Φ_c Q) per coefficient, its Jacobian Φ_cᵀ J Φ_c projected element by

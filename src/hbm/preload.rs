@@ -44,7 +44,7 @@ impl<F: HarmonicForce> FromStaticEquilibrium<F> {
         let mut state = inner.initial_state();
         let mut at_rest = vec![0.0; len];
         // At rest every velocity is zero, whatever ω.
-        inner.evaluate_at(layout, &zero, 0.0, &mut state, &mut at_rest, None, None)?;
+        inner.evaluate_into(layout, &zero, 0.0, &mut state, &mut at_rest, None, None)?;
         let mut rate = vec![0.0; len];
         let at_rest_rate = inner
             .parameter_derivative(layout, &zero, &inner.initial_state(), &mut rate)
@@ -91,20 +91,6 @@ impl<F: HarmonicForce> HarmonicForce for FromStaticEquilibrium<F> {
 
     fn reads_velocity(&self) -> bool {
         self.inner.reads_velocity()
-    }
-
-    fn evaluate_at(
-        &self,
-        layout: &HarmonicLayout,
-        q: &[f64],
-        omega: f64,
-        state: &mut Self::State,
-        force: &mut [f64],
-        jacobian: Option<MatMut<'_, f64>>,
-        d_omega: Option<&mut [f64]>,
-    ) -> Result<()> {
-        let jacobian = jacobian.map(JacobianMut::Dense);
-        self.evaluate_into(layout, q, omega, state, force, jacobian, d_omega)
     }
 
     fn evaluate_into(

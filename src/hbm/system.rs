@@ -157,7 +157,7 @@ impl<'a, F: HarmonicForce> HbmSystem<'a, F> {
     /// entries are coalesced and D̄(ω) is left pending on the LU factors of D_LL
     /// ([`LinearModel::condense_deferred`], [`crate::harmonics::BlockJacobian::materialize`]:
     /// formed only if the matrix is factorised)), `out.d_parameter` = ∂r/∂ω (with ∂F_nl/∂ω of a force that reads
-    /// velocities, [`HarmonicForce::evaluate_at`]); and `level_derivative` (if given) =
+    /// velocities, [`HarmonicForce::evaluate_into`]); and `level_derivative` (if given) =
     /// ∂r/∂level = −F̄_e. Returns the end-of-period force state.
     pub fn evaluate(
         &self,
