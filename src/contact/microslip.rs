@@ -1808,10 +1808,22 @@ fn evaluate_directions(
         u_all[d] = u;
         let p = &element.params;
         if !jacobian {
-            point(p, u, v, slider[d], None, &mut r)?;
+            point(
+                p,
+                &[u[0], u[1], u[2], v[0], v[1], v[2]],
+                slider[d],
+                None,
+                &mut r,
+            )?;
         } else {
             let mut j: PointJacobian = [[0.0; 7]; 6];
-            point(p, u, v, slider[d], Some(&mut j), &mut r)?;
+            point(
+                p,
+                &[u[0], u[1], u[2], v[0], v[1], v[2]],
+                slider[d],
+                Some(&mut j),
+                &mut r,
+            )?;
             write_jacobian(element, d, &j, jac, cols);
         }
         slider[d] = r.slider;
@@ -1832,40 +1844,44 @@ fn evaluate_directions(
     Ok(())
 }
 
-/// One point's harmonics into `out` and, if given, its Jacobian into `jac`: the closed forms
-/// where they apply ([`separation_form`], [`closed_form`]), else the event march
-/// ([`harmonics`]).
+/// One point's harmonics into `out` and, if given, its Jacobian into `jac`, for the motion
+/// `x` = (U0, U1, U2, V0, V1, V2) (m): the closed forms where they apply ([`separation_form`],
+/// [`closed_form`]), else the event march ([`harmonics`]).
 #[inline(always)]
 fn point(
     p: &ContactParams,
-    u: [f64; 3],
-    v: [f64; 3],
+    x: &[f64; 6],
     slider: f64,
     mut jac: Option<&mut PointJacobian>,
     out: &mut Harmonics,
 ) -> Result<()> {
+    let (u, v) = ([x[0], x[1], x[2]], [x[3], x[4], x[5]]);
     let (n0e, nv) = (p.n0 + p.kn * v[0], [p.kn * v[1], p.kn * v[2]]);
     if Window::always(n0e, nv)
         && closed_form(&Motion::new(p, u, v), slider, jac.as_deref_mut(), out)
     {
         return Ok(());
     }
-    point_otherwise(p, u, v, slider, jac, out)
+    point_otherwise(p, x, slider, jac, out)
 }
 
 /// [`point`] where the contact is not decided on squares or [`closed_form`] does not apply: the
 /// closed forms ([`separation_form`], [`closed_form`]) or else the event march ([`harmonics`]).
 /// Out of line and building its own motion, so that the motion of the path in contact is never
 /// stored to memory; the march builds its own again, so that no address of this one is taken.
+/// The motion `x` is the caller's input itself, not a copy stored just before the call: the
+/// compiler loads (U1, U2) and (V1, V2) here in 16-byte pairs, which a copy's stores, (U0, U1)
+/// and U2 apart, cannot forward (a store-forwarding stall at the head of every chain of the
+/// closed form with separation).
 #[inline(never)]
 fn point_otherwise(
     p: &ContactParams,
-    u: [f64; 3],
-    v: [f64; 3],
+    x: &[f64; 6],
     slider: f64,
     mut jac: Option<&mut PointJacobian>,
     out: &mut Harmonics,
 ) -> Result<()> {
+    let (u, v) = ([x[0], x[1], x[2]], [x[3], x[4], x[5]]);
     let mo = Motion::new(p, u, v);
     let exact = match mo.window {
         Window::Part { .. } => separation_form(&mo, jac.as_deref_mut(), out),
@@ -1917,9 +1933,9 @@ fn evaluate_one_direction(
                 "analytic friction point: the Jacobian buffer is not 6 × 7".into(),
             ));
         };
-        point(p, u, v, slider[0], Some(j), &mut r)?;
+        point(p, x, slider[0], Some(j), &mut r)?;
     } else {
-        point(p, u, v, slider[0], None, &mut r)?;
+        point(p, x, slider[0], None, &mut r)?;
     }
     let slider_in = *slider;
     slider[0] = r.slider;

@@ -10,8 +10,11 @@ slider state) by single-stepping it in gdb, then reads that sequence two ways:
   why dispatch stalls (the scheduler or the reorder buffer full);
 * its dataflow critical path: the longest chain of dependent instructions through registers and
   stack slots (spills), each instruction taking the latency of the llvm-mca model (a load 7
-  cycles, a store-to-load forwarding 2 more), without any limit on the window: the latency no
-  schedule can beat.
+  cycles, a store-to-load forwarding 2 more; the stack pointer always ready, as the core's stack
+  engine keeps it), without any limit on the window: the latency no schedule can beat;
+* the loads from the stack that no single store before them covers (a load spanning two stores,
+  or wider than the store it reads): the core cannot forward them and waits for the stores to
+  reach the cache, a stall the model does not see.
 
 Run from the repository root after `cargo build --release --example contact_cost`:
 
@@ -219,6 +222,9 @@ def critical_path(lines, lat):
             rsp += int(ops[0][1:], 0) * (1 if op.startswith("add") else -1)
         if zero_idiom:
             reads = []
+        # the stack engine keeps the stack pointer ready: no chain through push, pop and rsp
+        reads = [r for r in reads if r != "rsp"]
+        writes = [w for w in writes if w != "rsp"]
         address = set(registers_in(load_from)) if load_from and "(" in load_from else set()
         latency = lat[i] - LOAD if load_from and lat[i] > LOAD else lat[i]
         start, before = 0, None
@@ -254,6 +260,81 @@ def slot(operand, rsp):
     if not m:
         return None
     return rsp + (int(m.group(1), 0) if m.group(1) else 0)
+
+
+def access_width(op, ops):
+    """Bytes a memory operand of the instruction `op` covers."""
+    if op in ("movsd", "movq", "movlpd", "movhpd", "vmovsd", "vmovq"):
+        return 8
+    if op.startswith(("movap", "movup", "movdq")) or op.endswith(("pd", "ps")):
+        return 16
+    if op.endswith("sd"):
+        return 8
+    if op.endswith("ss"):
+        return 4
+    registers = [o for o in ops if o.startswith("%")]
+    if registers and registers[0].startswith("%xmm"):
+        return 16
+    if registers and (registers[0].startswith("%e") or registers[0].endswith("d")):
+        return 4
+    return 8
+
+
+def unforwarded_loads(steps):
+    """The loads from the stack that no single earlier store covers: (index, load, stores)."""
+    rsp, stack_registers, stores, found = 0, {}, [], []
+
+    def address(operand):
+        m = re.fullmatch(r"(-?(?:0x)?[0-9a-f]*)\((%\w+)\)", operand)
+        if not m:
+            return None
+        offset = int(m.group(1), 0) if m.group(1) else 0
+        if m.group(2) == "%rsp":
+            return rsp + offset
+        base = stack_registers.get(m.group(2))
+        return None if base is None else base + offset
+
+    for i, (_, text) in enumerate(steps):
+        op, ops = operands(text)
+        if op.startswith(("push", "call")):
+            rsp -= 8
+            stores.append((rsp, rsp + 8, text))
+            continue
+        if op.startswith(("pop", "ret")):
+            rsp += 8
+            continue
+        if op in ("sub", "subq", "add", "addq") and ops[-1] == "%rsp" and ops[0].startswith("$"):
+            rsp += int(ops[0][1:], 0) * (1 if op.startswith("add") else -1)
+            continue
+        if op.startswith("lea") and len(ops) == 2:
+            start = address(ops[0])
+            if start is None:
+                stack_registers.pop(ops[1], None)
+            else:
+                stack_registers[ops[1]] = start
+            continue
+        if ops and ops[-1] in stack_registers:
+            del stack_registers[ops[-1]]
+        memory = [o for o in ops if "(" in o]
+        start = address(memory[0]) if memory else None
+        if start is None:
+            continue
+        end = start + access_width(op, ops)
+        if ops[-1] == memory[0] and not op.startswith(COMPARE):
+            stores.append((start, end, text))
+            continue
+        needed, covering = set(range(start, end)), []
+        for s_start, s_end, s_text in reversed(stores):
+            overlap = needed & set(range(s_start, s_end))
+            if overlap:
+                covering.append((s_start, s_end, s_text))
+                needed -= overlap
+            if not needed:
+                break
+        whole = len(covering) == 1 and covering[0][0] <= start and covering[0][1] >= end
+        if covering and not whole:
+            found.append((i, text, [c[2] for c in covering]))
+    return found
 
 
 def stalls(text):
@@ -308,6 +389,10 @@ def main():
           f"{single} for one alone")
     print("  dispatch stalls: " + "; ".join(stalls(repeated)))
     print(f"dataflow critical path: {length} cycles, {len(chain)} instructions")
+    unforwarded = unforwarded_loads(steps)
+    print(f"loads from the stack no single store covers (not forwarded): {len(unforwarded)}")
+    for i, text, covering in unforwarded:
+        print(f"  {i:5d}  {text}  <- " + "; ".join(covering))
     if args.chain:
         _, _, finish = critical_path(lines, lat)
         for k in chain:
