@@ -21,8 +21,12 @@ Run from the repository root after `cargo build --release --example contact_cost
     python3 tools/benchmarks/critical_path.py [--regime separation] [--mcpu znver3] [--chain]
 
 Needs gdb and llvm-mca (LLVM 14 or later) on the path. The counts are those of the build in
-`target/release`; the cycles are the model's, at the core's clock (measure it to convert them to
-time).
+`target/release`; the cycles are the model's. To convert measured times to cycles,
+
+    python3 tools/benchmarks/critical_path.py --clock
+
+measures the core's clock (needs a C compiler, `cc`): the CPU time of a chain of 4e9 dependent
+integer additions, one per cycle.
 """
 
 import argparse
@@ -348,6 +352,40 @@ def stalls(text):
     return out
 
 
+CLOCK_C = r"""
+#include <stdio.h>
+#include <time.h>
+int main(void) {
+    const long n = 4000000000L;
+    long x = 0;
+    struct timespec a, b;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &a);
+    for (long i = 0; i < n; i += 8) {
+        /* eight dependent additions per round: one cycle each; the loop's own increment and
+           branch run beside them */
+        __asm__ volatile("add $1, %0\n\tadd $1, %0\n\tadd $1, %0\n\tadd $1, %0\n\t"
+                         "add $1, %0\n\tadd $1, %0\n\tadd $1, %0\n\tadd $1, %0"
+                         : "+r"(x));
+    }
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &b);
+    double s = (b.tv_sec - a.tv_sec) + 1e-9 * (b.tv_nsec - a.tv_nsec);
+    printf("%ld additions in %.3f s of CPU: %.2f GHz\n", x, s, x / s * 1e-9);
+    return 0;
+}
+"""
+
+
+def clock():
+    """Compiles and runs the chain of dependent additions of CLOCK_C; prints the clock."""
+    with tempfile.TemporaryDirectory() as directory:
+        source = os.path.join(directory, "clock.c")
+        binary = os.path.join(directory, "clock")
+        with open(source, "w") as f:
+            f.write(CLOCK_C)
+        subprocess.run(["cc", "-O1", "-o", binary, source], check=True)
+        subprocess.run([binary], check=True)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--regime", default="separation",
@@ -355,7 +393,12 @@ def main():
     parser.add_argument("--binary", default=BINARY)
     parser.add_argument("--mcpu", default="znver3")
     parser.add_argument("--chain", action="store_true", help="print the critical chain")
+    parser.add_argument("--clock", action="store_true",
+                        help="measure the core's clock (a chain of dependent additions) and exit")
     args = parser.parse_args()
+    if args.clock:
+        clock()
+        return
     with tempfile.TemporaryDirectory() as directory:
         steps = trace(args.binary, args.regime, directory)
         lines = straight_line(steps)
