@@ -465,7 +465,7 @@ impl<'a> Marcher<'a> {
                 // the step of the current state, found as the previous step ended
                 let mut dt = match self.next_dt.take() {
                     Some(dt) => dt,
-                    None => self.adaptive_step(false),
+                    None => self.step_of_current(),
                 };
                 // the step closing the period (shortened to its end) is a one-off size
                 let end_time = |dt: f64, t: f64| {
@@ -494,7 +494,7 @@ impl<'a> Marcher<'a> {
                     let steps = self.adaptive_dt.as_ref().expect("adaptive steps set up");
                     let dt_new = match steps.last_step(&self.next.samples) {
                         Some(dt) => dt,
-                        None => self.adaptive_step(true),
+                        None => self.step_of_next(),
                     };
                     let (h, t_new, one) = end_time(dt_new, self.t);
                     // a step closing the period is the same step at the smaller size
@@ -543,12 +543,16 @@ impl<'a> Marcher<'a> {
         Ok(steady)
     }
 
-    /// The adaptive step (s) of the contact state of the current snapshot, or of the next one
-    /// (`next`: the state an attempted step ended in).
-    fn adaptive_step(&mut self, next: bool) -> f64 {
-        let snapshot = if next { &self.next } else { &self.cur };
+    /// The adaptive step (s) of the contact state of the current snapshot.
+    fn step_of_current(&mut self) -> f64 {
         let steps = self.adaptive_dt.as_mut().expect("adaptive steps set up");
-        steps.step_of(self.sys, &snapshot.samples, &mut self.codes)
+        steps.step_of(self.sys, &self.cur.samples, &mut self.codes)
+    }
+
+    /// The adaptive step (s) of the contact state an attempted step ended in (the next snapshot).
+    fn step_of_next(&mut self) -> f64 {
+        let steps = self.adaptive_dt.as_mut().expect("adaptive steps set up");
+        steps.step_of(self.sys, &self.next.samples, &mut self.codes)
     }
 
     /// One adaptive step from the current state to `t1` (step `dt`; `one_off`: a size met once)
