@@ -1807,23 +1807,12 @@ fn evaluate_directions(
         check_finite(&u, &v, slider[d])?;
         u_all[d] = u;
         let p = &element.params;
+        let motion = [u[0], u[1], u[2], v[0], v[1], v[2]];
         if !jacobian {
-            point(
-                p,
-                &[u[0], u[1], u[2], v[0], v[1], v[2]],
-                slider[d],
-                None,
-                &mut r,
-            )?;
+            point(p, &motion, slider[d], None, &mut r)?;
         } else {
             let mut j: PointJacobian = [[0.0; 7]; 6];
-            point(
-                p,
-                &[u[0], u[1], u[2], v[0], v[1], v[2]],
-                slider[d],
-                Some(&mut j),
-                &mut r,
-            )?;
+            point(p, &motion, slider[d], Some(&mut j), &mut r)?;
             write_jacobian(element, d, &j, jac, cols);
         }
         slider[d] = r.slider;

@@ -491,11 +491,7 @@ impl<'a> Marcher<'a> {
                 };
                 // paper §4.2: re-run with the smaller step the new state asks for
                 for _ in 0..8 {
-                    let steps = self.adaptive_dt.as_ref().expect("adaptive steps set up");
-                    let dt_new = match steps.last_step(&self.next.samples) {
-                        Some(dt) => dt,
-                        None => self.step_of_next(),
-                    };
+                    let dt_new = self.step_of_next();
                     let (h, t_new, one) = end_time(dt_new, self.t);
                     // a step closing the period is the same step at the smaller size
                     if dt_new >= dt * (1.0 - 1e-12) || h.to_bits() == dt.to_bits() {
